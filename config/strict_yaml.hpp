@@ -1,0 +1,107 @@
+#pragma once
+// Strict reading of YAML configuration: every problem is refused with file, line and reason.
+//
+//   auto doc = config::Document::from_file("scenario.yaml");
+//   config::Map root = doc.root();
+//   double v = root.required<double>("speed_mps", {.min = 0.0, .max = 8.0});
+//   int n = root.optional<int>("runs", 100, {.min = 1});
+//   config::Map cam = root.map("camera");
+//   ...
+//   cam.finish();  root.finish();   // refuses keys that were never read (unknown keys)
+//
+// Errors are ConfigError, whose what() reads "file:line: reason". Lines count from 1.
+// A key read with the wrong type ("speed_mps: fast"), a missing required key, a value out of
+// its bounds, a sequence of the wrong length and an unknown key are all refused.
+
+#include <memory>
+#include <optional>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
+
+namespace shelfcross::config {
+
+class ConfigError : public std::runtime_error {
+ public:
+  ConfigError(std::string file, int line, std::string reason);
+  const std::string& file() const { return file_; }
+  int line() const { return line_; }  ///< 1-based; 0 when the problem has no line
+  const std::string& reason() const { return reason_; }
+
+ private:
+  std::string file_;
+  int line_;
+  std::string reason_;
+};
+
+/// Inclusive bounds unless marked exclusive. Empty bounds accept everything.
+template <class T>
+struct Bounds {
+  std::optional<T> min;
+  std::optional<T> max;
+  bool min_exclusive = false;
+  bool max_exclusive = false;
+};
+
+/// One mapping of a document. Remembers which keys were read so finish() can refuse the rest.
+class Map {
+ public:
+  Map(YAML::Node node, std::shared_ptr<const std::string> file);
+
+  bool has(const std::string& key) const;
+
+  /// Scalars: T is bool, int, std::int64_t, std::uint64_t, double or std::string.
+  template <class T>
+  T required(const std::string& key, const Bounds<T>& bounds = {}) const;
+  template <class T>
+  T optional(const std::string& key, const T& fallback, const Bounds<T>& bounds = {}) const;
+
+  /// A sequence of scalars; `size` (if given) is the exact length required.
+  template <class T>
+  std::vector<T> required_list(const std::string& key, const Bounds<T>& bounds = {},
+                               std::optional<size_t> size = std::nullopt) const;
+  template <class T>
+  std::vector<T> optional_list(const std::string& key, const std::vector<T>& fallback,
+                               const Bounds<T>& bounds = {},
+                               std::optional<size_t> size = std::nullopt) const;
+
+  /// A nested mapping (required, or optional: empty when absent).
+  Map map(const std::string& key) const;
+  std::optional<Map> optional_map(const std::string& key) const;
+  /// A sequence of mappings (required, or empty when absent).
+  std::vector<Map> map_list(const std::string& key) const;
+  std::vector<Map> optional_map_list(const std::string& key) const;
+
+  /// Refuse every key of this mapping that was never read, naming it and its line.
+  void finish() const;
+
+  /// The line of `key` (or of this mapping when the key is absent), for callers' own checks.
+  int line_of(const std::string& key) const;
+  int line() const;
+  const std::string& file() const { return *file_; }
+  [[noreturn]] void fail(const std::string& key, const std::string& reason) const;
+
+ private:
+  YAML::Node child(const std::string& key) const;  // marks the key as read
+  YAML::Node node_;
+  std::shared_ptr<const std::string> file_;
+  mutable std::set<std::string> read_;
+};
+
+/// A parsed YAML document with its file name for messages.
+class Document {
+ public:
+  static Document from_file(const std::string& path);
+  static Document from_string(const std::string& text, const std::string& name);
+  Map root() const;
+
+ private:
+  Document(YAML::Node root, std::string file);
+  YAML::Node root_;
+  std::shared_ptr<const std::string> file_;
+};
+
+}  // namespace shelfcross::config
