@@ -1,0 +1,129 @@
+#include "verification/results_store.hpp"
+
+#include <SQLiteCpp/SQLiteCpp.h>
+
+namespace shelfcross::verification {
+namespace {
+
+constexpr const char* kFormatVersion = "1";
+
+void configure(SQLite::Database& db) {
+  db.exec("PRAGMA journal_mode=WAL");
+  db.exec("PRAGMA synchronous=FULL");
+  db.exec("PRAGMA busy_timeout=10000");
+}
+
+std::string get_meta(SQLite::Database& db, const char* key) {
+  SQLite::Statement q(db, "SELECT value FROM campaign WHERE key = ?");
+  q.bind(1, key);
+  if (!q.executeStep()) throw ResultsMismatch(std::string("results database lacks campaign key '") + key + "'");
+  return q.getColumn(0).getString();
+}
+
+void set_meta(SQLite::Database& db, const char* key, const std::string& value) {
+  SQLite::Statement q(db, "INSERT OR REPLACE INTO campaign(key, value) VALUES(?, ?)");
+  q.bind(1, key);
+  q.bind(2, value);
+  q.exec();
+}
+
+}  // namespace
+
+ResultsStore::ResultsStore(std::unique_ptr<SQLite::Database> db) : db_(std::move(db)) {}
+ResultsStore::ResultsStore(ResultsStore&&) noexcept = default;
+ResultsStore& ResultsStore::operator=(ResultsStore&&) noexcept = default;
+ResultsStore::~ResultsStore() = default;
+
+void ResultsStore::read_meta() {
+  if (get_meta(*db_, "format_version") != kFormatVersion) {
+    throw ResultsMismatch("results database has an unknown format version");
+  }
+  meta_.scenario_yaml = get_meta(*db_, "scenario_yaml");
+  meta_.campaign_seed = std::stoull(get_meta(*db_, "campaign_seed"));
+  meta_.runs_requested = std::stoll(get_meta(*db_, "runs_requested"));
+}
+
+ResultsStore ResultsStore::open_or_create(const std::filesystem::path& db_path, const CampaignMeta& meta) {
+  const bool exists = std::filesystem::exists(db_path);
+  auto db = std::make_unique<SQLite::Database>(db_path.string(), SQLite::OPEN_READWRITE | SQLite::OPEN_CREATE);
+  configure(*db);
+  ResultsStore store(std::move(db));
+  if (!exists) {
+    SQLite::Transaction tx(*store.db_);
+    store.db_->exec("CREATE TABLE campaign(key TEXT PRIMARY KEY, value TEXT NOT NULL)");
+    store.db_->exec(
+        "CREATE TABLE runs(run_index INTEGER PRIMARY KEY, seed TEXT NOT NULL, dispersion_json TEXT NOT NULL,"
+        " outcome TEXT NOT NULL, metrics_json TEXT NOT NULL, run_hash TEXT NOT NULL, wall_s REAL NOT NULL)");
+    set_meta(*store.db_, "format_version", kFormatVersion);
+    set_meta(*store.db_, "scenario_yaml", meta.scenario_yaml);
+    set_meta(*store.db_, "campaign_seed", std::to_string(meta.campaign_seed));
+    set_meta(*store.db_, "runs_requested", std::to_string(meta.runs_requested));
+    tx.commit();
+  }
+  store.read_meta();
+  if (store.meta_.scenario_yaml != meta.scenario_yaml) {
+    throw ResultsMismatch(db_path.string() + " holds a campaign of a different scenario; use another --out");
+  }
+  if (store.meta_.campaign_seed != meta.campaign_seed) {
+    throw ResultsMismatch(db_path.string() + " holds a campaign with seed " +
+                          std::to_string(store.meta_.campaign_seed) + ", not " + std::to_string(meta.campaign_seed));
+  }
+  if (meta.runs_requested > store.meta_.runs_requested) {
+    set_meta(*store.db_, "runs_requested", std::to_string(meta.runs_requested));
+    store.meta_.runs_requested = meta.runs_requested;
+  }
+  return store;
+}
+
+ResultsStore ResultsStore::open_existing(const std::filesystem::path& db_path) {
+  if (!std::filesystem::exists(db_path)) throw ResultsMismatch(db_path.string() + ": no such results database");
+  auto db = std::make_unique<SQLite::Database>(db_path.string(), SQLite::OPEN_READWRITE);
+  configure(*db);
+  ResultsStore store(std::move(db));
+  store.read_meta();
+  return store;
+}
+
+std::vector<std::int64_t> ResultsStore::finished_indices() const {
+  std::vector<std::int64_t> out;
+  SQLite::Statement q(*db_, "SELECT run_index FROM runs ORDER BY run_index");
+  while (q.executeStep()) out.push_back(q.getColumn(0).getInt64());
+  return out;
+}
+
+void ResultsStore::insert(const RunRecord& run) {
+  SQLite::Transaction tx(*db_);
+  SQLite::Statement q(*db_,
+                      "INSERT INTO runs(run_index, seed, dispersion_json, outcome, metrics_json, run_hash, wall_s)"
+                      " VALUES(?, ?, ?, ?, ?, ?, ?)");
+  q.bind(1, static_cast<std::int64_t>(run.index));
+  q.bind(2, std::to_string(run.seed));
+  q.bind(3, run.dispersion_json);
+  q.bind(4, run.outcome);
+  q.bind(5, run.metrics_json);
+  q.bind(6, run.run_hash);
+  q.bind(7, run.wall_s);
+  q.exec();
+  tx.commit();
+}
+
+std::vector<RunRecord> ResultsStore::runs() const {
+  std::vector<RunRecord> out;
+  SQLite::Statement q(*db_,
+                      "SELECT run_index, seed, dispersion_json, outcome, metrics_json, run_hash, wall_s"
+                      " FROM runs ORDER BY run_index");
+  while (q.executeStep()) {
+    RunRecord r;
+    r.index = q.getColumn(0).getInt64();
+    r.seed = std::stoull(q.getColumn(1).getString());
+    r.dispersion_json = q.getColumn(2).getString();
+    r.outcome = q.getColumn(3).getString();
+    r.metrics_json = q.getColumn(4).getString();
+    r.run_hash = q.getColumn(5).getString();
+    r.wall_s = q.getColumn(6).getDouble();
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+}  // namespace shelfcross::verification

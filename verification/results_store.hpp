@@ -1,0 +1,78 @@
+#pragma once
+// A campaign's results: one SQLite database (WAL journal), one transaction per finished run.
+//
+// Tables
+//   campaign(key TEXT PRIMARY KEY, value TEXT)   format_version, scenario_yaml (fully
+//                                                resolved), campaign_seed, runs_requested
+//   runs(run_index INTEGER PRIMARY KEY, seed TEXT, dispersion_json TEXT, outcome TEXT,
+//        metrics_json TEXT, run_hash TEXT, wall_s REAL)
+//
+// Durability: WAL with synchronous=FULL, so a committed run survives SIGKILL (and power loss);
+// a run killed mid-way left nothing, and is simply run again on resume. Reopening a database
+// made for a different scenario or seed is refused, so two campaigns never mix.
+// Not thread-safe: one thread (the campaign's collector) owns a store.
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace SQLite {
+class Database;
+}
+
+namespace shelfcross::verification {
+
+struct CampaignMeta {
+  std::string scenario_yaml;        ///< the fully resolved scenario the runs used
+  std::uint64_t campaign_seed = 0;
+  std::int64_t runs_requested = 0;
+  bool operator==(const CampaignMeta&) const = default;
+};
+
+struct RunRecord {
+  std::int64_t index = 0;
+  std::uint64_t seed = 0;
+  std::string dispersion_json;  ///< drawn values, {"name": value, ...}
+  std::string outcome;          ///< success, collision, timeout, ...
+  std::string metrics_json;
+  std::string run_hash;         ///< 32 hex digits (run_hash.hpp)
+  double wall_s = 0.0;          ///< wall time the run took (informative, not hashed)
+  bool operator==(const RunRecord&) const = default;
+};
+
+/// The database does not belong to this campaign (other scenario or seed), or is not one.
+class ResultsMismatch : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+class ResultsStore {
+ public:
+  /// Opens `db_path`, creating it with `meta` if absent. An existing database must hold the
+  /// same scenario and seed; its runs_requested is raised to meta's if larger.
+  static ResultsStore open_or_create(const std::filesystem::path& db_path, const CampaignMeta& meta);
+  /// Opens an existing database read-write (report, replay, merge).
+  static ResultsStore open_existing(const std::filesystem::path& db_path);
+
+  ResultsStore(ResultsStore&&) noexcept;
+  ResultsStore& operator=(ResultsStore&&) noexcept;
+  ~ResultsStore();
+
+  const CampaignMeta& meta() const { return meta_; }
+  std::vector<std::int64_t> finished_indices() const;
+  /// Commits one run in its own transaction; a run index already present is refused.
+  void insert(const RunRecord& run);
+  /// Every stored run, by index.
+  std::vector<RunRecord> runs() const;
+
+ private:
+  explicit ResultsStore(std::unique_ptr<SQLite::Database> db);
+  void read_meta();
+  std::unique_ptr<SQLite::Database> db_;
+  CampaignMeta meta_;
+};
+
+}  // namespace shelfcross::verification
