@@ -8,13 +8,13 @@ function(shelfcross_module)
   file(GLOB sources CONFIGURE_DEPENDS "${CMAKE_CURRENT_SOURCE_DIR}/*.cpp")
   file(GLOB headers CONFIGURE_DEPENDS "${CMAKE_CURRENT_SOURCE_DIR}/*.hpp")
   set(target shelfcross_${M_NAME})
-  # Modules include each other as <plant/dynamics.hpp>: the source root is the
-  # include root for module headers once installed under include/shelfcross/<name>/.
+  # Modules include each other as "plant/dynamics.hpp" or "flight_sw/tello/sdk_state.hpp": the
+  # source root is the include root (installed: include/shelfcross/<folder>/).
   if(sources)
     add_library(${target} ${sources})
     set_target_properties(${target} PROPERTIES POSITION_INDEPENDENT_CODE ON)
     target_include_directories(${target} PUBLIC
-      $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/..>
+      $<BUILD_INTERFACE:${SHELFCROSS_SOURCE_DIR}>
       $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}/shelfcross>)
     target_link_libraries(${target} PUBLIC ${M_DEPS} PRIVATE ${M_PRIVATE_DEPS})
     target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic)
@@ -22,7 +22,7 @@ function(shelfcross_module)
     # A module with headers only (or none yet) is an interface library.
     add_library(${target} INTERFACE)
     target_include_directories(${target} INTERFACE
-      $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/..>
+      $<BUILD_INTERFACE:${SHELFCROSS_SOURCE_DIR}>
       $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}/shelfcross>)
     target_link_libraries(${target} INTERFACE ${M_DEPS})
   endif()
@@ -31,7 +31,8 @@ function(shelfcross_module)
   install(TARGETS ${target} EXPORT shelfcrossTargets
           ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
           LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
-  install(FILES ${headers} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/shelfcross/${M_NAME})
+  file(RELATIVE_PATH folder "${SHELFCROSS_SOURCE_DIR}" "${CMAKE_CURRENT_SOURCE_DIR}")
+  install(FILES ${headers} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/shelfcross/${folder})
 endfunction()
 
 # shelfcross_module_tests(NAME <name> DEPS <targets...>)
