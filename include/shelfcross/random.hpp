@@ -44,6 +44,7 @@ enum class StreamId : std::uint64_t {
   command_loss = 9,    ///< lost commands
   compute_latency = 10,///< the flight software's compute time
   link_faults = 11,    ///< emulator fault injection
+  state_latency = 12,  ///< state records and replies
 };
 
 /// xoshiro256** (Blackman & Vigna 2018), state filled from SplitMix64 of the stream's seed.

@@ -1,0 +1,57 @@
+#pragma once
+// The Wi-Fi link between the Tello and the computer running the flight software, as the
+// co-simulation models it: every message gets a latency (mean plus seeded jitter), video
+// frames and commands can be lost, and the flight software's own compute time delays what it
+// sends. Each effect draws from its own stream (shelfcross/random.hpp), so changing one
+// setting does not shift the draws of another.
+//
+// Defaults follow shared/tello/PROTOCOL.md: users report 0.3 to 1 s of video lag, most of it
+// receiver-side buffering; a receiver that always decodes the newest frame (as tello_pilot
+// does) sees about the encoder + Wi-Fi + decoder delay, taken here as 0.2 s mean.
+
+#include <cstdint>
+#include <optional>
+
+#include "shelfcross/random.hpp"
+#include "shelfcross/time.hpp"
+
+namespace shelfcross::verification {
+
+struct LinkSettings {
+  double video_latency_mean_s = 0.20;
+  double video_latency_jitter_s = 0.02;    ///< stddev, truncated at +-3 sigma
+  double frame_drop_probability = 0.02;
+  double state_latency_mean_s = 0.02;      ///< state records and replies
+  double state_latency_jitter_s = 0.005;
+  double command_latency_mean_s = 0.02;
+  double command_latency_jitter_s = 0.005;
+  double command_loss_probability = 0.005; ///< UDP: a lost command is simply never applied
+  double compute_latency_s = 0.002;        ///< flight software step time, fixed unless drawn
+  bool operator==(const LinkSettings&) const = default;
+};
+
+/// Draws per-message delivery for one run. Deliveries on one channel keep their order (a UDP
+/// stream on one Wi-Fi hop does not reorder in practice): a message never arrives before the
+/// one sent before it on the same channel.
+class LinkModel {
+ public:
+  LinkModel(const LinkSettings& settings, std::uint64_t run_seed);
+
+  /// When a frame captured at t_capture_ns reaches the flight software, or nothing if dropped.
+  std::optional<TimeNs> video_arrival(TimeNs t_capture_ns);
+  /// When a state record or a reply sent at t_send_ns reaches the flight software.
+  TimeNs state_arrival(TimeNs t_send_ns);
+  /// When a command issued at t_issue_ns (the stamp of the input that caused it) reaches the
+  /// vehicle, or nothing if lost. The compute time is added before the link latency.
+  std::optional<TimeNs> command_arrival(TimeNs t_issue_ns);
+
+  const LinkSettings& settings() const { return settings_; }
+
+ private:
+  static TimeNs jittered(RandomStream& stream, double mean_s, double jitter_s);
+  LinkSettings settings_;
+  RandomStream video_latency_, frame_drop_, state_latency_, command_latency_, command_loss_;
+  TimeNs last_video_ns_ = 0, last_state_ns_ = 0, last_command_ns_ = 0;
+};
+
+}  // namespace shelfcross::verification
