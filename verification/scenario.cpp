@@ -340,14 +340,14 @@ void visit_shelf(V& v, ShelfSpec& s, Context& ctx) {
     }
   }
   v.field("base_height_m", s.base_height_m, kNonNegative);
-  v.check("base_height_m", s.base_height_m >= 0.5 * s.beam_thickness_m,
+  v.check("base_height_m", s.base_height_m > 0.5 * s.beam_thickness_m,
           "the lowest beam would reach below the floor");
   v.field("depth_m", s.depth_m, kPositive);
   v.check("depth_m", s.depth_m > std::max(s.post_thickness_m, s.beam_thickness_m),
           "the front and back faces would overlap");
-  v.check("depth_m", w.box_size_m.x() <= s.depth_m + std::max(s.post_thickness_m, s.beam_thickness_m),
-          "boxes " + metres(w.box_size_m.x()) + " deep stick out of a shelf " + metres(s.depth_m) +
-              " deep");
+  v.check("depth_m", w.box_size_m.x() <= s.depth_m - s.post_thickness_m,
+          "boxes " + metres(w.box_size_m.x()) + " deep do not fit between the front and back "
+          "posts of a shelf " + metres(s.depth_m) + " deep");
   // Inside the arena: the four corners of the footprint and the top.
   {
     const Eigen::Isometry3d X_WS = shelf_pose_W(s);

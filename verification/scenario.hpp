@@ -13,6 +13,9 @@
 // Random box placement ("random_boxes: {fill_ratio, seed}") is resolved at load time from a
 // seeded stream, so a loaded Scenario holds explicit placements only and its written form lists
 // them; the same file always gives the same boxes, on every machine.
+// Top-level sections: version, name, warehouse, camera, vehicle, wind, autopilot, start. The
+// co-simulation and dispersion settings of later issues will be the top-level sections `cosim:`
+// and `dispersions:`; until their readers exist, they are refused as unknown keys.
 
 #include <optional>
 #include <string>

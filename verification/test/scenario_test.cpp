@@ -286,6 +286,11 @@ TEST(Scenario, RefusesBoxThatDoesNotFitItsCell) {
   // 0.33 m boxes fit the wide column (clear 0.46) but not the narrow one (clear 0.32).
   expect_refused(insert_line(4, "  boxes: {size_m: [0.3, 0.33, 0.3]}"), 9 + 1,
                  "does not fit the clear width");
+  expect_refused(insert_line(4, "  boxes: {size_m: [0.3, 0.2, 0.33]}"), 9 + 1,
+                 "does not fit the clear height");
+  // Deeper than the room between the front and back posts: reported at the shelf (line 5 + 1).
+  expect_refused(insert_line(4, "  boxes: {size_m: [0.33, 0.2, 0.2]}"), 5 + 1,
+                 "do not fit between the front and back posts");
 }
 
 TEST(Scenario, RefusesTagLargerThanCell) {
