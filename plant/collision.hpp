@@ -1,0 +1,146 @@
+#pragma once
+// The world the vehicle can hit: every bar, tag and box of every shelf, the floor, the walls and
+// the ceiling of the arena, with continuous (swept) collision checking of the vehicle between
+// two plant steps and exact box-to-box clearance queries.
+//
+// Geometry built from a Warehouse (conventions of include/shelfcross/warehouse.hpp), all in
+// the shelf frame S, then placed by X_WS. With T_p = post_thickness_m, T_b = beam_thickness_m,
+// D = depth_m, faces at x_S = 0 (front) and x_S = D (back), z_top = beam_z_S_m(nrows):
+//   post  (boundary i, face):  square T_p x T_p, centred on (x_face, post_y_S_m(i)), from the
+//                              floor z_S = 0 up to the top of the top beam, z_top + T_b / 2;
+//   beam  (boundary j, face):  square T_b x T_b along y_S, centred on (x_face, z = beam_z_S_m(j)),
+//                              from the outer side of the leftmost post to that of the rightmost;
+//   rail  (boundary i, j):     along x_S from the front centre line to the back one (x_S 0..D),
+//                              T_p wide (y_S) and T_b high (z_S), so that a cell's clear opening
+//                              is (column pitch - T_p) x (row pitch - T_b) all the way through;
+//   tag   (i, j, face):        a tag_size_m square card kTagThickness_m thick on the outer surface
+//                              of the intersection (x_S = -max(T_p, T_b) / 2 outward); a tag is
+//                              stuck to the shelf, so touching it is touching the shelf;
+//   box   (placement):         box_size_m, centred on its cell's (y, x_S = D / 2) and standing on
+//                              the top of the rails under it (z = beam_z(level - 1) + T_b / 2).
+// The floor is the half-space z < 0; the walls and the ceiling are the half-spaces outside the
+// arena box (arena_min_W_m, arena_max_W_m), exact for any distance (no thin slabs to tunnel).
+//
+// The vehicle is an oriented box: VehicleParams::size_m (propellers included) plus `margin_m`
+// on every side, centred on the body origin B with the body axes.
+//
+// Distances are exact box-to-box distances (Bullet's GJK, btGjkEpaSolver2, with zero collision
+// margins, for shelf elements; closed form for the half-spaces), signed: negative when the two
+// overlap, its magnitude then being the penetration depth (EPA: the shortest translation that
+// separates them). Two shapes closer than kContactTolerance_m count as touching.
+//
+// Swept test (sweep): the vehicle moves from X_WB_from to X_WB_to with its position linear and
+// its attitude the slerp between the two, both in the fraction s in [0, 1] of the step. For each
+// element whose bounds meet the swept bounds (Bullet's dynamic AABB tree broadphase), conservative
+// advancement finds the first s at which the distance falls below kContactTolerance_m: with n the
+// unit normal from the element toward the vehicle at the closest points, d the distance, dp the
+// step's translation, theta its rotation angle and r the vehicle's half diagonal, no point of the
+// vehicle approaches the separating plane faster than (-n . dp + theta * r) per unit s, so
+// advancing s by d / (-n . dp + theta * r) cannot pass through anything (no tunnelling, whatever
+// the speed, the step or the bar). A start pose already touching or overlapping is a contact at
+// the step's start time with its penetration depth.
+//
+// Thread safety: queries are const and use only thread-local scratch space, so one world may be
+// queried by several threads at once (the runs of a campaign can share it).
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "shelfcross/time.hpp"
+#include "shelfcross/warehouse.hpp"
+
+namespace shelfcross::plant {
+
+enum class ElementKind { floor, wall, post, beam, rail, tag, box };
+
+/// "floor", "wall", "post", ... for logs and reports.
+const char* to_string(ElementKind kind);
+
+/// One thing the vehicle can touch. `id` indexes CollisionWorld::elements().
+struct Element {
+  int id = -1;
+  ElementKind kind = ElementKind::floor;
+  int shelf = -1;  ///< index into Warehouse::shelves; -1 for floor, walls and ceiling
+  std::string name;  ///< e.g. "shelf 0 post between columns 1 and 2, front face", "floor", "wall x+"
+  bool operator==(const Element&) const = default;
+};
+
+/// True for the parts of a shelf (bars, tags, boxes); false for floor, walls and ceiling.
+inline bool is_shelf_part(ElementKind kind) {
+  return kind != ElementKind::floor && kind != ElementKind::wall;
+}
+
+struct Contact {
+  TimeNs t_ns = 0;                       ///< first touch, interpolated within the step
+  Element element;
+  Eigen::Vector3d point_W_m = Eigen::Vector3d::Zero();  ///< on the element's surface
+  Eigen::Vector3d normal_W = Eigen::Vector3d::Zero();   ///< unit, from the element toward the vehicle
+  double depth_m = 0.0;                  ///< penetration depth, >= 0 (0: touching)
+};
+
+struct Clearance {
+  double distance_m = 0.0;  ///< signed: < 0 when overlapping; +infinity when there is no shelf
+  Element element;          ///< the nearest shelf part (id -1 when there is no shelf)
+  Eigen::Vector3d point_on_element_W_m = Eigen::Vector3d::Zero();
+};
+
+/// Whether a query reports the floor. A landed vehicle always touches the floor, so the harness
+/// asks for the first contact that is not the floor while on the ground.
+enum class FloorContacts { report, ignore };
+
+class CollisionWorld {
+ public:
+  /// Distances below this count as touching (a contact). Far below any geometric tolerance.
+  static constexpr double kContactTolerance_m = 1e-6;
+  /// Thickness of a colour tag card.
+  static constexpr double kTagThickness_m = 0.001;
+
+  /// Builds the world. Preconditions (asserted; scenario loading validates user input): at
+  /// least one column and row per shelf, positive sizes, boxes in existing cells,
+  /// vehicle_size_m > 0, margin_m >= 0.
+  CollisionWorld(const Warehouse& warehouse, const Eigen::Vector3d& vehicle_size_m, double margin_m);
+  ~CollisionWorld();
+  CollisionWorld(CollisionWorld&&) noexcept;
+  CollisionWorld& operator=(CollisionWorld&&) noexcept;
+  CollisionWorld(const CollisionWorld&) = delete;
+  CollisionWorld& operator=(const CollisionWorld&) = delete;
+
+  /// The first contact along the motion from X_WB_from (at t_from_ns) to X_WB_to (at t_to_ns),
+  /// t_to_ns >= t_from_ns; nullopt when the vehicle touches nothing during the step. Its time is
+  /// t_from_ns + floor(s * (t_to_ns - t_from_ns)) for the first-touch fraction s. Ties between
+  /// elements are broken by the lower element id.
+  std::optional<Contact> sweep(const Eigen::Isometry3d& X_WB_from, TimeNs t_from_ns,
+                               const Eigen::Isometry3d& X_WB_to, TimeNs t_to_ns,
+                               FloorContacts floor = FloorContacts::report) const;
+
+  /// Every element touched during the motion, each once at its own first touch, sorted by time
+  /// (then element id).
+  std::vector<Contact> sweep_all(const Eigen::Isometry3d& X_WB_from, TimeNs t_from_ns,
+                                 const Eigen::Isometry3d& X_WB_to, TimeNs t_to_ns,
+                                 FloorContacts floor = FloorContacts::report) const;
+
+  /// Every element the vehicle touches or overlaps at one pose, by element id, with depths.
+  std::vector<Contact> overlaps(const Eigen::Isometry3d& X_WB, TimeNs t_ns,
+                                FloorContacts floor = FloorContacts::report) const;
+
+  /// The nearest shelf part (post, beam, rail, tag or box; not floor, walls or ceiling) and the
+  /// exact signed box-to-box distance to it.
+  Clearance clearance_to_shelves(const Eigen::Isometry3d& X_WB) const;
+
+  /// Signed distance from the vehicle at X_WB to one element (see the header comment).
+  double distance_to(const Eigen::Isometry3d& X_WB, int element_id) const;
+
+  const std::vector<Element>& elements() const;
+  /// Half extents of the vehicle box used for checks: size / 2 + margin.
+  const Eigen::Vector3d& vehicle_half_extents_m() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace shelfcross::plant

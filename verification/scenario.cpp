@@ -1,0 +1,637 @@
+#include "verification/scenario.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+#include <map>
+#include <numbers>
+#include <random>
+#include <set>
+#include <utility>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
+
+#include "config/strict_yaml.hpp"
+#include "plant/collision.hpp"
+
+namespace shelfcross::verification {
+namespace {
+
+using config::Bounds;
+using config::ConfigError;
+
+// ---- One description of every key, walked by a reader and by a writer ----
+//
+// Each visit_* function below lists the keys of one section once: their names, ranges and
+// cross-checks. Reader fills the structs from a config::Map (absent optional keys keep the
+// struct's default); Writer writes them back as YAML in the same order. So the format, its
+// defaults and its writer cannot drift apart.
+
+enum class Need { optional, required };
+
+template <class T>
+Bounds<T> at_least(T lo) {
+  Bounds<T> b;
+  b.min = lo;
+  return b;
+}
+template <class T>
+Bounds<T> between(T lo, T hi) {
+  Bounds<T> b;
+  b.min = lo;
+  b.max = hi;
+  return b;
+}
+Bounds<double> above(double lo) {
+  Bounds<double> b = at_least(lo);
+  b.min_exclusive = true;
+  return b;
+}
+
+const Bounds<double> kPositive = above(0.0);
+const Bounds<double> kNonNegative = at_least(0.0);
+const Bounds<double> kUnit = between(0.0, 1.0);
+const Bounds<double> kAnyFinite{};
+
+class Reader {
+ public:
+  static constexpr bool kReading = true;
+  explicit Reader(const config::Map& map) : map_(map) {}
+
+  template <class T>
+  void field(const char* key, T& v, const Bounds<T>& b = {}, Need need = Need::optional) const {
+    v = need == Need::required ? map_.required<T>(key, b) : map_.optional<T>(key, v, b);
+  }
+  void vec3(const char* key, Eigen::Vector3d& v, const Bounds<double>& b = {},
+            Need need = Need::optional) const {
+    const std::vector<double> l = need == Need::required
+                                      ? map_.required_list<double>(key, b, 3)
+                                      : map_.optional_list<double>(key, {v.x(), v.y(), v.z()}, b, 3);
+    v = {l[0], l[1], l[2]};
+  }
+  void colour(const char* key, Rgb& c) const {
+    const std::vector<double> l = map_.optional_list<double>(key, {c.r, c.g, c.b}, kUnit, 3);
+    c = {l[0], l[1], l[2]};
+  }
+  void list(const char* key, std::vector<double>& v, const Bounds<double>& b, Need need) const {
+    v = need == Need::required ? map_.required_list<double>(key, b)
+                               : map_.optional_list<double>(key, v, b);
+  }
+  template <class F>
+  void section(const char* key, F&& visit, Need need = Need::optional) const {
+    std::optional<config::Map> sub;
+    if (need == Need::required) sub.emplace(map_.map(key));
+    else sub = map_.optional_map(key);
+    if (!sub) return;
+    Reader r(*sub);
+    visit(r);
+    sub->finish();
+  }
+  /// A list of mappings; `flow` only matters to the writer.
+  template <class T, class F>
+  void items(const char* key, std::vector<T>& v, F&& visit, Need need, bool /*flow*/) const {
+    if (need == Need::optional && !map_.has(key)) {
+      map_.optional_map_list(key);  // marks the key as read
+      return;
+    }
+    const std::vector<config::Map> maps = map_.map_list(key);
+    v.assign(maps.size(), T{});
+    for (size_t i = 0; i < maps.size(); ++i) {
+      Reader r(maps[i]);
+      visit(r, v[i]);
+      maps[i].finish();
+    }
+  }
+  /// A consistency rule: refused with the line of `key` when `ok` is false.
+  void check(const char* key, bool ok, const std::string& reason) const {
+    if (!ok) map_.fail(key, reason);
+  }
+  const config::Map& map() const { return map_; }
+
+ private:
+  const config::Map& map_;
+};
+
+/// The shortest decimal text that reads back to exactly `x`: plain notation ("500", "0.34") in
+/// the usual range, else scientific ("1e-300"); at most 17 significant digits either way.
+std::string format_double(double x) {
+  char buf[64];
+  const double magnitude = std::abs(x);
+  if (magnitude == 0.0 || (magnitude >= 1e-4 && magnitude < 1e15)) {
+    for (int decimals = 0; decimals <= 20; ++decimals) {
+      std::snprintf(buf, sizeof buf, "%.*f", decimals, x);
+      if (std::strtod(buf, nullptr) == x) return buf;
+    }
+  }
+  for (int digits = 1; digits <= 17; ++digits) {
+    std::snprintf(buf, sizeof buf, "%.*g", digits, x);
+    if (std::strtod(buf, nullptr) == x) break;
+  }
+  return buf;
+}
+
+std::string quoted(const std::string& s) {
+  YAML::Emitter e;
+  e << YAML::DoubleQuoted << s;
+  return e.c_str();
+}
+
+class Writer {
+ public:
+  static constexpr bool kReading = false;
+  Writer(std::string& out, int indent, bool dash_first = false, bool flow = false)
+      : out_(out), indent_(indent), dash_(dash_first), flow_(flow) {}
+
+  template <class T>
+  void field(const char* key, T& v, const Bounds<T>& = {}, Need = Need::optional) {
+    if constexpr (std::is_same_v<T, bool>) put(key, v ? "true" : "false");
+    else if constexpr (std::is_same_v<T, std::string>) put(key, quoted(v));
+    else if constexpr (std::is_floating_point_v<T>) put(key, format_double(v));
+    else put(key, std::to_string(v));
+  }
+  void vec3(const char* key, Eigen::Vector3d& v, const Bounds<double>& = {}, Need = Need::optional) {
+    put(key, flow_list({v.x(), v.y(), v.z()}));
+  }
+  void colour(const char* key, Rgb& c) { put(key, flow_list({c.r, c.g, c.b})); }
+  void list(const char* key, std::vector<double>& v, const Bounds<double>&, Need) {
+    put(key, flow_list(v));
+  }
+  template <class F>
+  void section(const char* key, F&& visit, Need = Need::optional) {
+    open(key);
+    Writer w(out_, indent_ + 2);
+    visit(w);
+  }
+  template <class T, class F>
+  void items(const char* key, std::vector<T>& v, F&& visit, Need, bool flow) {
+    if (v.empty()) {
+      put(key, "[]");
+      return;
+    }
+    open(key);
+    for (T& item : v) {
+      if (flow) {
+        std::string unused;
+        Writer w(unused, 0, false, true);
+        visit(w, item);
+        std::string line = "{";
+        for (size_t i = 0; i < w.parts_.size(); ++i) line += (i ? ", " : "") + w.parts_[i];
+        out_ += std::string(static_cast<size_t>(indent_ + 2), ' ') + "- " + line + "}\n";
+      } else {
+        Writer w(out_, indent_ + 4, true);
+        visit(w, item);
+      }
+    }
+  }
+  void check(const char*, bool, const std::string&) const {}
+
+ private:
+  static std::string flow_list(const std::vector<double>& v) {
+    std::string s = "[";
+    for (size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + format_double(v[i]);
+    return s + "]";
+  }
+  std::string prefix() {
+    if (dash_) {
+      dash_ = false;
+      return std::string(static_cast<size_t>(indent_ - 2), ' ') + "- ";
+    }
+    return std::string(static_cast<size_t>(indent_), ' ');
+  }
+  void put(const char* key, const std::string& value) {
+    if (flow_) {
+      parts_.push_back(std::string(key) + ": " + value);
+      return;
+    }
+    out_ += prefix() + key + ": " + value + "\n";
+  }
+  void open(const char* key) { out_ += prefix() + key + ":\n"; }
+
+  std::string& out_;
+  int indent_;
+  bool dash_;
+  bool flow_;
+  std::vector<std::string> parts_;
+};
+
+// ---- ArUco dictionaries (OpenCV's predefined names and sizes) ----
+
+const std::map<std::string, int>& aruco_dictionaries() {
+  static const std::map<std::string, int> sizes = [] {
+    std::map<std::string, int> m;
+    for (const char* bits : {"4X4", "5X5", "6X6", "7X7"}) {
+      for (int n : {50, 100, 250, 1000}) m[std::string("DICT_") + bits + "_" + std::to_string(n)] = n;
+    }
+    m["DICT_ARUCO_ORIGINAL"] = 1024;
+    m["DICT_APRILTAG_16h5"] = 30;
+    m["DICT_APRILTAG_25h9"] = 35;
+    m["DICT_APRILTAG_36h10"] = 2320;
+    m["DICT_APRILTAG_36h11"] = 587;
+    return m;
+  }();
+  return sizes;
+}
+
+// ---- Seeded draws (bit-reproducible: only mt19937_64's integer output is used) ----
+
+/// Uniform integer in [0, n) by rejection, identical on every standard library.
+std::uint64_t draw_below(std::mt19937_64& gen, std::uint64_t n) {
+  const std::uint64_t limit = std::numeric_limits<std::uint64_t>::max() -
+                              std::numeric_limits<std::uint64_t>::max() % n;
+  for (;;) {
+    const std::uint64_t x = gen();
+    if (x < limit) return x % n;
+  }
+}
+
+/// The first k items of a seeded Fisher-Yates shuffle of v.
+template <class T>
+std::vector<T> draw_without_replacement(std::mt19937_64& gen, std::vector<T> v, size_t k) {
+  for (size_t i = 0; i < k; ++i) {
+    const size_t j = i + static_cast<size_t>(draw_below(gen, v.size() - i));
+    std::swap(v[i], v[j]);
+  }
+  v.resize(k);
+  return v;
+}
+
+// ---- The sections ----
+
+std::string metres(double x) { return format_double(x) + " m"; }
+
+/// State shared by the sections while reading one scenario.
+struct Context {
+  Scenario* scenario = nullptr;
+  int dictionary_size = 0;
+  std::set<int> marker_ids;  // across all shelves
+  struct RandomFill {
+    size_t shelf;
+    double fill_ratio;
+    std::uint64_t seed;
+    int line;
+  };
+  std::vector<RandomFill> random_fills;
+  size_t shelf_index = 0;
+};
+
+template <class V>
+void visit_box(V& v, BoxPlacement& b, const ShelfSpec& s, std::set<std::pair<int, int>>& cells,
+               Context& ctx) {
+  const Warehouse& w = ctx.scenario->warehouse;
+  const int nrows = static_cast<int>(s.row_pitch_m.size());
+  const int ncols = static_cast<int>(s.column_pitch_m.size());
+  v.field("level", b.level, at_least(1), Need::required);
+  v.check("level", b.level <= nrows,
+          "level " + std::to_string(b.level) + " does not exist: the shelf has " +
+              std::to_string(nrows) + " levels");
+  v.field("column", b.column, at_least(1), Need::required);
+  v.check("column", b.column <= ncols,
+          "column " + std::to_string(b.column) + " does not exist: the shelf has " +
+              std::to_string(ncols) + " columns");
+  v.field("marker_id", b.marker_id, at_least(0), Need::required);
+  v.check("marker_id", b.marker_id < ctx.dictionary_size,
+          "marker ID " + std::to_string(b.marker_id) + " is beyond " + w.aruco_dictionary +
+              " (IDs 0.." + std::to_string(ctx.dictionary_size - 1) + ")");
+  v.check("level", cells.insert({b.level, b.column}).second,
+          "two boxes in the cell at level " + std::to_string(b.level) + ", column " +
+              std::to_string(b.column));
+  v.check("marker_id", ctx.marker_ids.insert(b.marker_id).second,
+          "marker ID " + std::to_string(b.marker_id) + " is used by another box");
+  if (b.level < 1 || b.column < 1 || b.level > nrows || b.column > ncols) return;  // refused above
+  const double clear_width = s.column_pitch_m[static_cast<size_t>(b.column - 1)] - s.post_thickness_m;
+  const double clear_height = s.row_pitch_m[static_cast<size_t>(b.level - 1)] - s.beam_thickness_m;
+  v.check("column", w.box_size_m.y() <= clear_width,
+          "a box " + metres(w.box_size_m.y()) + " wide does not fit the clear width " +
+              metres(clear_width) + " of column " + std::to_string(b.column));
+  v.check("level", w.box_size_m.z() <= clear_height,
+          "a box " + metres(w.box_size_m.z()) + " high does not fit the clear height " +
+              metres(clear_height) + " of level " + std::to_string(b.level));
+}
+
+template <class V>
+void visit_shelf(V& v, ShelfSpec& s, Context& ctx) {
+  const Warehouse& w = ctx.scenario->warehouse;
+  const size_t index = ctx.shelf_index++;
+  const Bounds<double> kYaw = between(-std::numbers::pi, std::numbers::pi);
+  v.field("name", s.name);
+  v.vec3("origin_W_m", s.origin_W_m, kAnyFinite, Need::required);
+  v.check("origin_W_m", s.origin_W_m.z() == 0.0, "a shelf stands on the floor: z must be 0");
+  v.field("yaw_rad", s.yaw_rad, kYaw);
+  v.field("post_thickness_m", s.post_thickness_m, kPositive);
+  v.field("beam_thickness_m", s.beam_thickness_m, kPositive);
+  v.list("column_pitch_m", s.column_pitch_m, kPositive, Need::required);
+  v.list("row_pitch_m", s.row_pitch_m, kPositive, Need::required);
+  for (const char* key : {"column_pitch_m", "row_pitch_m"}) {
+    const std::vector<double>& pitches =
+        std::string(key) == "column_pitch_m" ? s.column_pitch_m : s.row_pitch_m;
+    const double bar = std::string(key) == "column_pitch_m" ? s.post_thickness_m : s.beam_thickness_m;
+    v.check(key, !pitches.empty() && pitches.size() <= 64, "a shelf has 1 to 64 columns and rows");
+    for (double p : pitches) {
+      v.check(key, p > bar, "pitch " + metres(p) + " leaves no opening between bars " +
+                                metres(bar) + " thick");
+      v.check(key, w.tag_size_m < p,
+              "tags of " + metres(w.tag_size_m) + " are larger than the cell pitch " + metres(p) +
+                  " (adjacent tags would overlap)");
+    }
+  }
+  v.field("base_height_m", s.base_height_m, kNonNegative);
+  v.check("base_height_m", s.base_height_m > 0.5 * s.beam_thickness_m,
+          "the lowest beam would reach below the floor");
+  v.field("depth_m", s.depth_m, kPositive);
+  v.check("depth_m", s.depth_m > std::max(s.post_thickness_m, s.beam_thickness_m),
+          "the front and back faces would overlap");
+  v.check("depth_m", w.box_size_m.x() <= s.depth_m - s.post_thickness_m,
+          "boxes " + metres(w.box_size_m.x()) + " deep do not fit between the front and back "
+          "posts of a shelf " + metres(s.depth_m) + " deep");
+  // Inside the arena: the four corners of the footprint and the top.
+  {
+    const Eigen::Isometry3d X_WS = shelf_pose_W(s);
+    const double bar = 0.5 * std::max(s.post_thickness_m, s.beam_thickness_m);
+    const double y_left = post_y_S_m(s, 0) + bar, y_right = post_y_S_m(s, static_cast<int>(s.column_pitch_m.size())) - bar;
+    const double top = beam_z_S_m(s, static_cast<int>(s.row_pitch_m.size())) + 0.5 * s.beam_thickness_m;
+    bool inside = top <= w.arena_max_W_m.z();
+    for (double x : {-bar, s.depth_m + bar}) {
+      for (double y : {y_left, y_right}) {
+        const Eigen::Vector3d c = X_WS * Eigen::Vector3d(x, y, 0.0);
+        inside = inside && c.x() >= w.arena_min_W_m.x() && c.x() <= w.arena_max_W_m.x() &&
+                 c.y() >= w.arena_min_W_m.y() && c.y() <= w.arena_max_W_m.y();
+      }
+    }
+    v.check("origin_W_m", inside, "the shelf does not fit inside the arena");
+  }
+  std::set<std::pair<int, int>> cells;
+  v.items("boxes", s.boxes,
+          [&](auto& bv, BoxPlacement& b) { visit_box(bv, b, s, cells, ctx); }, Need::optional,
+          true);
+  if constexpr (V::kReading) {
+    if (v.map().has("random_boxes")) {
+      v.check("random_boxes", !v.map().has("boxes"), "give either 'boxes' or 'random_boxes', not both");
+      const config::Map r = v.map().map("random_boxes");
+      const double fill = r.required<double>("fill_ratio", kUnit);
+      const auto seed = r.required<std::uint64_t>("seed");
+      r.finish();
+      ctx.random_fills.push_back({index, fill, seed, v.map().line_of("random_boxes")});
+    } else {
+      v.map().optional_map("random_boxes");  // marks it as read (absent)
+    }
+  }
+}
+
+/// Random placements (Reader only, after every explicit box is known): in each shelf with
+/// `random_boxes`, round(fill_ratio * cells the box fits) distinct cells and as many marker IDs
+/// unused anywhere else, both drawn without replacement from mt19937_64(seed).
+void resolve_random_boxes(Context& ctx, const std::string& file) {
+  Warehouse& w = ctx.scenario->warehouse;
+  for (const Context::RandomFill& f : ctx.random_fills) {
+    ShelfSpec& s = w.shelves[f.shelf];
+    std::vector<std::pair<int, int>> cells;
+    for (int level = 1; level <= static_cast<int>(s.row_pitch_m.size()); ++level) {
+      for (int column = 1; column <= static_cast<int>(s.column_pitch_m.size()); ++column) {
+        const bool fits =
+            w.box_size_m.y() <= s.column_pitch_m[static_cast<size_t>(column - 1)] - s.post_thickness_m &&
+            w.box_size_m.z() <= s.row_pitch_m[static_cast<size_t>(level - 1)] - s.beam_thickness_m;
+        if (fits) cells.emplace_back(level, column);
+      }
+    }
+    const auto count = static_cast<size_t>(std::llround(f.fill_ratio * static_cast<double>(cells.size())));
+    std::vector<int> free_ids;
+    for (int id = 0; id < ctx.dictionary_size; ++id) {
+      if (!ctx.marker_ids.count(id)) free_ids.push_back(id);
+    }
+    if (count > free_ids.size()) {
+      throw ConfigError(file, f.line, "'random_boxes': " + std::to_string(count) +
+                                          " boxes need more unused marker IDs than " +
+                                          w.aruco_dictionary + " has left (" +
+                                          std::to_string(free_ids.size()) + ")");
+    }
+    std::mt19937_64 gen(f.seed);
+    std::vector<std::pair<int, int>> chosen = draw_without_replacement(gen, cells, count);
+    const std::vector<int> ids = draw_without_replacement(gen, free_ids, count);
+    s.boxes.clear();
+    for (size_t i = 0; i < count; ++i) {
+      s.boxes.push_back({chosen[i].first, chosen[i].second, ids[i]});
+      ctx.marker_ids.insert(ids[i]);
+    }
+    // Listed bottom to top, left to right (IDs stay with their drawn cells).
+    std::sort(s.boxes.begin(), s.boxes.end(), [](const BoxPlacement& a, const BoxPlacement& b) {
+      return std::pair(a.level, a.column) < std::pair(b.level, b.column);
+    });
+  }
+}
+
+template <class V>
+void visit_warehouse(V& v, Warehouse& w, Context& ctx) {
+  v.section("arena", [&](auto& a) {
+    a.vec3("min_W_m", w.arena_min_W_m);
+    a.vec3("max_W_m", w.arena_max_W_m);
+    a.check("min_W_m", w.arena_min_W_m.z() == 0.0, "the floor is z = 0: the arena's min z must be 0");
+    a.check("max_W_m", (w.arena_max_W_m.array() > w.arena_min_W_m.array()).all(),
+            "every coordinate of max_W_m must exceed that of min_W_m");
+  });
+  v.section("colours", [&](auto& c) {
+    c.colour("floor", w.floor_colour);
+    c.colour("wall", w.wall_colour);
+    c.colour("bar", w.bar_colour);
+    c.colour("tag", w.tag_colour);
+    c.colour("box", w.box_colour);
+  });
+  v.section("lighting", [&](auto& l) {
+    l.field("ambient", w.lighting.ambient, kUnit);
+    l.field("directional", w.lighting.directional, kUnit);
+    l.vec3("direction_W", w.lighting.direction_W);
+    l.check("direction_W", w.lighting.direction_W.norm() > 0.0, "the light direction must not be zero");
+  });
+  v.section("tags", [&](auto& t) { t.field("size_m", w.tag_size_m, kPositive); });
+  v.section("boxes", [&](auto& b) {
+    b.vec3("size_m", w.box_size_m, kPositive);
+    b.field("aruco_dictionary", w.aruco_dictionary);
+    const auto size = aruco_dictionary_size(w.aruco_dictionary);
+    b.check("aruco_dictionary", size.has_value(),
+            "unknown ArUco dictionary '" + w.aruco_dictionary + "' (OpenCV names: DICT_4X4_50, ...)");
+    ctx.dictionary_size = size.value_or(0);
+    b.field("marker_size_m", w.marker_size_m, kPositive);
+    b.check("marker_size_m", w.marker_size_m <= std::min(w.box_size_m.y(), w.box_size_m.z()),
+            "a marker of " + metres(w.marker_size_m) + " is larger than the box face (" +
+                metres(w.box_size_m.y()) + " x " + metres(w.box_size_m.z()) + ")");
+  });
+  if (!ctx.dictionary_size) ctx.dictionary_size = aruco_dictionary_size(w.aruco_dictionary).value_or(0);
+  v.items("shelves", w.shelves, [&](auto& sv, ShelfSpec& s) { visit_shelf(sv, s, ctx); },
+          Need::required, false);
+  v.check("shelves", !w.shelves.empty(), "a warehouse has at least one shelf");
+}
+
+template <class V>
+void visit_camera(V& v, Scenario& s) {
+  CameraIntrinsics& c = s.camera;
+  v.field("width_px", c.width_px, between(1, 16384));
+  v.field("height_px", c.height_px, between(1, 16384));
+  v.field("fx_px", c.fx_px, kPositive);
+  v.field("fy_px", c.fy_px, kPositive);
+  v.field("cx_px", c.cx_px, kNonNegative);
+  v.check("cx_px", c.cx_px <= c.width_px, "the principal point must lie in the image");
+  v.field("cy_px", c.cy_px, kNonNegative);
+  v.check("cy_px", c.cy_px <= c.height_px, "the principal point must lie in the image");
+  v.field("k1", c.k1);
+  v.field("k2", c.k2);
+  v.field("p1", c.p1);
+  v.field("p2", c.p2);
+  v.field("k3", c.k3);
+  v.field("frame_rate_hz", s.frame_rate_hz, between(1.0, 240.0));
+  v.section("mount", [&](auto& m) {
+    m.field("pitch_rad", s.camera_mount.pitch_rad,
+            between(-0.5 * std::numbers::pi, 0.5 * std::numbers::pi));
+    m.vec3("p_BC_B_m", s.camera_mount.p_BC_B_m, between(-1.0, 1.0));
+  });
+}
+
+template <class V>
+void visit_vehicle(V& v, plant::VehicleParams& p) {
+  v.field("mass_kg", p.mass_kg, kPositive);
+  v.field("gravity_mps2", p.gravity_mps2, kPositive);
+  v.vec3("size_m", p.size_m, kPositive);
+  v.vec3("inertia_kgm2", p.inertia_kgm2, kNonNegative);
+  v.field("arm_x_m", p.arm_x_m, kNonNegative);
+  v.field("arm_y_m", p.arm_y_m, kNonNegative);
+  v.field("rotor_inertia_kgm2", p.rotor_inertia_kgm2, kNonNegative);
+  v.field("thrust_coeff_N_per_radps2", p.thrust_coeff_N_per_radps2, kNonNegative);
+  v.field("torque_coeff_Nm_per_radps2", p.torque_coeff_Nm_per_radps2, kNonNegative);
+  v.field("rotor_speed_max_radps", p.rotor_speed_max_radps, kNonNegative);
+  v.field("rotor_speed_min_radps", p.rotor_speed_min_radps, kNonNegative);
+  v.check("rotor_speed_min_radps", p.rotor_speed_min_radps <= p.rotor_speed_max_radps,
+          "must not exceed rotor_speed_max_radps");
+  v.field("motor_time_constant_s", p.motor_time_constant_s, kPositive);
+  v.vec3("linear_drag_Ns_per_m", p.linear_drag_Ns_per_m, kNonNegative);
+  v.vec3("quadratic_drag_Ns2_per_m2", p.quadratic_drag_Ns2_per_m2, kNonNegative);
+  v.section("switches", [&](auto& w) {
+    w.field("motor_dynamics", p.switches.motor_dynamics);
+    w.field("gyroscopic", p.switches.gyroscopic);
+    w.field("linear_drag", p.switches.linear_drag);
+    w.field("quadratic_drag", p.switches.quadratic_drag);
+    w.field("wind", p.switches.wind);
+  });
+}
+
+template <class V>
+void visit_wind(V& v, plant::WindParams& p) {
+  v.vec3("steady_W_mps", p.steady_W_mps, between(-50.0, 50.0));
+  v.field("gust_stddev_mps", p.gust_stddev_mps, between(0.0, 50.0));
+  v.field("gust_time_constant_s", p.gust_time_constant_s, kPositive);
+}
+
+template <class V>
+void visit_autopilot(V& v, plant::AutopilotParams& p) {
+  Bounds<double> kTilt = between(0.0, 0.5 * std::numbers::pi);  // exclusive at both ends
+  kTilt.min_exclusive = kTilt.max_exclusive = true;
+  v.field("rate_hz", p.rate_hz, between(1.0, 100000.0));
+  v.field("rc_horizontal_mps_at_100", p.rc_horizontal_mps_at_100, kPositive);
+  v.field("rc_vertical_mps_at_100", p.rc_vertical_mps_at_100, kPositive);
+  v.field("rc_yaw_radps_at_100", p.rc_yaw_radps_at_100, kPositive);
+  v.field("fast_mode_speed_factor", p.fast_mode_speed_factor, at_least(1.0));
+  v.field("velocity_time_constant_s", p.velocity_time_constant_s, kPositive);
+  v.field("vertical_time_constant_s", p.vertical_time_constant_s, kPositive);
+  v.field("yaw_time_constant_s", p.yaw_time_constant_s, kPositive);
+  v.field("tilt_limit_slow_rad", p.tilt_limit_slow_rad, kTilt);
+  v.field("tilt_limit_fast_rad", p.tilt_limit_fast_rad, kTilt);
+  v.check("tilt_limit_fast_rad", p.tilt_limit_fast_rad >= p.tilt_limit_slow_rad,
+          "must not be below tilt_limit_slow_rad");
+  v.field("takeoff_height_m", p.takeoff_height_m, kPositive);
+  v.field("takeoff_reply_delay_s", p.takeoff_reply_delay_s, kNonNegative);
+  v.field("land_speed_mps", p.land_speed_mps, kPositive);
+  v.field("watchdog_s", p.watchdog_s, kPositive);
+}
+
+template <class V>
+void visit_start(V& v, Scenario& s) {
+  StartState& st = s.start;
+  v.vec3("p_WB_m", st.p_WB_m, kAnyFinite, Need::required);
+  v.field("yaw_rad", st.yaw_rad, between(-std::numbers::pi, std::numbers::pi));
+  v.field("landed", st.landed);
+  if constexpr (V::kReading) {
+    const double half_height = 0.5 * s.vehicle.size_m.z();
+    if (st.landed) {
+      v.check("p_WB_m", st.p_WB_m.z() == 0.0, "a landed start is on the floor: z must be 0");
+    } else {
+      v.check("p_WB_m", st.p_WB_m.z() > half_height,
+              "a hovering start must be above the floor: z > " + metres(half_height));
+    }
+    // The vehicle must start clear of the walls and of every shelf part (the floor it may touch).
+    Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();
+    X_WB.linear() = Eigen::AngleAxisd(st.yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    X_WB.translation() = st.p_WB_m;
+    if (st.landed) X_WB.translation().z() = half_height;
+    const plant::CollisionWorld world(s.warehouse, s.vehicle.size_m, 0.0);
+    const auto hits = world.overlaps(X_WB, 0, plant::FloorContacts::ignore);
+    v.check("p_WB_m", hits.empty(),
+            hits.empty() ? "" : "the vehicle would start inside the " + hits.front().element.name);
+  }
+}
+
+bool valid_id(const std::string& name) {
+  if (name.empty() || name.size() > 64) return false;
+  return std::all_of(name.begin(), name.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.';
+  });
+}
+
+constexpr int kFormatVersion = 1;
+
+template <class V>
+void visit_scenario(V& v, Scenario& s, Context& ctx) {
+  int version = kFormatVersion;
+  v.field("version", version, between(kFormatVersion, kFormatVersion));
+  v.field("name", s.name, {}, Need::required);
+  v.check("name", valid_id(s.name), "a name is 1 to 64 letters, digits, '_', '-' or '.'");
+  v.section("warehouse", [&](auto& w) { visit_warehouse(w, s.warehouse, ctx); }, Need::required);
+  if constexpr (V::kReading) resolve_random_boxes(ctx, v.map().file());
+  v.section("camera", [&](auto& c) { visit_camera(c, s); });
+  v.section("vehicle", [&](auto& p) { visit_vehicle(p, s.vehicle); });
+  v.section("wind", [&](auto& p) { visit_wind(p, s.wind); });
+  v.section("autopilot", [&](auto& p) { visit_autopilot(p, s.autopilot); });
+  // The start is checked against the vehicle and the warehouse, so it comes last.
+  v.section("start", [&](auto& p) { visit_start(p, s); }, Need::required);
+}
+
+Scenario read(const config::Document& doc) {
+  const config::Map root = doc.root();
+  Scenario s;
+  Context ctx;
+  ctx.scenario = &s;
+  Reader reader(root);
+  visit_scenario(reader, s, ctx);
+  root.finish();
+  return s;
+}
+
+}  // namespace
+
+std::optional<int> aruco_dictionary_size(const std::string& name) {
+  const auto& m = aruco_dictionaries();
+  const auto it = m.find(name);
+  if (it == m.end()) return std::nullopt;
+  return it->second;
+}
+
+Scenario load_scenario(const std::string& path) { return read(config::Document::from_file(path)); }
+
+Scenario parse_scenario(const std::string& yaml_text, const std::string& name_for_errors) {
+  return read(config::Document::from_string(yaml_text, name_for_errors));
+}
+
+std::string write_scenario(const Scenario& scenario) {
+  Scenario s = scenario;  // the visitors take mutable references; the writer only reads them
+  Context ctx;
+  ctx.scenario = &s;
+  std::string out =
+      "# shelfcross scenario, fully resolved: every key written out, defaults included.\n"
+      "# Format: scenarios/README.md\n";
+  Writer writer(out, 0);
+  visit_scenario(writer, s, ctx);
+  return out;
+}
+
+}  // namespace shelfcross::verification
