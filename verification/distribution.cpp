@@ -96,29 +96,4 @@ Distribution parse_distribution(const config::Map& parent, const std::string& ke
   return d;
 }
 
-void emit_distribution(YAML::Emitter& out, const Distribution& d) {
-  out << YAML::Flow << YAML::BeginMap;
-  switch (d.kind) {
-    case Distribution::Kind::uniform:
-      out << YAML::Key << "uniform" << YAML::Value << YAML::BeginMap << YAML::Key << "min" << YAML::Value
-          << d.min << YAML::Key << "max" << YAML::Value << d.max << YAML::EndMap;
-      break;
-    case Distribution::Kind::normal:
-      out << YAML::Key << "normal" << YAML::Value << YAML::BeginMap << YAML::Key << "mean" << YAML::Value
-          << d.mean << YAML::Key << "stddev" << YAML::Value << d.stddev << YAML::EndMap;
-      break;
-    case Distribution::Kind::truncated_normal:
-      out << YAML::Key << "truncated_normal" << YAML::Value << YAML::BeginMap << YAML::Key << "mean"
-          << YAML::Value << d.mean << YAML::Key << "stddev" << YAML::Value << d.stddev << YAML::Key << "min"
-          << YAML::Value << d.min << YAML::Key << "max" << YAML::Value << d.max << YAML::EndMap;
-      break;
-    case Distribution::Kind::choice:
-      out << YAML::Key << "choice" << YAML::Value << YAML::BeginMap << YAML::Key << "values" << YAML::Value
-          << YAML::Flow << d.values << YAML::Key << "weights" << YAML::Value << YAML::Flow << d.weights
-          << YAML::EndMap;
-      break;
-  }
-  out << YAML::EndMap;
-}
-
 }  // namespace shelfcross::verification

@@ -13,8 +13,6 @@
 #include <string>
 #include <vector>
 
-#include <yaml-cpp/yaml.h>
-
 #include "config/strict_yaml.hpp"
 #include "shelfcross/random.hpp"
 
@@ -39,8 +37,5 @@ struct Distribution {
 /// Reads `parent[key]` as a distribution; refuses unknown kinds, bad parameters (min > max,
 /// stddev < 0, empty or negative-weight choices) with file:line.
 Distribution parse_distribution(const config::Map& parent, const std::string& key);
-
-/// Writes the distribution back in the same form (flow style), for the resolved scenario.
-void emit_distribution(YAML::Emitter& out, const Distribution& d);
 
 }  // namespace shelfcross::verification

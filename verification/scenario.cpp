@@ -1,4 +1,5 @@
 #include "verification/scenario.hpp"
+#include "verification/dispersion.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -9,7 +10,6 @@
 #include <limits>
 #include <map>
 #include <numbers>
-#include <random>
 #include <set>
 #include <utility>
 #include <vector>
@@ -57,6 +57,8 @@ const Bounds<double> kPositive = above(0.0);
 const Bounds<double> kNonNegative = at_least(0.0);
 const Bounds<double> kUnit = between(0.0, 1.0);
 const Bounds<double> kAnyFinite{};
+
+std::string format_double(double x);
 
 class Reader {
  public:
@@ -106,6 +108,23 @@ class Reader {
       visit(r, v[i]);
       maps[i].finish();
     }
+  }
+  /// The dispersions: a mapping from parameter names (dispersion.hpp) to distributions whose
+  /// every draw stays in the parameter's allowed range.
+  void distributions(const char* key, std::map<std::string, Distribution>& out) const {
+    const std::optional<config::Map> sub = map_.optional_map(key);
+    if (!sub) return;
+    out.clear();
+    for (const DispersionParameter& p : dispersion_parameters()) {
+      if (!sub->has(p.name)) continue;
+      const Distribution d = parse_distribution(*sub, p.name);
+      if (d.lowest() < p.lowest || d.highest() > p.highest) {
+        sub->fail(p.name, "its draws can leave the allowed range [" + format_double(p.lowest) + ", " +
+                              format_double(p.highest) + "]");
+      }
+      out[p.name] = d;
+    }
+    sub->finish();
   }
   /// A consistency rule: refused with the line of `key` when `ok` is false.
   void check(const char* key, bool ok, const std::string& reason) const {
@@ -188,9 +207,34 @@ class Writer {
       }
     }
   }
+  void distributions(const char* key, std::map<std::string, Distribution>& m) {
+    if (m.empty()) {
+      put(key, "{}");
+      return;
+    }
+    open(key);
+    Writer w(out_, indent_ + 2);
+    for (const auto& [name, d] : m) w.put(name.c_str(), flow_text(d));
+  }
   void check(const char*, bool, const std::string&) const {}
 
  private:
+  /// A distribution in the flow form of distribution.hpp, doubles exact.
+  static std::string flow_text(const Distribution& d) {
+    const auto f = [](double x) { return format_double(x); };
+    switch (d.kind) {
+      case Distribution::Kind::uniform:
+        return "{uniform: {min: " + f(d.min) + ", max: " + f(d.max) + "}}";
+      case Distribution::Kind::normal:
+        return "{normal: {mean: " + f(d.mean) + ", stddev: " + f(d.stddev) + "}}";
+      case Distribution::Kind::truncated_normal:
+        return "{truncated_normal: {mean: " + f(d.mean) + ", stddev: " + f(d.stddev) + ", min: " + f(d.min) +
+               ", max: " + f(d.max) + "}}";
+      case Distribution::Kind::choice:
+        return "{choice: {values: " + flow_list(d.values) + ", weights: " + flow_list(d.weights) + "}}";
+    }
+    return "{}";
+  }
   static std::string flow_list(const std::vector<double>& v) {
     std::string s = "[";
     for (size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + format_double(v[i]);
@@ -235,29 +279,6 @@ const std::map<std::string, int>& aruco_dictionaries() {
     return m;
   }();
   return sizes;
-}
-
-// ---- Seeded draws (bit-reproducible: only mt19937_64's integer output is used) ----
-
-/// Uniform integer in [0, n) by rejection, identical on every standard library.
-std::uint64_t draw_below(std::mt19937_64& gen, std::uint64_t n) {
-  const std::uint64_t limit = std::numeric_limits<std::uint64_t>::max() -
-                              std::numeric_limits<std::uint64_t>::max() % n;
-  for (;;) {
-    const std::uint64_t x = gen();
-    if (x < limit) return x % n;
-  }
-}
-
-/// The first k items of a seeded Fisher-Yates shuffle of v.
-template <class T>
-std::vector<T> draw_without_replacement(std::mt19937_64& gen, std::vector<T> v, size_t k) {
-  for (size_t i = 0; i < k; ++i) {
-    const size_t j = i + static_cast<size_t>(draw_below(gen, v.size() - i));
-    std::swap(v[i], v[j]);
-  }
-  v.resize(k);
-  return v;
 }
 
 // ---- The sections ----
@@ -384,43 +405,22 @@ void visit_shelf(V& v, ShelfSpec& s, Context& ctx) {
 
 /// Random placements (Reader only, after every explicit box is known): in each shelf with
 /// `random_boxes`, round(fill_ratio * cells the box fits) distinct cells and as many marker IDs
-/// unused anywhere else, both drawn without replacement from mt19937_64(seed).
+/// unused anywhere else, both drawn without replacement (place_random_boxes, seeded stream).
 void resolve_random_boxes(Context& ctx, const std::string& file) {
   Warehouse& w = ctx.scenario->warehouse;
   for (const Context::RandomFill& f : ctx.random_fills) {
     ShelfSpec& s = w.shelves[f.shelf];
-    std::vector<std::pair<int, int>> cells;
-    for (int level = 1; level <= static_cast<int>(s.row_pitch_m.size()); ++level) {
-      for (int column = 1; column <= static_cast<int>(s.column_pitch_m.size()); ++column) {
-        const bool fits =
-            w.box_size_m.y() <= s.column_pitch_m[static_cast<size_t>(column - 1)] - s.post_thickness_m &&
-            w.box_size_m.z() <= s.row_pitch_m[static_cast<size_t>(level - 1)] - s.beam_thickness_m;
-        if (fits) cells.emplace_back(level, column);
-      }
-    }
-    const auto count = static_cast<size_t>(std::llround(f.fill_ratio * static_cast<double>(cells.size())));
     std::vector<int> free_ids;
     for (int id = 0; id < ctx.dictionary_size; ++id) {
       if (!ctx.marker_ids.count(id)) free_ids.push_back(id);
     }
-    if (count > free_ids.size()) {
-      throw ConfigError(file, f.line, "'random_boxes': " + std::to_string(count) +
-                                          " boxes need more unused marker IDs than " +
-                                          w.aruco_dictionary + " has left (" +
-                                          std::to_string(free_ids.size()) + ")");
+    RandomStream stream(f.seed, StreamId::box_placement);
+    try {
+      s.boxes = place_random_boxes(w, s, f.fill_ratio, free_ids, stream);
+    } catch (const std::invalid_argument& e) {
+      throw ConfigError(file, f.line, std::string("'random_boxes': ") + e.what() + " (" + w.aruco_dictionary + ")");
     }
-    std::mt19937_64 gen(f.seed);
-    std::vector<std::pair<int, int>> chosen = draw_without_replacement(gen, cells, count);
-    const std::vector<int> ids = draw_without_replacement(gen, free_ids, count);
-    s.boxes.clear();
-    for (size_t i = 0; i < count; ++i) {
-      s.boxes.push_back({chosen[i].first, chosen[i].second, ids[i]});
-      ctx.marker_ids.insert(ids[i]);
-    }
-    // Listed bottom to top, left to right (IDs stay with their drawn cells).
-    std::sort(s.boxes.begin(), s.boxes.end(), [](const BoxPlacement& a, const BoxPlacement& b) {
-      return std::pair(a.level, a.column) < std::pair(b.level, b.column);
-    });
+    for (const BoxPlacement& b : s.boxes) ctx.marker_ids.insert(b.marker_id);
   }
 }
 
@@ -571,6 +571,36 @@ void visit_start(V& v, Scenario& s) {
   }
 }
 
+template <class V>
+void visit_link(V& v, LinkSettings& l) {
+  v.field("video_latency_mean_s", l.video_latency_mean_s, between(0.0, 5.0));
+  v.field("video_latency_jitter_s", l.video_latency_jitter_s, between(0.0, 1.0));
+  v.field("frame_drop_probability", l.frame_drop_probability, between(0.0, 0.9));
+  v.field("state_latency_mean_s", l.state_latency_mean_s, between(0.0, 2.0));
+  v.field("state_latency_jitter_s", l.state_latency_jitter_s, between(0.0, 1.0));
+  v.field("command_latency_mean_s", l.command_latency_mean_s, between(0.0, 2.0));
+  v.field("command_latency_jitter_s", l.command_latency_jitter_s, between(0.0, 1.0));
+  v.field("command_loss_probability", l.command_loss_probability, between(0.0, 0.9));
+  v.field("compute_latency_s", l.compute_latency_s, between(0.0, 1.0));
+}
+
+template <class V>
+void visit_cosim(V& v, CosimSettings& c) {
+  v.field("state_rate_hz", c.state_rate_hz, between(1.0, 100.0));
+  v.field("timeout_s", c.timeout_s, between(1.0, 3600.0));
+  v.field("trajectory_rate_hz", c.trajectory_rate_hz, between(1.0, 1000.0));
+  v.field("vehicle_margin_m", c.vehicle_margin_m, between(0.0, 0.5));
+  v.field("battery_start_pct", c.battery_start_pct, between(1.0, 100.0));
+  v.field("endurance_s", c.endurance_s, kPositive);
+  v.field("render_noise_stddev", c.render_noise_stddev, between(0.0, 50.0));
+  v.field("motion_blur_samples", c.motion_blur_samples, between(1, 16));
+  v.field("settling_fraction", c.settling_fraction, between(0.0, 1.0));
+  v.field("settling_floor_z_m", c.settling_floor_z_m, kNonNegative);
+  v.field("settling_floor_yaw_rad", c.settling_floor_yaw_rad, kNonNegative);
+  v.field("settling_floor_y_m", c.settling_floor_y_m, kNonNegative);
+  v.section("link", [&](auto& l) { visit_link(l, c.link); });
+}
+
 bool valid_id(const std::string& name) {
   if (name.empty() || name.size() > 64) return false;
   return std::all_of(name.begin(), name.end(), [](char c) {
@@ -594,6 +624,8 @@ void visit_scenario(V& v, Scenario& s, Context& ctx) {
   v.section("autopilot", [&](auto& p) { visit_autopilot(p, s.autopilot); });
   // The start is checked against the vehicle and the warehouse, so it comes last.
   v.section("start", [&](auto& p) { visit_start(p, s); }, Need::required);
+  v.section("cosim", [&](auto& c) { visit_cosim(c, s.cosim); });
+  v.distributions("dispersions", s.dispersions);
 }
 
 Scenario read(const config::Document& doc) {
@@ -608,6 +640,36 @@ Scenario read(const config::Document& doc) {
 }
 
 }  // namespace
+
+std::vector<BoxPlacement> place_random_boxes(const Warehouse& w, const ShelfSpec& s, double fill_ratio,
+                                             std::vector<int> free_ids, RandomStream& stream) {
+  std::vector<std::pair<int, int>> cells;
+  for (int level = 1; level <= static_cast<int>(s.row_pitch_m.size()); ++level) {
+    for (int column = 1; column <= static_cast<int>(s.column_pitch_m.size()); ++column) {
+      const bool fits = w.box_size_m.y() <= s.column_pitch_m[static_cast<size_t>(column - 1)] - s.post_thickness_m &&
+                        w.box_size_m.z() <= s.row_pitch_m[static_cast<size_t>(level - 1)] - s.beam_thickness_m;
+      if (fits) cells.emplace_back(level, column);
+    }
+  }
+  const auto count = static_cast<size_t>(std::llround(fill_ratio * static_cast<double>(cells.size())));
+  if (count > free_ids.size()) {
+    throw std::invalid_argument(std::to_string(count) + " boxes need more unused marker IDs than are left (" +
+                                std::to_string(free_ids.size()) + ")");
+  }
+  // The first `count` items of a seeded Fisher-Yates shuffle: cells, then IDs.
+  const auto shuffle_prefix = [&](auto& v) {
+    for (size_t i = 0; i < count; ++i) std::swap(v[i], v[i + stream.below(v.size() - i)]);
+  };
+  shuffle_prefix(cells);
+  shuffle_prefix(free_ids);
+  std::vector<BoxPlacement> boxes;
+  for (size_t i = 0; i < count; ++i) boxes.push_back({cells[i].first, cells[i].second, free_ids[i]});
+  // Listed bottom to top, left to right (IDs stay with their drawn cells).
+  std::sort(boxes.begin(), boxes.end(), [](const BoxPlacement& a, const BoxPlacement& b) {
+    return std::pair(a.level, a.column) < std::pair(b.level, b.column);
+  });
+  return boxes;
+}
 
 std::optional<int> aruco_dictionary_size(const std::string& name) {
   const auto& m = aruco_dictionaries();

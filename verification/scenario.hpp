@@ -13,18 +13,23 @@
 // Random box placement ("random_boxes: {fill_ratio, seed}") is resolved at load time from a
 // seeded stream, so a loaded Scenario holds explicit placements only and its written form lists
 // them; the same file always gives the same boxes, on every machine.
-// Top-level sections: version, name, warehouse, camera, vehicle, wind, autopilot, start. The
-// co-simulation and dispersion settings of later issues will be the top-level sections `cosim:`
-// and `dispersions:`; until their readers exist, they are refused as unknown keys.
+// Top-level sections: version, name, warehouse, camera, vehicle, wind, autopilot, start,
+// cosim (co-simulation and link settings, cosim_settings.hpp) and dispersions (campaign
+// distributions over the named parameters of dispersion.hpp).
 
+#include <map>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
 #include "plant/params.hpp"
 #include "shelfcross/camera.hpp"
+#include "shelfcross/random.hpp"
 #include "shelfcross/warehouse.hpp"
+#include "verification/cosim_settings.hpp"
+#include "verification/distribution.hpp"
 
 namespace shelfcross::verification {
 
@@ -49,6 +54,8 @@ struct Scenario {
   plant::WindParams wind;
   plant::AutopilotParams autopilot;
   StartState start;
+  CosimSettings cosim;
+  std::map<std::string, Distribution> dispersions;  ///< by parameter name (dispersion.hpp)
   bool operator==(const Scenario&) const = default;
 };
 
@@ -62,6 +69,14 @@ Scenario parse_scenario(const std::string& yaml_text, const std::string& name_fo
 /// fewest digits that read back to the same value. parse_scenario(write_scenario(s)) == s, and
 /// writing that again gives the same text.
 std::string write_scenario(const Scenario& scenario);
+
+/// Boxes for `shelf`: `fill_ratio` of the cells a box of the warehouse's size fits (rounded),
+/// chosen without replacement from `stream`, with marker IDs drawn without replacement from
+/// `free_ids`; listed bottom to top, left to right. Throws std::invalid_argument when
+/// `free_ids` holds fewer IDs than boxes.
+std::vector<BoxPlacement> place_random_boxes(const Warehouse& warehouse, const ShelfSpec& shelf,
+                                             double fill_ratio, std::vector<int> free_ids,
+                                             RandomStream& stream);
 
 /// The number of markers of an OpenCV predefined ArUco dictionary ("DICT_4X4_50" -> 50), or
 /// nullopt for a name OpenCV does not have.

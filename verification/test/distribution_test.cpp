@@ -24,19 +24,15 @@ int error_line(const std::string& yaml) {
   return -1;
 }
 
-TEST(Distribution, ParsesEveryKindAndRoundTrips) {
-  for (const std::string text :
-       {"x: {uniform: {min: 2.5, max: 3.5}}", "x: {normal: {mean: 0.1, stddev: 0.2}}",
-        "x: {truncated_normal: {mean: 0, stddev: 0.05, min: -0.1, max: 0.2}}",
-        "x: {choice: {values: [0.6, 1, 1.4], weights: [1, 2, 1]}}"}) {
-    const Distribution d = parse(text);
-    YAML::Emitter out;
-    out.SetDoublePrecision(17);
-    out << YAML::BeginMap << YAML::Key << "x" << YAML::Value;
-    emit_distribution(out, d);
-    out << YAML::EndMap;
-    EXPECT_EQ(parse(out.c_str()), d) << text;
-  }
+TEST(Distribution, ParsesEveryKind) {
+  EXPECT_EQ(parse("x: {uniform: {min: 2.5, max: 3.5}}").max, 3.5);
+  EXPECT_EQ(parse("x: {normal: {mean: 0.1, stddev: 0.2}}").stddev, 0.2);
+  const Distribution t = parse("x: {truncated_normal: {mean: 0, stddev: 0.05, min: -0.1, max: 0.2}}");
+  EXPECT_EQ(t.kind, Distribution::Kind::truncated_normal);
+  EXPECT_EQ(t.lowest(), -0.1);
+  const Distribution c = parse("x: {choice: {values: [0.6, 1, 1.4]}}");
+  EXPECT_EQ(c.weights, (std::vector<double>{1, 1, 1}));
+  EXPECT_EQ(c.highest(), 1.4);
 }
 
 TEST(Distribution, RefusesBadSpecsWithLines) {

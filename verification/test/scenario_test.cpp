@@ -209,8 +209,9 @@ TEST(Scenario, RefusesUnknownKey) {
   expect_refused(insert_line(4, "  colour: red"), 4, "unknown key 'colour'");
   expect_refused(insert_line(12, "  height_m: 1.0"), 12, "unknown key 'height_m'");
   // Later issues add these sections; until then they are refused, not silently ignored.
-  expect_refused(insert_line(11, "cosim: {rate_hz: 500}"), 11, "unknown key 'cosim'");
-  expect_refused(insert_line(11, "dispersions: {}"), 11, "unknown key 'dispersions'");
+  expect_refused(insert_line(11, "cosim: {rate_hz: 500}"), 11, "unknown key 'rate_hz'");
+  expect_refused(insert_line(11, "dispersions: {gravity_mps2: {uniform: {min: 9, max: 10}}}"), 11,
+                 "unknown key 'gravity_mps2'");
 }
 
 TEST(Scenario, RefusesWrongType) {

@@ -1,0 +1,30 @@
+#pragma once
+// Settings of the lockstep co-simulation that a scenario's `cosim:` section holds. The
+// autopilot rate is autopilot.rate_hz and the frame rate camera.frame_rate_hz; these are the
+// rest: the state-record rate, the link, the end of a run, and how metrics are judged.
+
+#include <cmath>
+#include <numbers>
+
+#include "verification/link_model.hpp"
+
+namespace shelfcross::verification {
+
+struct CosimSettings {
+  double state_rate_hz = 10.0;        ///< the Tello pushes a state record every 100 ms
+  double timeout_s = 120.0;           ///< a run not finished by then ends as "timeout"
+  double trajectory_rate_hz = 50.0;   ///< trajectory.csv and plot sampling
+  double vehicle_margin_m = 0.0;      ///< added around the vehicle box for contacts
+  double battery_start_pct = 100.0;
+  double endurance_s = 780.0;         ///< 13 min hover from full (METHOD.md Table 4): linear drain
+  double render_noise_stddev = 2.0;   ///< camera sensor noise, grey levels
+  int motion_blur_samples = 1;        ///< 1: no blur
+  double settling_fraction = 0.02;    ///< band: fraction of the initial error ...
+  double settling_floor_z_m = 0.01;   ///< ... never tighter than 1 cm ...
+  double settling_floor_yaw_rad = 0.5 * std::numbers::pi / 180.0;  ///< ... or 0.5 deg
+  double settling_floor_y_m = 0.01;   ///< lateral response band floor
+  LinkSettings link;
+  bool operator==(const CosimSettings&) const = default;
+};
+
+}  // namespace shelfcross::verification

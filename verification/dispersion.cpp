@@ -1,0 +1,127 @@
+#include "verification/dispersion.hpp"
+
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+#include "verification/scenario.hpp"
+
+namespace shelfcross::verification {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+/// A parameter's own stream: the dispersion stream of a seed mixed with the name's hash
+/// (FNV-1a, fixed), so streams do not depend on which other parameters are dispersed.
+RandomStream parameter_stream(std::uint64_t run_seed, const std::string& name) {
+  std::uint64_t h = 0xcbf29ce484222325ull;
+  for (unsigned char c : name) h = (h ^ c) * 0x100000001b3ull;
+  return RandomStream(run_seed ^ mix64(h), StreamId::dispersion);
+}
+
+double wrap_pi(double a) { return std::remainder(a, 2.0 * kPi); }
+
+}  // namespace
+
+const std::vector<DispersionParameter>& dispersion_parameters() {
+  static const std::vector<DispersionParameter> table{
+      {"start_distance_m", 0.5, 20.0},
+      {"start_lateral_m", -5.0, 5.0},
+      {"start_yaw_rad", -kPi, kPi},
+      {"light_scale", 0.05, 3.0},
+      {"box_fill_ratio", 0.0, 1.0},
+      {"camera_focal_error_rel", -0.2, 0.2},
+      {"camera_cx_error_px", -50.0, 50.0},
+      {"camera_cy_error_px", -50.0, 50.0},
+      {"rc_gain_scale", 0.2, 5.0},
+      {"velocity_time_constant_s", 0.05, 3.0},
+      {"vertical_time_constant_s", 0.05, 3.0},
+      {"yaw_time_constant_s", 0.02, 3.0},
+      {"mass_scale", 0.5, 2.0},
+      {"wind_speed_mps", 0.0, 10.0},
+      {"wind_direction_rad", -2.0 * kPi, 2.0 * kPi},
+      {"gust_stddev_mps", 0.0, 5.0},
+      {"video_latency_mean_s", 0.0, 5.0},
+      {"frame_drop_probability", 0.0, 0.9},
+      {"command_latency_mean_s", 0.0, 2.0},
+      {"command_loss_probability", 0.0, 0.9},
+      {"compute_latency_s", 0.0, 1.0},
+  };
+  return table;
+}
+
+DrawnValues draw_dispersions(const std::map<std::string, Distribution>& dispersions, std::uint64_t run_seed) {
+  DrawnValues drawn;
+  for (const auto& [name, distribution] : dispersions) {
+    RandomStream stream = parameter_stream(run_seed, name);
+    drawn[name] = distribution.sample(stream);
+  }
+  return drawn;
+}
+
+RunSetup disperse(const Scenario& nominal, std::uint64_t run_seed) {
+  RunSetup setup;
+  setup.seed = run_seed;
+  setup.drawn = draw_dispersions(nominal.dispersions, run_seed);
+  auto s = std::make_shared<Scenario>(nominal);
+  setup.believed_camera = nominal.camera;
+  const auto has = [&](const char* name) { return setup.drawn.count(name) > 0; };
+  const auto value = [&](const char* name) { return setup.drawn.at(name); };
+
+  // Start: in shelf 0's frame S (x_S into the shelf, y_S left), the start sits at x_S = -d.
+  if (!s->warehouse.shelves.empty() && (has("start_distance_m") || has("start_lateral_m"))) {
+    const Eigen::Isometry3d X_WS = shelf_pose_W(s->warehouse.shelves.front());
+    Eigen::Vector3d p_S = X_WS.inverse() * s->start.p_WB_m;
+    if (has("start_distance_m")) p_S.x() = -value("start_distance_m");
+    if (has("start_lateral_m")) p_S.y() += value("start_lateral_m");
+    s->start.p_WB_m = X_WS * p_S;
+  }
+  if (has("start_yaw_rad")) s->start.yaw_rad = wrap_pi(s->start.yaw_rad + value("start_yaw_rad"));
+  if (has("light_scale")) {
+    s->warehouse.lighting.ambient *= value("light_scale");
+    s->warehouse.lighting.directional *= value("light_scale");
+  }
+  if (has("box_fill_ratio")) {
+    RandomStream stream(run_seed, StreamId::box_placement);
+    const int dictionary = aruco_dictionary_size(s->warehouse.aruco_dictionary).value_or(0);
+    std::vector<int> free_ids;
+    for (int id = 0; id < dictionary; ++id) free_ids.push_back(id);
+    for (ShelfSpec& shelf : s->warehouse.shelves) {
+      shelf.boxes = place_random_boxes(s->warehouse, shelf, value("box_fill_ratio"), free_ids, stream);
+      for (const BoxPlacement& b : shelf.boxes) std::erase(free_ids, b.marker_id);
+    }
+  }
+  if (has("camera_focal_error_rel")) {
+    setup.believed_camera.fx_px *= 1.0 + value("camera_focal_error_rel");
+    setup.believed_camera.fy_px *= 1.0 + value("camera_focal_error_rel");
+  }
+  if (has("camera_cx_error_px")) setup.believed_camera.cx_px += value("camera_cx_error_px");
+  if (has("camera_cy_error_px")) setup.believed_camera.cy_px += value("camera_cy_error_px");
+  plant::AutopilotParams& ap = s->autopilot;
+  if (has("rc_gain_scale")) {
+    ap.rc_horizontal_mps_at_100 *= value("rc_gain_scale");
+    ap.rc_vertical_mps_at_100 *= value("rc_gain_scale");
+    ap.rc_yaw_radps_at_100 *= value("rc_gain_scale");
+  }
+  if (has("velocity_time_constant_s")) ap.velocity_time_constant_s = value("velocity_time_constant_s");
+  if (has("vertical_time_constant_s")) ap.vertical_time_constant_s = value("vertical_time_constant_s");
+  if (has("yaw_time_constant_s")) ap.yaw_time_constant_s = value("yaw_time_constant_s");
+  if (has("mass_scale")) s->vehicle.mass_kg *= value("mass_scale");
+  if (has("wind_speed_mps") || has("wind_direction_rad")) {
+    const Eigen::Vector3d& w = s->wind.steady_W_mps;
+    const double speed = has("wind_speed_mps") ? value("wind_speed_mps") : w.head<2>().norm();
+    const double direction = has("wind_direction_rad") ? value("wind_direction_rad") : std::atan2(w.y(), w.x());
+    s->wind.steady_W_mps = {speed * std::cos(direction), speed * std::sin(direction), w.z()};
+  }
+  if (has("gust_stddev_mps")) s->wind.gust_stddev_mps = value("gust_stddev_mps");
+  LinkSettings& link = s->cosim.link;
+  if (has("video_latency_mean_s")) link.video_latency_mean_s = value("video_latency_mean_s");
+  if (has("frame_drop_probability")) link.frame_drop_probability = value("frame_drop_probability");
+  if (has("command_latency_mean_s")) link.command_latency_mean_s = value("command_latency_mean_s");
+  if (has("command_loss_probability")) link.command_loss_probability = value("command_loss_probability");
+  if (has("compute_latency_s")) link.compute_latency_s = value("compute_latency_s");
+  setup.scenario = std::move(s);
+  return setup;
+}
+
+}  // namespace shelfcross::verification

@@ -1,0 +1,72 @@
+#pragma once
+// Dispersed parameters of a campaign: the scenario's `dispersions:` section maps names from a
+// fixed table to distributions (distribution.hpp). Each run draws every listed parameter from
+// its own stream, derived from (run seed, parameter name), so adding a parameter to a
+// scenario never changes the draws of the others, and a run's draws depend on nothing but its
+// seed.
+//
+// The table (name: what a draw does; allowed range of a draw):
+//   start_distance_m        start this far in front of shelf 0's front face      [0.5, 20]
+//   start_lateral_m         start offset along the shelf (y_S), added            [-5, 5]
+//   start_yaw_rad           initial heading, added to the start yaw              [-pi, pi]
+//   light_scale             ambient and directional light intensities, times     [0.05, 3]
+//   box_fill_ratio          re-place boxes: this fraction of the cells that fit  [0, 1]
+//   camera_focal_error_rel  the flight software's fx, fy are (1 + e) x the truth [-0.2, 0.2]
+//   camera_cx_error_px      the flight software's cx is off by e                 [-50, 50]
+//   camera_cy_error_px      the flight software's cy is off by e                 [-50, 50]
+//   rc_gain_scale           autopilot rc-to-velocity gains (all axes), times     [0.2, 5]
+//   velocity_time_constant_s  autopilot horizontal velocity time constant       [0.05, 3]
+//   vertical_time_constant_s  autopilot vertical time constant                  [0.05, 3]
+//   yaw_time_constant_s     autopilot yaw-rate time constant                     [0.02, 3]
+//   mass_scale              vehicle mass, times                                  [0.5, 2]
+//   wind_speed_mps          steady wind speed                                    [0, 10]
+//   wind_direction_rad      steady wind direction, from +x_W toward +y_W         [-2pi, 2pi]
+//   gust_stddev_mps         gust intensity                                       [0, 5]
+//   video_latency_mean_s    link: mean video latency                             [0, 5]
+//   frame_drop_probability  link: dropped frames                                 [0, 0.9]
+//   command_latency_mean_s  link: mean command latency                           [0, 2]
+//   command_loss_probability link: lost commands                                 [0, 0.9]
+//   compute_latency_s       flight software step time                            [0, 1]
+// Values outside a distribution's support cannot be drawn; a distribution whose support
+// leaves the allowed range (a normal on a bounded parameter, say) is refused at load time.
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "shelfcross/camera.hpp"
+#include "verification/distribution.hpp"
+
+namespace shelfcross::verification {
+
+struct Scenario;
+
+struct DispersionParameter {
+  const char* name;
+  double lowest;   ///< the range a draw must stay in
+  double highest;
+};
+
+/// The table above, in a fixed order.
+const std::vector<DispersionParameter>& dispersion_parameters();
+
+/// One run's drawn values, by parameter name (the scenario's dispersed parameters only).
+using DrawnValues = std::map<std::string, double>;
+
+DrawnValues draw_dispersions(const std::map<std::string, Distribution>& dispersions, std::uint64_t run_seed);
+
+/// What a run is set up with: the dispersed truth, and the camera model the flight software
+/// believes (the truth's intrinsics plus any calibration error).
+struct RunSetup {
+  std::uint64_t seed = 0;
+  DrawnValues drawn;
+  std::shared_ptr<const Scenario> scenario;
+  CameraIntrinsics believed_camera;
+};
+
+/// The nominal scenario with one run's draws applied.
+RunSetup disperse(const Scenario& nominal, std::uint64_t run_seed);
+
+}  // namespace shelfcross::verification

@@ -1,0 +1,85 @@
+#include "verification/dispersion.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "verification/scenario.hpp"
+
+namespace shelfcross::verification {
+namespace {
+
+const std::string kDefault = std::string(SHELFCROSS_SOURCE_DIR) + "/scenarios/paper_test_shelf.yaml";
+
+Scenario with_dispersions(const std::string& yaml_section) {
+  Scenario s = load_scenario(kDefault);
+  std::string text = write_scenario(s);
+  text = text.substr(0, text.find("dispersions:")) + yaml_section;
+  return parse_scenario(text, "d.yaml");
+}
+
+TEST(Dispersion, DrawsDependOnlyOnSeedAndParameter) {
+  const Scenario a = with_dispersions(
+      "dispersions:\n  start_distance_m: {uniform: {min: 2.5, max: 3.5}}\n"
+      "  start_yaw_rad: {truncated_normal: {mean: 0, stddev: 0.05, min: -0.2, max: 0.2}}\n");
+  const Scenario b = with_dispersions("dispersions:\n  start_distance_m: {uniform: {min: 2.5, max: 3.5}}\n");
+  for (std::uint64_t seed : {1ull, 2ull, 99ull}) {
+    const DrawnValues da = draw_dispersions(a.dispersions, seed);
+    EXPECT_EQ(da, draw_dispersions(a.dispersions, seed));
+    // Adding start_yaw_rad did not move the draw of start_distance_m.
+    EXPECT_EQ(da.at("start_distance_m"), draw_dispersions(b.dispersions, seed).at("start_distance_m"));
+  }
+  EXPECT_NE(draw_dispersions(a.dispersions, 1), draw_dispersions(a.dispersions, 2));
+}
+
+TEST(Dispersion, AppliesDrawsToTruthAndBeliefs) {
+  const Scenario s = with_dispersions(
+      "dispersions:\n"
+      "  start_distance_m: {uniform: {min: 2.0, max: 2.0}}\n"
+      "  start_lateral_m: {choice: {values: [0.25]}}\n"
+      "  camera_focal_error_rel: {choice: {values: [0.1]}}\n"
+      "  camera_cx_error_px: {choice: {values: [-4]}}\n"
+      "  rc_gain_scale: {choice: {values: [2]}}\n"
+      "  light_scale: {choice: {values: [0.5]}}\n"
+      "  wind_speed_mps: {choice: {values: [1.0]}}\n"
+      "  wind_direction_rad: {choice: {values: [1.5707963267948966]}}\n"
+      "  frame_drop_probability: {choice: {values: [0.2]}}\n");
+  const RunSetup run = disperse(s, 5);
+  const Scenario& d = *run.scenario;
+  const double face_x = s.warehouse.shelves[0].origin_W_m.x();
+  EXPECT_DOUBLE_EQ(d.start.p_WB_m.x(), face_x - 2.0);
+  EXPECT_DOUBLE_EQ(d.start.p_WB_m.y(), s.start.p_WB_m.y() + 0.25);
+  EXPECT_DOUBLE_EQ(run.believed_camera.fx_px, s.camera.fx_px * 1.1);
+  EXPECT_DOUBLE_EQ(run.believed_camera.cx_px, s.camera.cx_px - 4.0);
+  EXPECT_EQ(d.camera, s.camera);  // the truth's camera is untouched
+  EXPECT_DOUBLE_EQ(d.autopilot.rc_horizontal_mps_at_100, 2.0 * s.autopilot.rc_horizontal_mps_at_100);
+  EXPECT_DOUBLE_EQ(d.warehouse.lighting.ambient, 0.5 * s.warehouse.lighting.ambient);
+  EXPECT_NEAR(d.wind.steady_W_mps.x(), 0.0, 1e-12);
+  EXPECT_NEAR(d.wind.steady_W_mps.y(), 1.0, 1e-12);
+  EXPECT_DOUBLE_EQ(d.cosim.link.frame_drop_probability, 0.2);
+}
+
+TEST(Dispersion, BoxPlacementIsRedrawnPerRun) {
+  const Scenario s = with_dispersions("dispersions:\n  box_fill_ratio: {uniform: {min: 0.5, max: 0.5}}\n");
+  const RunSetup a = disperse(s, 1), b = disperse(s, 2), a2 = disperse(s, 1);
+  const auto& boxes = a.scenario->warehouse.shelves[0].boxes;
+  EXPECT_EQ(boxes.size(), 8u);  // half of the 16 cells
+  EXPECT_EQ(boxes, a2.scenario->warehouse.shelves[0].boxes);
+  EXPECT_NE(boxes, b.scenario->warehouse.shelves[0].boxes);
+}
+
+TEST(Dispersion, ScenarioRoundTripsAndRefusesUnsafeSupports) {
+  const Scenario s = load_scenario(kDefault);
+  EXPECT_FALSE(s.dispersions.empty());
+  EXPECT_EQ(parse_scenario(write_scenario(s), "w.yaml"), s);
+  try {
+    with_dispersions("dispersions:\n  frame_drop_probability: {normal: {mean: 0.1, stddev: 0.05}}\n");
+    FAIL() << "a normal on a probability was accepted";
+  } catch (const config::ConfigError& e) {
+    EXPECT_THAT(e.reason(), ::testing::HasSubstr("allowed range"));
+  }
+  EXPECT_THROW(with_dispersions("dispersions:\n  start_distance_m: {uniform: {min: 0.1, max: 3}}\n"),
+               config::ConfigError);
+}
+
+}  // namespace
+}  // namespace shelfcross::verification
