@@ -19,7 +19,7 @@ std::optional<PoseEstimate> estimate_pose(const std::vector<cv::Point3d>& points
   bool ok = false;
   try {
     ok = cv::solvePnP(points_F_m, pixels, K, dist, rvec, tvec, false, cv::SOLVEPNP_IPPE);
-    if (ok && points_F_m.size() > 4) {
+    if (ok) {
       cv::solvePnPRefineLM(points_F_m, pixels, K, dist, rvec, tvec);
     }
   } catch (const cv::Exception&) {

@@ -80,14 +80,23 @@ double keep_front_shelf(std::vector<TagBlob>& blobs, double threshold) {
   return largest;
 }
 
-double tag_scale_px_per_m(const std::vector<TagBlob>& blobs, double tag_size_m) {
+double tag_scale_px_per_m(const std::vector<TagBlob>& blobs, const KnownShelf& shelf) {
   if (blobs.empty()) return 0.0;
-  std::vector<double> sides;
-  sides.reserve(blobs.size());
-  for (const TagBlob& b : blobs) sides.push_back(std::sqrt(b.area_px));
-  auto mid = sides.begin() + static_cast<std::ptrdiff_t>(sides.size() / 2);
-  std::nth_element(sides.begin(), mid, sides.end());
-  return *mid / tag_size_m;
+  if (blobs.size() == 1) return std::sqrt(blobs[0].area_px) / shelf.tag_size_m;
+  std::vector<double> nearest(blobs.size(), std::numeric_limits<double>::infinity());
+  for (size_t i = 0; i < blobs.size(); ++i) {
+    for (size_t j = i + 1; j < blobs.size(); ++j) {
+      const double d = cv::norm(blobs[i].centre_px - blobs[j].centre_px);
+      nearest[i] = std::min(nearest[i], d);
+      nearest[j] = std::min(nearest[j], d);
+    }
+  }
+  auto mid = nearest.begin() + static_cast<std::ptrdiff_t>(nearest.size() / 2);
+  std::nth_element(nearest.begin(), mid, nearest.end());
+  const double min_pitch = std::min(
+      *std::min_element(shelf.column_pitch_m.begin(), shelf.column_pitch_m.end()),
+      *std::min_element(shelf.row_pitch_m.begin(), shelf.row_pitch_m.end()));
+  return *mid / min_pitch;
 }
 
 // ---- Grid: eq. 2, 3, 4 ----
@@ -304,7 +313,7 @@ void analyse_shelf(const cv::Mat& bgr, TagDetector& detector, const FlightConfig
   view.grid = TagGrid{};
   detector.detect(bgr, cv::Rect(0, 0, bgr.cols, bgr.rows), view.tags);
   view.largest_tag_area_px = keep_front_shelf(view.tags, config.perception.area_ratio_threshold);
-  view.px_per_m = tag_scale_px_per_m(view.tags, config.shelf.tag_size_m);
+  view.px_per_m = tag_scale_px_per_m(view.tags, config.shelf);
   if (view.tags.empty()) {
     view.grid.refusal = "no tags";
     return;

@@ -52,8 +52,11 @@ class TagDetector {
 /// Returns L_T (0 when empty).
 double keep_front_shelf(std::vector<TagBlob>& blobs, double threshold);
 
-/// Image scale at the front tags: median over tags of sqrt(area) / tag side, px per metre.
-double tag_scale_px_per_m(const std::vector<TagBlob>& blobs, double tag_size_m);
+/// Image scale at the front tags, px per metre. With two tags or more: the median distance
+/// from each tag to its nearest neighbour over the smallest pitch of the shelf (the nearest
+/// neighbour in a grid is one smallest pitch away whatever the rotation, and spacing is
+/// measured far more precisely than blob area). With one tag: sqrt(area) / tag side.
+double tag_scale_px_per_m(const std::vector<TagBlob>& blobs, const KnownShelf& shelf);
 
 /// The stair-classification windows and the rotation up to which they work.
 struct GridLimits {
