@@ -173,6 +173,7 @@ void FlightSoftware::on_completion(const SdkLink::Completion& c) {
                                  state_->height_m > config_.mission.airborne_height_m;
     if (c.ok || airborne_anyway) {
       attempts_ = 0;
+      airborne_since_ns_ = now_ns_;
       enter(Phase::FindShelf, c.ok ? "airborne" : "airborne (takeoff reply lost)");
     } else if (retry_left) {
       retry(config_.timeouts.takeoff_reply_s);
@@ -238,7 +239,7 @@ void FlightSoftware::supervise() {
   }
   // Video stall: the timers run on whatever input arrives (state records at 10 Hz).
   if (vision_phase()) {
-    const TimeNs since_ns = now_ns_ - last_frame_ns_.value_or(phase_start_ns_);
+    const TimeNs since_ns = now_ns_ - std::max(last_frame_ns_.value_or(0), airborne_since_ns_);
     if (ns_to_seconds(since_ns) > to.video_land_s) return land(Outcome::Aborted, "video lost");
     if (ns_to_seconds(since_ns) > to.video_hover_s && !video_stalled_) {
       video_stalled_ = true;

@@ -199,6 +199,7 @@ class FlightSoftware {
   Outcome pending_outcome_ = Outcome::Aborted;  ///< the outcome a Land phase ends in
   std::optional<StateRecord> state_;
   std::optional<TimeNs> last_frame_ns_;
+  TimeNs airborne_since_ns_ = 0;  ///< video-stall timer floor: frames are needed from here
   std::optional<TimeNs> last_rc_ns_;
   std::optional<TimeNs> last_control_ns_;
   VelocityCommand velocity_;
