@@ -179,6 +179,7 @@ void read_mission(const Map& m, MissionParams& p) {
   p.vehicle_size_m = vector3(m, "vehicle_size_m", p.vehicle_size_m, kPositive);
   opt(m, "crossing_margin_m", p.crossing_margin_m, kNonNegative);
   opt(m, "crossing_yaw_tolerance_rad", p.crossing_yaw_tolerance_rad, kPositive);
+  opt(m, "crossing_attempts", p.crossing_attempts, at_least(1));
   opt(m, "cross_range_max_m", p.cross_range_max_m, kPositive);
   opt(m, "beyond_distance_m", p.beyond_distance_m, kNonNegative);
   opt(m, "edge_margin_px", p.edge_margin_px, kNonNegative);

@@ -28,7 +28,7 @@
 //   mission:    low_battery_pct takeoff_min_battery_pct airborne_height_m viewpoint_margin
 //               viewpoint_position_tolerance_m viewpoint_yaw_tolerance_rad
 //               viewpoint_settle_frames viewpoint_lost_s vehicle_size_m [x, y, z]
-//               crossing_margin_m crossing_yaw_tolerance_rad cross_range_max_m
+//               crossing_margin_m crossing_yaw_tolerance_rad crossing_attempts cross_range_max_m
 //               beyond_distance_m edge_margin_px
 
 #include <string>
@@ -144,6 +144,7 @@ struct MissionParams {
   Eigen::Vector3d vehicle_size_m = Eigen::Vector3d(0.098, 0.0925, 0.041);
   double crossing_margin_m = 0.03;  ///< kept clear on each side inside the opening
   double crossing_yaw_tolerance_rad = 0.15;
+  int crossing_attempts = 3;       ///< off-centre arrivals (each backed off) before giving up
   double cross_range_max_m = 0.9;  ///< tags leaving the view farther than this: lost, not close
   double beyond_distance_m = 0.5;  ///< flown past the back face before landing
   double edge_margin_px = 4.0;     ///< a tag this close to the border is leaving the view

@@ -633,6 +633,10 @@ void FlightSoftware::approach(const cv::Mat& bgr) {
       return;
     }
     if (!back_off_since_ns_) {
+      if (++crossing_refusals_ >= config_.mission.crossing_attempts) {
+        land(Outcome::Aborted, "could not centre on the target cell");
+        return;
+      }
       back_off_since_ns_ = now_ns_;
       telemetry_.event = "not centred (" + why + "): backing off";
     }

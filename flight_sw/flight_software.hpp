@@ -22,7 +22,8 @@
 // crossing: the crossing is open loop and stopping inside the shelf is worse). Target lost:
 // hover and re-acquire from the tags, give up after target_lost_s and land. Battery below
 // low_battery_pct: land (after the crossing if crossing). Corner tags leaving the view while
-// not centred: back off until they are back, give up after back_off_s. Takeoff refused or
+// not centred: back off until they are back (then approach again), give up after back_off_s
+// of backing off or at the crossing_attempts-th off-centre arrival. Takeoff refused or
 // unanswered: retried command_retries times, then the mission ends on the ground.
 //
 // Lateral law sign (paper Fig. 19): the yaw loop keeps the target cell centred in the image,
@@ -222,6 +223,7 @@ class FlightSoftware {
   bool near_edge_ = false;              ///< a corner tag was about to leave the view
   std::optional<TimeNs> lost_since_ns_;
   std::optional<TimeNs> back_off_since_ns_;
+  int crossing_refusals_ = 0;           ///< off-centre arrivals at the cell so far
   // Crossing
   TimeNs cross_duration_ns_ = 0;
 

@@ -29,6 +29,7 @@ struct Options {
   Eigen::Vector3d start_W_m = Eigen::Vector3d(0.3, 0.0, 0.0);
   double start_yaw_rad = 0.0;
   bool blank_frames = false;  ///< frames show only the wall
+  double blank_after_approach_s = -1.0;  ///< >= 0: frames go blank this long into the approach
 };
 
 class Harness {
@@ -69,11 +70,14 @@ class Harness {
         handle(fsw_.step(s));
       } else if (t_next == t_frame) {
         ++frame_k;
+        if (fsw_.phase() == Phase::Approach && !approach_t_) approach_t_ = t_;
+        const bool blank = o_.blank_frames || (o_.blank_after_approach_s >= 0.0 && approach_t_ &&
+                                               t_ - *approach_t_ > seconds_to_ns(o_.blank_after_approach_s));
         if (video_on_ && o_.frames_on(t_)) {
           CameraFrame f;
           f.t_ns = t_;
           f.index = frame_k;
-          f.bgr = o_.blank_frames ? cv::Mat(config_.camera.height_px, config_.camera.width_px, CV_8UC3,
+          f.bgr = blank ? cv::Mat(config_.camera.height_px, config_.camera.width_px, CV_8UC3,
                                             cv::Scalar(185, 185, 180))
                                   : drawer_.draw(scene_, testing::camera_pose_W(p_WB_, yaw_, 0, 0, config_.mount));
           phases_.push_back(fsw_.phase());
@@ -155,6 +159,7 @@ class Harness {
   testing::Scene scene_;
   testing::Drawer drawer_;
   TimeNs t_ = 0;
+  std::optional<TimeNs> approach_t_;
   Eigen::Vector3d p_WB_;
   double yaw_ = 0.0;
   bool video_on_ = false, airborne_ = false, landing_ = false;
@@ -293,6 +298,44 @@ TEST(FlightSoftware, LowBatteryInFlightLands) {
   ASSERT_TRUE(h.fsw().finished());
   EXPECT_EQ(h.fsw().result().reason, "low battery (12%)");
   EXPECT_TRUE(h.fsw().result().landed);
+}
+
+TEST(FlightSoftware, TargetLostHoversThenGivesUp) {
+  Options o;
+  o.blank_after_approach_s = 1.0;
+  Harness h(o);
+  h.run(40.0);
+  ASSERT_TRUE(h.fsw().finished());
+  EXPECT_EQ(h.fsw().result().reason, "target lost");
+  EXPECT_TRUE(h.fsw().result().landed);
+  // After the target vanished: only hover commands until the land.
+  const auto& cmds = h.commands();
+  const auto land = std::find_if(cmds.begin(), cmds.end(), [](const SdkCommand& c) { return c.text == "land"; });
+  ASSERT_NE(land, cmds.end());
+  int hovers = 0;
+  for (auto it = cmds.begin(); it != land; ++it) {
+    if (land->t_ns - it->t_ns < 3 * kNsPerSecond && it->text.rfind("rc", 0) == 0) {
+      EXPECT_EQ(it->text, "rc 0 0 0 0");
+      ++hovers;
+    }
+  }
+  EXPECT_GT(hovers, 20);
+}
+
+TEST(FlightSoftware, NeverCrossesOffCentreBacksOffAndGivesUp) {
+  FlightConfig c;
+  // Leave 2 mm of lateral tolerance in the 32 cm opening: the vehicle cannot be centred so
+  // finely, so the tags leave the view without permission to cross.
+  c.mission.crossing_margin_m = 0.112;
+  Harness h(Options{}, c);
+  h.run(60.0);
+  ASSERT_TRUE(h.fsw().finished());
+  EXPECT_FALSE(h.saw_phase(Phase::Cross));
+  EXPECT_EQ(h.fsw().result().reason, "could not centre on the target cell");
+  bool backed_off = false;
+  for (const auto& cmd : h.commands()) backed_off = backed_off || cmd.text == "rc 0 -20 0 0";
+  EXPECT_TRUE(backed_off);
+  EXPECT_LT(h.position().x(), 3.0 - 0.1) << "stayed in front of the shelf";
 }
 
 // ---- The whole mission ----
