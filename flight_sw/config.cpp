@@ -1,0 +1,253 @@
+#include "flight_sw/config.hpp"
+
+#include <stdexcept>
+
+#include "config/strict_yaml.hpp"
+#include "flight_sw/perception.hpp"
+
+namespace shelfcross::flight_sw {
+namespace {
+
+using config::Bounds;
+using config::Map;
+
+// Bounds with every field named (designated initializers that skip fields warn).
+template <class T>
+Bounds<T> at_least(T lo, bool exclusive = false) {
+  return {.min = lo, .max = std::nullopt, .min_exclusive = exclusive, .max_exclusive = false};
+}
+template <class T>
+Bounds<T> within(T lo, T hi) {
+  return {.min = lo, .max = hi, .min_exclusive = false, .max_exclusive = false};
+}
+const Bounds<double> kPositive = at_least(0.0, true);
+const Bounds<double> kNonNegative = at_least(0.0);
+const Bounds<double> kFraction = within(0.0, 1.0);
+const Bounds<int> kHue = within(0, 179);
+const Bounds<int> kByte = within(0, 255);
+const Bounds<int> kPercent = within(0, 100);
+
+template <class T>
+void opt(const Map& m, const char* key, T& value, const Bounds<T>& b = {}) {
+  value = m.optional<T>(key, value, b);
+}
+
+Eigen::Vector3d vector3(const Map& m, const char* key, const Eigen::Vector3d& fallback,
+                        const Bounds<double>& b = {}) {
+  const std::vector<double> v =
+      m.optional_list<double>(key, {fallback.x(), fallback.y(), fallback.z()}, b, 3);
+  return {v[0], v[1], v[2]};
+}
+
+void read_shelf(const Map& m, KnownShelf& s) {
+  s.column_pitch_m = m.required_list<double>("column_pitch_m", kPositive);
+  s.row_pitch_m = m.required_list<double>("row_pitch_m", kPositive);
+  if (s.column_pitch_m.empty()) m.fail("column_pitch_m", "needs at least one column");
+  if (s.row_pitch_m.empty()) m.fail("row_pitch_m", "needs at least one level");
+  opt(m, "post_thickness_m", s.post_thickness_m, kNonNegative);
+  opt(m, "beam_thickness_m", s.beam_thickness_m, kNonNegative);
+  opt(m, "depth_m", s.depth_m, kPositive);
+  opt(m, "tag_size_m", s.tag_size_m, kPositive);
+  opt(m, "tag_offset_m", s.tag_offset_m, kNonNegative);
+  opt(m, "aruco_dictionary", s.aruco_dictionary);
+  if (!aruco_dictionary_id(s.aruco_dictionary)) {
+    m.fail("aruco_dictionary", "unknown ArUco dictionary '" + s.aruco_dictionary +
+                                   "' (an OpenCV predefined name such as DICT_4X4_50)");
+  }
+  opt(m, "marker_size_m", s.marker_size_m, kPositive);
+  for (double p : s.column_pitch_m) {
+    if (p <= s.post_thickness_m) m.fail("column_pitch_m", "a column pitch is not wider than a post");
+  }
+  for (double p : s.row_pitch_m) {
+    if (p <= s.beam_thickness_m) m.fail("row_pitch_m", "a row pitch is not taller than a beam");
+  }
+  m.finish();
+}
+
+void read_camera(const Map& m, CameraIntrinsics& c) {
+  opt(m, "width_px", c.width_px, at_least(16));
+  opt(m, "height_px", c.height_px, at_least(16));
+  opt(m, "fx_px", c.fx_px, kPositive);
+  opt(m, "fy_px", c.fy_px, kPositive);
+  opt(m, "cx_px", c.cx_px);
+  opt(m, "cy_px", c.cy_px);
+  opt(m, "k1", c.k1);
+  opt(m, "k2", c.k2);
+  opt(m, "p1", c.p1);
+  opt(m, "p2", c.p2);
+  opt(m, "k3", c.k3);
+  m.finish();
+}
+
+void read_mount(const Map& m, CameraMount& c) {
+  opt(m, "pitch_rad", c.pitch_rad, within(-1.0, 1.0));
+  c.p_BC_B_m = vector3(m, "p_BC_B_m", c.p_BC_B_m);
+  m.finish();
+}
+
+void read_perception(const Map& m, PerceptionParams& p) {
+  if (auto hsv = m.optional_map("tag_hsv")) {
+    opt(*hsv, "hue_min", p.tag_hsv.hue_min, kHue);
+    opt(*hsv, "hue_max", p.tag_hsv.hue_max, kHue);
+    opt(*hsv, "sat_min", p.tag_hsv.sat_min, kByte);
+    opt(*hsv, "sat_max", p.tag_hsv.sat_max, kByte);
+    opt(*hsv, "val_min", p.tag_hsv.val_min, kByte);
+    opt(*hsv, "val_max", p.tag_hsv.val_max, kByte);
+    if (p.tag_hsv.sat_min > p.tag_hsv.sat_max) hsv->fail("sat_min", "sat_min > sat_max");
+    if (p.tag_hsv.val_min > p.tag_hsv.val_max) hsv->fail("val_min", "val_min > val_max");
+    hsv->finish();
+  }
+  opt(m, "min_tag_area_px", p.min_tag_area_px, kNonNegative);
+  opt(m, "min_fill_ratio", p.min_fill_ratio, kFraction);
+  opt(m, "max_aspect_ratio", p.max_aspect_ratio, at_least(1.0));
+  opt(m, "area_ratio_threshold", p.area_ratio_threshold, kFraction);
+  opt(m, "grid_orthogonality_tolerance_rad", p.grid_orthogonality_tolerance_rad,
+      within(0.0, 0.8));
+  opt(m, "marker_area_ratio_threshold", p.marker_area_ratio_threshold, kFraction);
+  opt(m, "marker_min_agreeing_frames", p.marker_min_agreeing_frames, at_least(1));
+  opt(m, "inventory_frames", p.inventory_frames, at_least(1));
+  opt(m, "roi_expand", p.roi_expand, within(0.0, 5.0));
+  opt(m, "corner_gate", p.corner_gate, {.min = 0.0, .max = 1.0, .min_exclusive = true, .max_exclusive = false});
+  if (p.inventory_frames < p.marker_min_agreeing_frames) {
+    m.fail("inventory_frames", "must be >= marker_min_agreeing_frames");
+  }
+  m.finish();
+}
+
+void read_control(const Map& m, ControlGains& c) {
+  opt(m, "forward_speed_mps", c.forward_speed_mps, kPositive);
+  opt(m, "kp_z", c.kp_z, kNonNegative);
+  opt(m, "ki_z", c.ki_z, kNonNegative);
+  opt(m, "z_integral_limit_m_s", c.z_integral_limit_m_s, kNonNegative);
+  opt(m, "z_speed_max_mps", c.z_speed_max_mps, kPositive);
+  opt(m, "kp_psi", c.kp_psi, kNonNegative);
+  opt(m, "ki_psi", c.ki_psi, kNonNegative);
+  opt(m, "psi_integral_limit_rad_s", c.psi_integral_limit_rad_s, kNonNegative);
+  opt(m, "yaw_rate_max_radps", c.yaw_rate_max_radps, kPositive);
+  opt(m, "lateral_speed_mps", c.lateral_speed_mps, kNonNegative);
+  opt(m, "psi_lateral_threshold_rad", c.psi_lateral_threshold_rad, kNonNegative);
+  opt(m, "viewpoint_kp", c.viewpoint_kp, kPositive);
+  opt(m, "viewpoint_speed_max_mps", c.viewpoint_speed_max_mps, kPositive);
+  opt(m, "viewpoint_yaw_kp", c.viewpoint_yaw_kp, kNonNegative);
+  opt(m, "search_yaw_rate_radps", c.search_yaw_rate_radps, kNonNegative);
+  opt(m, "back_off_speed_mps", c.back_off_speed_mps, kPositive);
+  opt(m, "crossing_speed_mps", c.crossing_speed_mps, kPositive);
+  opt(m, "max_control_dt_s", c.max_control_dt_s, kPositive);
+  m.finish();
+}
+
+void read_rc(const Map& m, RcConversion& r) {
+  opt(m, "rc_per_mps_horizontal", r.rc_per_mps_horizontal, kPositive);
+  opt(m, "rc_per_mps_vertical", r.rc_per_mps_vertical, kPositive);
+  opt(m, "rc_per_radps_yaw", r.rc_per_radps_yaw, kPositive);
+  opt(m, "rc_period_s", r.rc_period_s, kNonNegative);
+  opt(m, "keepalive_s", r.keepalive_s, within(0.05, 10.0));
+  m.finish();
+}
+
+void read_timeouts(const Map& m, Timeouts& t) {
+  const std::pair<const char*, double*> seconds[] = {{"command_reply_s", &t.command_reply_s},
+                            {"takeoff_reply_s", &t.takeoff_reply_s},
+                            {"land_reply_s", &t.land_reply_s},
+                            {"video_start_s", &t.video_start_s},
+                            {"find_shelf_s", &t.find_shelf_s},
+                            {"go_to_viewpoint_s", &t.go_to_viewpoint_s},
+                            {"take_inventory_s", &t.take_inventory_s},
+                            {"approach_s", &t.approach_s},
+                            {"target_lost_s", &t.target_lost_s},
+                            {"back_off_s", &t.back_off_s},
+                            {"video_hover_s", &t.video_hover_s},
+                            {"video_land_s", &t.video_land_s}};
+  for (const auto& [key, value] : seconds) {
+    opt(m, key, *value, kPositive);
+  }
+  opt(m, "command_retries", t.command_retries, within(0, 20));
+  opt(m, "command_gap_s", t.command_gap_s, kNonNegative);
+  if (t.video_land_s <= t.video_hover_s) m.fail("video_land_s", "must exceed video_hover_s");
+  m.finish();
+}
+
+void read_mission(const Map& m, MissionParams& p) {
+  opt(m, "low_battery_pct", p.low_battery_pct, kPercent);
+  opt(m, "takeoff_min_battery_pct", p.takeoff_min_battery_pct, kPercent);
+  opt(m, "airborne_height_m", p.airborne_height_m, kPositive);
+  opt(m, "viewpoint_margin", p.viewpoint_margin, within(0.0, 2.0));
+  opt(m, "viewpoint_position_tolerance_m", p.viewpoint_position_tolerance_m, kPositive);
+  opt(m, "viewpoint_yaw_tolerance_rad", p.viewpoint_yaw_tolerance_rad, kPositive);
+  opt(m, "viewpoint_settle_frames", p.viewpoint_settle_frames, at_least(1));
+  opt(m, "viewpoint_lost_s", p.viewpoint_lost_s, kPositive);
+  p.vehicle_size_m = vector3(m, "vehicle_size_m", p.vehicle_size_m, kPositive);
+  opt(m, "crossing_margin_m", p.crossing_margin_m, kNonNegative);
+  opt(m, "crossing_yaw_tolerance_rad", p.crossing_yaw_tolerance_rad, kPositive);
+  opt(m, "crossing_attempts", p.crossing_attempts, at_least(1));
+  opt(m, "cross_range_max_m", p.cross_range_max_m, kPositive);
+  opt(m, "beyond_distance_m", p.beyond_distance_m, kNonNegative);
+  opt(m, "edge_margin_px", p.edge_margin_px, kNonNegative);
+  m.finish();
+}
+
+FlightConfig read(const config::Document& doc) {
+  FlightConfig c;
+  const Map root = doc.root();
+  read_shelf(root.map("shelf"), c.shelf);
+  if (auto m = root.optional_map("camera")) read_camera(*m, c.camera);
+  if (auto m = root.optional_map("mount")) read_mount(*m, c.mount);
+  if (auto m = root.optional_map("perception")) read_perception(*m, c.perception);
+  if (auto m = root.optional_map("control")) read_control(*m, c.control);
+  if (auto m = root.optional_map("rc")) read_rc(*m, c.rc);
+  if (auto m = root.optional_map("timeouts")) read_timeouts(*m, c.timeouts);
+  if (auto m = root.optional_map("mission")) read_mission(*m, c.mission);
+  root.finish();
+  try {
+    validate_flight_config(c);  // the cross-field checks not tied to one key
+  } catch (const std::invalid_argument& e) {
+    throw config::ConfigError(root.file(), root.line(), e.what());
+  }
+  return c;
+}
+
+void require(bool ok, const std::string& what) {
+  if (!ok) throw std::invalid_argument("flight configuration: " + what);
+}
+
+}  // namespace
+
+FlightConfig load_flight_config(const std::string& path) {
+  return read(config::Document::from_file(path));
+}
+
+FlightConfig parse_flight_config(const std::string& yaml_text, const std::string& name) {
+  return read(config::Document::from_string(yaml_text, name));
+}
+
+void validate_flight_config(const FlightConfig& c) {
+  const KnownShelf& s = c.shelf;
+  require(!s.column_pitch_m.empty() && !s.row_pitch_m.empty(),
+          "shelf needs at least one column and one level");
+  for (double p : s.column_pitch_m) require(p > s.post_thickness_m, "column pitch <= post");
+  for (double p : s.row_pitch_m) require(p > s.beam_thickness_m, "row pitch <= beam");
+  require(s.tag_size_m > 0.0 && s.marker_size_m > 0.0 && s.depth_m > 0.0,
+          "tag, marker sizes and shelf depth must be positive");
+  require(aruco_dictionary_id(s.aruco_dictionary).has_value(),
+          "unknown ArUco dictionary '" + s.aruco_dictionary + "'");
+  const CameraIntrinsics& k = c.camera;
+  require(k.width_px >= 16 && k.height_px >= 16 && k.fx_px > 0.0 && k.fy_px > 0.0,
+          "camera size and focal lengths must be positive");
+  const HsvRange& h = c.perception.tag_hsv;
+  require(h.hue_min >= 0 && h.hue_min <= 179 && h.hue_max >= 0 && h.hue_max <= 179,
+          "tag hue outside 0..179");
+  require(h.sat_min <= h.sat_max && h.val_min <= h.val_max, "tag HSV range empty");
+  require(c.perception.marker_min_agreeing_frames >= 1 &&
+              c.perception.inventory_frames >= c.perception.marker_min_agreeing_frames,
+          "inventory_frames must be >= marker_min_agreeing_frames >= 1");
+  require(c.timeouts.video_land_s > c.timeouts.video_hover_s,
+          "video_land_s must exceed video_hover_s");
+  require(c.rc.rc_per_mps_horizontal > 0.0 && c.rc.rc_per_mps_vertical > 0.0 &&
+              c.rc.rc_per_radps_yaw > 0.0,
+          "rc conversion gains must be positive");
+  require(c.control.crossing_speed_mps > 0.0 && c.control.forward_speed_mps > 0.0,
+          "forward and crossing speeds must be positive");
+  require(c.mission.vehicle_size_m.minCoeff() > 0.0, "vehicle size must be positive");
+}
+
+}  // namespace shelfcross::flight_sw

@@ -1,0 +1,172 @@
+#pragma once
+// The flight software's configuration: what the operator knows about the shelf (its geometry,
+// not where it stands), the camera, the perception thresholds, the control gains and the
+// mission's timeouts and failsafes. Plain data with defaults (the paper's test shelf, Tello
+// calibration A); read from YAML by load_flight_config / parse_flight_config (errors carry
+// file:line), or built directly by code (the co-simulation builds it from a scenario) and then
+// checked with validate_flight_config.
+//
+// YAML layout (every key optional unless marked required; see flight_sw/README.md):
+//   shelf:      column_pitch_m [required], row_pitch_m [required], post_thickness_m,
+//               beam_thickness_m, depth_m, tag_size_m, tag_offset_m, aruco_dictionary,
+//               marker_size_m
+//   camera:     width_px height_px fx_px fy_px cx_px cy_px k1 k2 p1 p2 k3
+//   mount:      pitch_rad, p_BC_B_m [x, y, z]
+//   perception: tag_hsv {hue_min hue_max sat_min sat_max val_min val_max}, min_tag_area_px,
+//               min_fill_ratio, max_aspect_ratio, area_ratio_threshold,
+//               grid_orthogonality_tolerance_rad, marker_area_ratio_threshold,
+//               marker_min_agreeing_frames, inventory_frames, roi_expand, corner_gate
+//   control:    forward_speed_mps kp_z ki_z z_integral_limit_m_s z_speed_max_mps kp_psi ki_psi
+//               psi_integral_limit_rad_s yaw_rate_max_radps lateral_speed_mps
+//               psi_lateral_threshold_rad viewpoint_kp viewpoint_speed_max_mps viewpoint_yaw_kp
+//               search_yaw_rate_radps back_off_speed_mps crossing_speed_mps max_control_dt_s
+//   rc:         rc_per_mps_horizontal rc_per_mps_vertical rc_per_radps_yaw rc_period_s
+//               keepalive_s
+//   timeouts:   command_reply_s takeoff_reply_s land_reply_s command_retries command_gap_s
+//               video_start_s find_shelf_s go_to_viewpoint_s take_inventory_s approach_s
+//               target_lost_s back_off_s video_hover_s video_land_s
+//   mission:    low_battery_pct takeoff_min_battery_pct airborne_height_m viewpoint_margin
+//               viewpoint_position_tolerance_m viewpoint_yaw_tolerance_rad
+//               viewpoint_settle_frames viewpoint_lost_s vehicle_size_m [x, y, z]
+//               crossing_margin_m crossing_yaw_tolerance_rad crossing_attempts cross_range_max_m
+//               beyond_distance_m edge_margin_px
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "shelfcross/camera.hpp"
+
+namespace shelfcross::flight_sw {
+
+/// The shelf as the operator measured it. Its position, and the height of its lowest beam
+/// above the floor, are NOT known: the flight software navigates relative to the tag grid
+/// only (levels are counted from the lowest tag row, which the full-view inventory sees).
+struct KnownShelf {
+  std::vector<double> column_pitch_m{0.34, 0.48, 0.34, 0.48};  ///< left to right on approach
+  std::vector<double> row_pitch_m{0.34, 0.34, 0.34, 0.34};     ///< bottom to top
+  double post_thickness_m = 0.02;
+  double beam_thickness_m = 0.02;
+  double depth_m = 0.34;        ///< front-face to back-face bar centre lines
+  double tag_size_m = 0.06;     ///< side of the square colour tags
+  double tag_offset_m = 0.01;   ///< tag face in front of the front bars' centre plane
+  std::string aruco_dictionary = "DICT_4X4_50";
+  double marker_size_m = 0.10;  ///< black border included
+
+  int columns() const { return static_cast<int>(column_pitch_m.size()); }
+  int levels() const { return static_cast<int>(row_pitch_m.size()); }
+};
+
+/// An HSV range in OpenCV's 8-bit units: hue 0..179 (degrees / 2), saturation and value
+/// 0..255. hue_min > hue_max means the range wraps through red (e.g. 170..10).
+struct HsvRange {
+  int hue_min = 48;
+  int hue_max = 85;
+  int sat_min = 80;
+  int sat_max = 255;
+  int val_min = 30;  ///< loose: lighting changes move V far more than H and S
+  int val_max = 255;
+};
+
+struct PerceptionParams {
+  HsvRange tag_hsv;
+  double min_tag_area_px = 12.0;     ///< smaller blobs are noise
+  double min_fill_ratio = 0.40;      ///< blob area / bounding-box area (a 45 deg square: 0.5)
+  double max_aspect_ratio = 3.0;     ///< bounding-box long side / short side
+  double area_ratio_threshold = 0.45;  ///< eq. 1: R_A = S_T / L_T below this -> shelf behind
+  double grid_orthogonality_tolerance_rad = 0.17;  ///< row vs column direction disagreement
+  /// Markers smaller than this fraction of the area expected from the front tags' scale
+  /// belong to a box behind the front shelf (eq. 1 applied to markers).
+  double marker_area_ratio_threshold = 0.45;
+  int marker_min_agreeing_frames = 3;  ///< N: frames that must agree on a cell's marker ID
+  int inventory_frames = 5;            ///< full-view frames read before the inventory closes
+  double roi_expand = 0.6;   ///< approach search window: box grown by this fraction per side
+  double corner_gate = 0.35;  ///< corner tag must lie within this fraction of the box size
+};
+
+struct ControlGains {
+  double forward_speed_mps = 0.25;  ///< xdot_0, eq. 10
+  double kp_z = 1.0;                ///< eq. 12, (m/s) per m
+  double ki_z = 0.3;                ///< eq. 12, (m/s) per (m s)
+  double z_integral_limit_m_s = 0.5;
+  double z_speed_max_mps = 0.4;
+  double kp_psi = 1.2;              ///< eq. 15, (rad/s) per rad
+  double ki_psi = 0.2;
+  double psi_integral_limit_rad_s = 0.5;
+  double yaw_rate_max_radps = 0.8;
+  double lateral_speed_mps = 0.10;          ///< V_y of the bang-off-bang law
+  double psi_lateral_threshold_rad = 0.03;  ///< psi_L of the bang-off-bang law
+  double viewpoint_kp = 0.8;                ///< (m/s) per m toward the optimal viewpoint
+  double viewpoint_speed_max_mps = 0.4;
+  double viewpoint_yaw_kp = 1.0;            ///< (rad/s) per rad toward facing the shelf
+  double search_yaw_rate_radps = 0.3;       ///< yaw sweep while no tag is in view
+  double back_off_speed_mps = 0.2;          ///< backing away to see a grid fragment whole
+  double crossing_speed_mps = 0.3;          ///< open-loop forward speed through the cell
+  double max_control_dt_s = 0.2;            ///< integrator step cap across frame gaps
+};
+
+/// Conversion between SI commands and the SDK's -100..100 sticks.
+struct RcConversion {
+  double rc_per_mps_horizontal = 100.0;
+  double rc_per_mps_vertical = 100.0;
+  double rc_per_radps_yaw = 66.7;
+  double rc_period_s = 0.05;  ///< at most one rc per this period
+  double keepalive_s = 1.0;   ///< an rc at least this often while airborne, frames or not
+};
+
+struct Timeouts {
+  double command_reply_s = 7.0;
+  double takeoff_reply_s = 20.0;
+  double land_reply_s = 10.0;
+  int command_retries = 3;       ///< attempts after the first
+  double command_gap_s = 0.1;    ///< between two non-rc commands
+  double video_start_s = 10.0;   ///< first frame after streamon
+  double find_shelf_s = 30.0;
+  double go_to_viewpoint_s = 40.0;
+  double take_inventory_s = 15.0;
+  double approach_s = 40.0;
+  double target_lost_s = 3.0;    ///< hovering to re-acquire the target, then give up
+  double back_off_s = 5.0;       ///< backing off an off-centre approach, then give up
+  double video_hover_s = 0.5;    ///< no frame for this long: hover
+  double video_land_s = 3.0;     ///< no frame for this long: land
+};
+
+struct MissionParams {
+  int low_battery_pct = 15;
+  int takeoff_min_battery_pct = 25;
+  double airborne_height_m = 0.3;  ///< a takeoff whose reply was lost counts above this
+  double viewpoint_margin = 0.15;  ///< shelf extent grown by this fraction to fit the view
+  double viewpoint_position_tolerance_m = 0.15;
+  double viewpoint_yaw_tolerance_rad = 0.08;
+  int viewpoint_settle_frames = 5;
+  double viewpoint_lost_s = 2.0;   ///< full grid out of view this long: search again
+  Eigen::Vector3d vehicle_size_m = Eigen::Vector3d(0.098, 0.0925, 0.041);
+  double crossing_margin_m = 0.03;  ///< kept clear on each side inside the opening
+  double crossing_yaw_tolerance_rad = 0.15;
+  int crossing_attempts = 3;       ///< off-centre arrivals (each backed off) before giving up
+  double cross_range_max_m = 0.9;  ///< tags leaving the view farther than this: lost, not close
+  double beyond_distance_m = 0.5;  ///< flown past the back face before landing
+  double edge_margin_px = 4.0;     ///< a tag this close to the border is leaving the view
+};
+
+struct FlightConfig {
+  KnownShelf shelf;
+  CameraIntrinsics camera;
+  CameraMount mount;
+  PerceptionParams perception;
+  ControlGains control;
+  RcConversion rc;
+  Timeouts timeouts;
+  MissionParams mission;
+};
+
+/// Reads a configuration file; throws config::ConfigError ("file:line: reason").
+FlightConfig load_flight_config(const std::string& path);
+/// Same from text; `name` stands for the file name in error messages.
+FlightConfig parse_flight_config(const std::string& yaml_text, const std::string& name);
+/// Checks a configuration built by code; throws std::invalid_argument naming the bad field.
+/// (The YAML readers check the same through their bounds.)
+void validate_flight_config(const FlightConfig& config);
+
+}  // namespace shelfcross::flight_sw

@@ -1,0 +1,41 @@
+#include "flight_sw/control.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace shelfcross::flight_sw {
+
+double PiController::update(double error, double dt_s) {
+  const double lim = gains_.output_limit;
+  const double unsaturated = gains_.kp * error + gains_.ki * integral_;
+  const bool pushing_further = (unsaturated >= lim && error > 0.0) ||
+                               (unsaturated <= -lim && error < 0.0);
+  if (!pushing_further) {
+    integral_ = std::clamp(integral_ + error * dt_s, -gains_.integral_limit, gains_.integral_limit);
+  }
+  return std::clamp(gains_.kp * error + gains_.ki * integral_, -lim, lim);
+}
+
+double bang_off_bang(double psi_rad, double threshold_rad, double speed_mps) {
+  if (psi_rad > threshold_rad) return speed_mps;
+  if (psi_rad < -threshold_rad) return -speed_mps;
+  return 0.0;
+}
+
+std::string RcSticks::text() const {
+  return "rc " + std::to_string(a) + " " + std::to_string(b) + " " + std::to_string(c) + " " +
+         std::to_string(d);
+}
+
+namespace {
+int stick(double value) {
+  return static_cast<int>(std::clamp<long>(std::lround(value), -100L, 100L));
+}
+}  // namespace
+
+RcSticks to_rc(const VelocityCommand& v, const RcConversion& k) {
+  return {stick(-k.rc_per_mps_horizontal * v.vy_B_mps), stick(k.rc_per_mps_horizontal * v.vx_B_mps),
+          stick(k.rc_per_mps_vertical * v.vz_mps), stick(-k.rc_per_radps_yaw * v.yaw_rate_radps)};
+}
+
+}  // namespace shelfcross::flight_sw

@@ -1,0 +1,67 @@
+#pragma once
+// Control laws (paper section 4-4, METHOD.md section 4) and the conversion of SI velocity
+// commands to the SDK's rc sticks.
+//
+// Commands are in the body frame B (x forward, y left, z up) and yaw rate counter-clockwise
+// positive seen from above. The SDK's `rc a b c d` is a right, b forward, c up, d clockwise:
+//   a = -k_h * vy_B,  b = k_h * vx_B,  c = k_v * vz,  d = -k_psi * yaw_rate,
+// each rounded to the nearest integer and saturated to -100..100.
+
+#include <string>
+
+#include "flight_sw/config.hpp"
+
+namespace shelfcross::flight_sw {
+
+struct PiGains {
+  double kp = 0.0;
+  double ki = 0.0;
+  double integral_limit = 0.0;  ///< |integral of the error| never exceeds this
+  double output_limit = 0.0;    ///< |output| saturates here
+};
+
+/// u = kp e + ki integral(e dt), saturated to +-output_limit. Anti-windup: the integral is
+/// clamped to +-integral_limit and is not advanced while the output is saturated in the
+/// direction the error pushes it (conditional integration), so that the loop leaves
+/// saturation as soon as the error changes sign.
+class PiController {
+ public:
+  PiController() = default;
+  explicit PiController(PiGains gains) : gains_(gains) {}
+  double update(double error, double dt_s);
+  void reset() { integral_ = 0.0; }
+  double integral() const { return integral_; }
+
+ private:
+  PiGains gains_;
+  double integral_ = 0.0;
+};
+
+/// The lateral law of paper Fig. 19: +speed if psi > threshold, -speed if psi < -threshold,
+/// 0 otherwise. psi is the heading relative to the cell normal (CCW positive) and the result
+/// a body-frame y velocity (left positive); see FlightSoftware for why this sign straightens
+/// the path onto the normal.
+double bang_off_bang(double psi_rad, double threshold_rad, double speed_mps);
+
+/// A velocity command in the body frame.
+struct VelocityCommand {
+  double vx_B_mps = 0.0;
+  double vy_B_mps = 0.0;
+  double vz_mps = 0.0;
+  double yaw_rate_radps = 0.0;  ///< counter-clockwise positive
+  bool operator==(const VelocityCommand&) const = default;
+};
+
+struct RcSticks {
+  int a = 0;  ///< right
+  int b = 0;  ///< forward
+  int c = 0;  ///< up
+  int d = 0;  ///< clockwise
+  std::string text() const;  ///< "rc a b c d"
+  bool operator==(const RcSticks&) const = default;
+};
+
+/// Converts through the configured gains, rounding half away from zero, saturating to 100.
+RcSticks to_rc(const VelocityCommand& v, const RcConversion& conversion);
+
+}  // namespace shelfcross::flight_sw

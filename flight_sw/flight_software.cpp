@@ -1,0 +1,664 @@
+#include "flight_sw/flight_software.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace shelfcross::flight_sw {
+
+const char* phase_name(Phase p) {
+  switch (p) {
+    case Phase::Idle: return "idle";
+    case Phase::EnterSdk: return "enter_sdk";
+    case Phase::StartVideo: return "start_video";
+    case Phase::WaitVideo: return "wait_video";
+    case Phase::TakeOff: return "take_off";
+    case Phase::FindShelf: return "find_shelf";
+    case Phase::GoToViewpoint: return "go_to_viewpoint";
+    case Phase::TakeInventory: return "take_inventory";
+    case Phase::Approach: return "approach";
+    case Phase::Cross: return "cross";
+    case Phase::Land: return "land";
+    case Phase::Done: return "done";
+  }
+  return "?";
+}
+
+const char* outcome_name(Outcome o) {
+  switch (o) {
+    case Outcome::Running: return "running";
+    case Outcome::Crossed: return "crossed";
+    case Outcome::NoEmptyCell: return "no_empty_cell";
+    case Outcome::Aborted: return "aborted";
+  }
+  return "?";
+}
+
+namespace {
+
+FlightConfig validated(FlightConfig c) {
+  validate_flight_config(c);
+  return c;
+}
+
+std::string cell_text(CellIndex c) {
+  return "L" + std::to_string(c.level) + " C" + std::to_string(c.column);
+}
+
+cv::Point2d centre_of(const cv::Rect2d& r) { return {r.x + 0.5 * r.width, r.y + 0.5 * r.height}; }
+
+}  // namespace
+
+FlightSoftware::FlightSoftware(FlightConfig config)
+    : config_(validated(std::move(config))),
+      link_(config_.timeouts.command_gap_s),
+      tag_detector_(config_.perception),
+      marker_detector_(config_.shelf.aruco_dictionary),
+      inventory_(0, config_.shelf.levels(), config_.shelf.columns(),
+                 config_.perception.marker_min_agreeing_frames),
+      pi_z_({config_.control.kp_z, config_.control.ki_z, config_.control.z_integral_limit_m_s,
+             config_.control.z_speed_max_mps}),
+      pi_psi_({config_.control.kp_psi, config_.control.ki_psi,
+               config_.control.psi_integral_limit_rad_s, config_.control.yaw_rate_max_radps}),
+      viewpoint_G_m_(optimal_viewpoint_G(config_.shelf, config_.camera, config_.mount,
+                                         config_.mission.viewpoint_margin)) {}
+
+// ---- Entry points ----
+
+std::vector<SdkCommand> FlightSoftware::start(TimeNs t_ns) {
+  std::vector<SdkCommand> out;
+  if (phase_ != Phase::Idle) return out;
+  now_ns_ = t_ns;
+  telemetry_.t_ns = t_ns;
+  result_.outcome = Outcome::Running;
+  enter(Phase::EnterSdk, "entering SDK mode");
+  attempts_ = 0;
+  link_.request("command", config_.timeouts.command_reply_s);
+  link_.poll(now_ns_, out);
+  return out;
+}
+
+std::vector<SdkCommand> FlightSoftware::step(const Input& input) {
+  out_.clear();
+  if (phase_ == Phase::Idle || phase_ == Phase::Done) {
+    if (const auto* r = std::get_if<SdkReply>(&input)) link_.on_reply(*r);  // drained
+    return out_;
+  }
+  const TimeNs t = std::visit([](const auto& m) { return m.t_ns; }, input);
+  now_ns_ = std::max(now_ns_, t);
+  telemetry_.t_ns = now_ns_;
+  std::visit(
+      [this](const auto& m) {
+        using T = std::decay_t<decltype(m)>;
+        if constexpr (std::is_same_v<T, SdkReply>) on_reply(m);
+        else if constexpr (std::is_same_v<T, StateRecord>) on_state(m);
+        else on_frame(m);
+      },
+      input);
+  if (auto c = link_.check_timeout(now_ns_)) on_completion(*c);
+  if (phase_ != Phase::Done) supervise();
+  link_.poll(now_ns_, out_);
+  telemetry_.phase = phase_;
+  telemetry_.velocity = velocity_;
+  telemetry_.stale_replies = link_.stale_replies();
+  telemetry_.video_stalled = video_stalled_;
+  return out_;
+}
+
+void FlightSoftware::on_reply(const SdkReply& reply) {
+  if (auto c = link_.on_reply(reply)) on_completion(*c);
+}
+
+void FlightSoftware::on_state(const StateRecord& s) {
+  state_ = s;
+  telemetry_.battery_pct = s.battery_pct;
+  telemetry_.height_m = s.height_m;
+}
+
+void FlightSoftware::on_frame(const CameraFrame& f) {
+  if (f.bgr.type() != CV_8UC3 || f.bgr.cols != config_.camera.width_px ||
+      f.bgr.rows != config_.camera.height_px) {
+    ++telemetry_.bad_frames;
+    return;
+  }
+  last_frame_ns_ = now_ns_;
+  if (video_stalled_) {
+    video_stalled_ = false;
+    telemetry_.event = "video back";
+  }
+  switch (phase_) {
+    case Phase::WaitVideo:
+      if (state_ && state_->battery_pct < config_.mission.takeoff_min_battery_pct) {
+        abort_on_ground("battery " + std::to_string(state_->battery_pct) +
+                        "% below the take-off minimum");
+      } else {
+        command_takeoff();
+      }
+      return;
+    case Phase::FindShelf: find_shelf(f.bgr); break;
+    case Phase::GoToViewpoint: go_to_viewpoint(f.bgr, false); break;
+    case Phase::TakeInventory: take_inventory(f.bgr); break;
+    case Phase::Approach: approach(f.bgr); break;
+    default: break;
+  }
+  last_control_ns_ = now_ns_;
+  emit_rc(false);
+}
+
+// ---- SDK command results ----
+
+void FlightSoftware::on_completion(const SdkLink::Completion& c) {
+  const bool retry_left = attempts_ < config_.timeouts.command_retries;
+  auto retry = [&](double timeout_s) {
+    ++attempts_;
+    link_.request(c.command, timeout_s);
+    telemetry_.event = "'" + c.command + "' " + (c.timed_out ? "timed out" : "refused: " + c.reply) +
+                       ", retry " + std::to_string(attempts_);
+  };
+  if (c.command == "command" || c.command == "streamon") {
+    if (c.ok) {
+      attempts_ = 0;
+      if (c.command == "command") {
+        enter(Phase::StartVideo, "SDK mode; starting video");
+        link_.request("streamon", config_.timeouts.command_reply_s);
+      } else {
+        enter(Phase::WaitVideo, "video on; waiting for the first frame");
+      }
+    } else if (retry_left) {
+      retry(config_.timeouts.command_reply_s);
+    } else {
+      abort_on_ground("'" + c.command + "' failed: " + (c.timed_out ? "no reply" : c.reply));
+    }
+  } else if (c.command == "takeoff") {
+    const bool airborne_anyway = c.timed_out && state_ &&
+                                 state_->height_m > config_.mission.airborne_height_m;
+    if (c.ok || airborne_anyway) {
+      attempts_ = 0;
+      airborne_since_ns_ = now_ns_;
+      enter(Phase::FindShelf, c.ok ? "airborne" : "airborne (takeoff reply lost)");
+    } else if (retry_left) {
+      retry(config_.timeouts.takeoff_reply_s);
+    } else {
+      abort_on_ground("takeoff failed: " + (c.timed_out ? std::string("no reply") : c.reply));
+    }
+  } else if (c.command == "land") {
+    if (c.ok) {
+      result_.outcome = pending_outcome_;
+      result_.landed = true;
+      enter(Phase::Done, "landed");
+    } else if (retry_left) {
+      retry(config_.timeouts.land_reply_s);
+    } else {
+      result_.outcome = pending_outcome_;
+      result_.landed = false;
+      result_.reason += "; land not acknowledged";
+      enter(Phase::Done, "land not acknowledged");
+    }
+  }
+}
+
+// ---- Timers: failsafes, phase timeouts, keep-alive ----
+
+void FlightSoftware::supervise() {
+  const Timeouts& to = config_.timeouts;
+  const double in_phase_s = ns_to_seconds(now_ns_ - phase_start_ns_);
+  auto timed_out = [&](double limit_s) { return in_phase_s > limit_s; };
+  switch (phase_) {
+    case Phase::WaitVideo:
+      if (timed_out(to.video_start_s)) abort_on_ground("no video after streamon");
+      return;
+    case Phase::FindShelf:
+      if (timed_out(to.find_shelf_s)) return land(Outcome::Aborted, "shelf not found");
+      break;
+    case Phase::GoToViewpoint:
+      if (timed_out(to.go_to_viewpoint_s)) return land(Outcome::Aborted, "viewpoint not reached");
+      break;
+    case Phase::TakeInventory:
+      if (timed_out(to.take_inventory_s)) return land(Outcome::Aborted, "inventory not completed");
+      break;
+    case Phase::Approach:
+      if (timed_out(to.approach_s)) return land(Outcome::Aborted, "approach timed out");
+      if (lost_since_ns_ && ns_to_seconds(now_ns_ - *lost_since_ns_) > to.target_lost_s) {
+        return land(Outcome::Aborted, "target lost");
+      }
+      if (back_off_since_ns_ && ns_to_seconds(now_ns_ - *back_off_since_ns_) > to.back_off_s) {
+        return land(Outcome::Aborted, "could not centre on the target cell");
+      }
+      break;
+    case Phase::Cross:
+      if (now_ns_ - phase_start_ns_ >= cross_duration_ns_) {
+        return land(Outcome::Crossed, "crossed cell " + cell_text(*target_));
+      }
+      break;
+    default:
+      break;
+  }
+  if (!airborne_phase()) return;
+  // Low battery: land now, except in the crossing (finish it, then land beyond the shelf).
+  if (phase_ != Phase::Cross && state_ && state_->battery_pct < config_.mission.low_battery_pct) {
+    return land(Outcome::Aborted, "low battery (" + std::to_string(state_->battery_pct) + "%)");
+  }
+  // Video stall: the timers run on whatever input arrives (state records at 10 Hz).
+  if (vision_phase()) {
+    const TimeNs since_ns = now_ns_ - std::max(last_frame_ns_.value_or(0), airborne_since_ns_);
+    if (ns_to_seconds(since_ns) > to.video_land_s) return land(Outcome::Aborted, "video lost");
+    if (ns_to_seconds(since_ns) > to.video_hover_s && !video_stalled_) {
+      video_stalled_ = true;
+      telemetry_.event = "video stalled: hovering";
+      hover();
+      emit_rc(true);
+    }
+  }
+  // Keep-alive (and the steady rc while frames are missing).
+  if (!last_rc_ns_ || ns_to_seconds(now_ns_ - *last_rc_ns_) >= config_.rc.keepalive_s) emit_rc(true);
+}
+
+bool FlightSoftware::airborne_phase() const {
+  return phase_ == Phase::FindShelf || phase_ == Phase::GoToViewpoint ||
+         phase_ == Phase::TakeInventory || phase_ == Phase::Approach || phase_ == Phase::Cross;
+}
+
+bool FlightSoftware::vision_phase() const { return airborne_phase() && phase_ != Phase::Cross; }
+
+// ---- Actions ----
+
+void FlightSoftware::enter(Phase p, const std::string& event) {
+  phase_ = p;
+  phase_start_ns_ = now_ns_;
+  telemetry_.phase = p;
+  telemetry_.event = event;
+  settled_frames_ = 0;
+  lost_since_ns_.reset();
+  back_off_since_ns_.reset();
+  pi_z_.reset();
+  pi_psi_.reset();
+}
+
+void FlightSoftware::command_takeoff() {
+  enter(Phase::TakeOff, "taking off");
+  attempts_ = 0;
+  link_.request("takeoff", config_.timeouts.takeoff_reply_s);
+}
+
+void FlightSoftware::land(Outcome outcome, const std::string& reason) {
+  hover();
+  pending_outcome_ = outcome;
+  result_.reason = reason;
+  enter(Phase::Land, "landing: " + reason);
+  attempts_ = 0;
+  link_.request("land", config_.timeouts.land_reply_s);
+}
+
+void FlightSoftware::abort_on_ground(const std::string& reason) {
+  result_ = {Outcome::Aborted, reason, false};
+  enter(Phase::Done, "gave up on the ground: " + reason);
+}
+
+void FlightSoftware::set_velocity(const VelocityCommand& v) { velocity_ = v; }
+
+void FlightSoftware::hover() {
+  velocity_ = {};
+  pi_z_.reset();
+  pi_psi_.reset();
+}
+
+void FlightSoftware::emit_rc(bool force) {
+  if (!airborne_phase() || link_.outstanding()) return;
+  if (!force && last_rc_ns_ && ns_to_seconds(now_ns_ - *last_rc_ns_) < config_.rc.rc_period_s) {
+    return;
+  }
+  telemetry_.rc = to_rc(velocity_, config_.rc);
+  out_.push_back({now_ns_, telemetry_.rc.text()});
+  last_rc_ns_ = now_ns_;
+}
+
+double FlightSoftware::control_dt_s() {
+  if (!last_control_ns_) return 0.0;
+  return std::min(ns_to_seconds(now_ns_ - *last_control_ns_), config_.control.max_control_dt_s);
+}
+
+void FlightSoftware::update_view_telemetry() {
+  telemetry_.tags.clear();
+  for (size_t i = 0; i < view_.tags.size(); ++i) {
+    const bool classified = view_.grid.valid && i < view_.grid.row.size();
+    telemetry_.tags.push_back({view_.tags[i].centre_px, view_.tags[i].area_px,
+                               classified ? view_.grid.row[i] : -1,
+                               classified ? view_.grid.column[i] : -1});
+  }
+  telemetry_.grid_valid = view_.grid.valid;
+  telemetry_.grid_rows = view_.grid.rows;
+  telemetry_.grid_columns = view_.grid.columns;
+  telemetry_.full_view = view_.full;
+  telemetry_.grid_refusal = view_.grid.refusal;
+}
+
+// ---- Phase behaviours ----
+
+void FlightSoftware::find_shelf(const cv::Mat& bgr) {
+  analyse_shelf(bgr, tag_detector_, config_, view_);
+  update_view_telemetry();
+  const ControlGains& g = config_.control;
+  const CameraIntrinsics& k = config_.camera;
+  if (view_.full) {
+    enter(Phase::GoToViewpoint, "whole shelf in view");
+    go_to_viewpoint(bgr, true);
+    return;
+  }
+  VelocityCommand v;
+  if (!view_.tags.empty()) {
+    // A fragment: back away and centre it until the whole grid fits the view.
+    cv::Point2d c(0, 0);
+    for (const TagBlob& t : view_.tags) c += t.centre_px;
+    c *= 1.0 / static_cast<double>(view_.tags.size());
+    v.vx_B_mps = -g.back_off_speed_mps;
+    v.yaw_rate_radps = std::clamp(g.viewpoint_yaw_kp * std::atan((k.cx_px - c.x) / k.fx_px),
+                                  -g.yaw_rate_max_radps, g.yaw_rate_max_radps);
+    v.vz_mps = std::clamp(g.viewpoint_kp * (k.cy_px - c.y) / k.fy_px, -g.z_speed_max_mps,
+                          g.z_speed_max_mps);
+  } else {
+    v.yaw_rate_radps = g.search_yaw_rate_radps;  // nothing in view: turn and look
+  }
+  set_velocity(v);
+}
+
+void FlightSoftware::go_to_viewpoint(const cv::Mat& bgr, bool view_fresh) {
+  if (!view_fresh) {
+    analyse_shelf(bgr, tag_detector_, config_, view_);
+    update_view_telemetry();
+  }
+  const ControlGains& g = config_.control;
+  const MissionParams& m = config_.mission;
+  if (!view_.full) {
+    hover();
+    if (last_full_view_ns_ && ns_to_seconds(now_ns_ - *last_full_view_ns_) > m.viewpoint_lost_s) {
+      enter(Phase::FindShelf, "shelf out of view: searching");
+    }
+    return;
+  }
+  last_full_view_ns_ = now_ns_;
+  std::vector<cv::Point3d> obj;
+  std::vector<cv::Point2d> img;
+  for (int r = 0; r < view_.grid.rows; ++r) {
+    for (int c = 0; c < view_.grid.columns; ++c) {
+      obj.push_back(grid_tag_G(config_.shelf, c, r));
+      img.push_back(view_.tags[static_cast<size_t>(view_.grid.at(r, c))].centre_px);
+    }
+  }
+  const auto pose = estimate_pose(obj, img, config_.camera, config_.mount);
+  if (!pose) {
+    hover();
+    return;
+  }
+  telemetry_.pose = pose;
+  telemetry_.pose_in_cell_frame = false;
+  // e1: from the current position to the optimal viewpoint, in G; flown in the body frame.
+  const Eigen::Vector3d e1 = viewpoint_G_m_ - pose->p_FB_m();
+  telemetry_.e1_G_m = e1;
+  Eigen::Vector3d v_G = g.viewpoint_kp * e1;
+  if (v_G.norm() > g.viewpoint_speed_max_mps) v_G *= g.viewpoint_speed_max_mps / v_G.norm();
+  const double c = std::cos(pose->yaw_rad), s = std::sin(pose->yaw_rad);
+  VelocityCommand v;
+  v.vx_B_mps = c * v_G.x() + s * v_G.y();  // R_z(-yaw) v_G
+  v.vy_B_mps = -s * v_G.x() + c * v_G.y();
+  v.vz_mps = v_G.z();
+  v.yaw_rate_radps = std::clamp(-g.viewpoint_yaw_kp * pose->yaw_rad, -g.yaw_rate_max_radps,
+                                g.yaw_rate_max_radps);
+  set_velocity(v);
+  const bool there = e1.norm() < m.viewpoint_position_tolerance_m &&
+                     std::abs(pose->yaw_rad) < m.viewpoint_yaw_tolerance_rad;
+  settled_frames_ = there ? settled_frames_ + 1 : 0;
+  if (settled_frames_ >= m.viewpoint_settle_frames) {
+    hover();
+    enter(Phase::TakeInventory, "at the optimal viewpoint: reading the shelf");
+  }
+}
+
+void FlightSoftware::take_inventory(const cv::Mat& bgr) {
+  hover();
+  analyse_shelf(bgr, tag_detector_, config_, view_);
+  update_view_telemetry();
+  if (!view_.full) return;
+  markers_.clear();
+  marker_detector_.detect(bgr, markers_);
+  telemetry_.markers_seen = static_cast<int>(markers_.size());
+  inventory_.observe(assign_markers(view_, markers_, config_));
+  if (inventory_.frames() < config_.perception.inventory_frames) return;
+  if (!select_target(bgr)) {
+    land(Outcome::NoEmptyCell, "inventory taken; no crossable empty cell");
+    return;
+  }
+  enter(Phase::Approach, "inventory taken; approaching cell " + cell_text(*target_));
+}
+
+bool FlightSoftware::select_target(const cv::Mat& bgr) {
+  const cv::Point2d centre(config_.camera.cx_px, config_.camera.cy_px);
+  std::optional<CellIndex> best;
+  double best_d = 0.0;
+  for (const CellIndex& cell : inventory_.empty_cells()) {
+    // Only cells the vehicle fits through, centred and level.
+    const Eigen::Vector2d opening = cell_opening_m(config_.shelf, cell);
+    const Eigen::Vector3d& size = config_.mission.vehicle_size_m;
+    if (opening.x() - size.y() - 2.0 * config_.mission.crossing_margin_m <= 0.0 ||
+        opening.y() - size.z() - 2.0 * config_.mission.crossing_margin_m <= 0.0) {
+      continue;
+    }
+    const auto q = cell_quad(view_, cell);
+    const cv::Point2d c = 0.25 * (q[0] + q[1] + q[2] + q[3]);
+    const double d = cv::norm(c - centre);
+    if (!best || d < best_d) {
+      best = cell;
+      best_d = d;
+    }
+  }
+  if (!best) return false;
+  target_ = best;
+  telemetry_.target = best;
+  const auto q = cell_quad(view_, *best);
+  const auto idx = cell_corner_indices(view_.grid, best->level - 1, best->column - 1);
+  double side = 0.0;
+  for (size_t k = 0; k < 4; ++k) {
+    corner_px_[k] = q[k];
+    side += std::sqrt(view_.tags[static_cast<size_t>((*idx)[k])].area_px) * 0.25;
+  }
+  const cv::Rect2d centres = cv::boundingRect(std::vector<cv::Point2f>(q.begin(), q.end()));
+  box_px_ = cv::Rect2d(centres.x - 0.5 * side, centres.y - 0.5 * side, centres.width + side,
+                       centres.height + side);
+  start_tracker(bgr, box_px_);
+  return true;
+}
+
+void FlightSoftware::start_tracker(const cv::Mat& bgr, const cv::Rect2d& box) {
+  tracker_ = cv::legacy::TrackerMedianFlow::create();
+  tracker_->init(bgr, box);
+  telemetry_.tracked_box_px = box;
+}
+
+// Looks for the target's four corner tags around `predicted`: tags in a window around it,
+// eq. 1 inside the window, each corner the nearest tag to where the box puts it.
+bool FlightSoftware::measure_target(const cv::Mat& bgr, const cv::Rect2d& predicted) {
+  const PerceptionParams& p = config_.perception;
+  const double grow_x = p.roi_expand * predicted.width, grow_y = p.roi_expand * predicted.height;
+  const cv::Rect roi(cv::Point(static_cast<int>(std::floor(predicted.x - grow_x)),
+                               static_cast<int>(std::floor(predicted.y - grow_y))),
+                     cv::Point(static_cast<int>(std::ceil(predicted.br().x + grow_x)),
+                               static_cast<int>(std::ceil(predicted.br().y + grow_y))));
+  roi_tags_.clear();
+  tag_detector_.detect(bgr, roi, roi_tags_);
+  keep_front_shelf(roi_tags_, p.area_ratio_threshold);
+  // Where the box puts each corner: the old corners moved and scaled with the box.
+  const cv::Point2d old_c = centre_of(box_px_), new_c = centre_of(predicted);
+  const double sx = predicted.width / box_px_.width, sy = predicted.height / box_px_.height;
+  const double gate = p.corner_gate * std::min(predicted.width, predicted.height);
+  std::array<int, 4> pick{-1, -1, -1, -1};
+  for (size_t k = 0; k < 4; ++k) {
+    const cv::Point2d d = corner_px_[k] - old_c;
+    const cv::Point2d expect = new_c + cv::Point2d(d.x * sx, d.y * sy);
+    double best = gate;
+    for (size_t i = 0; i < roi_tags_.size(); ++i) {
+      const double dist = cv::norm(roi_tags_[i].centre_px - expect);
+      if (dist < best) {
+        best = dist;
+        pick[k] = static_cast<int>(i);
+      }
+    }
+    if (pick[k] < 0) return false;
+    for (size_t j = 0; j < k; ++j) {
+      if (pick[j] == pick[k]) return false;
+    }
+  }
+  const auto obj = cell_corner_tags_K(config_.shelf, *target_);
+  std::vector<cv::Point3d> obj_v(obj.begin(), obj.end());
+  std::vector<cv::Point2d> img;
+  double side = 0.0;
+  for (size_t k = 0; k < 4; ++k) {
+    const TagBlob& t = roi_tags_[static_cast<size_t>(pick[k])];
+    img.push_back(t.centre_px);
+    corner_px_[k] = t.centre_px;
+    side += 0.25 * std::sqrt(t.area_px);
+  }
+  const auto pose = estimate_pose(obj_v, img, config_.camera, config_.mount);
+  if (!pose) return false;
+  pose_K_ = pose;
+  const cv::Rect2d centres = cv::boundingRect(std::vector<cv::Point2f>(img.begin(), img.end()));
+  box_px_ = cv::Rect2d(centres.x - 0.5 * side, centres.y - 0.5 * side, centres.width + side,
+                       centres.height + side);
+  // About to leave the view: a corner tag within a tag side (plus margin) of the border.
+  const double m = config_.mission.edge_margin_px + side;
+  near_edge_ = false;
+  for (const cv::Point2d& c : img) {
+    near_edge_ = near_edge_ || c.x < m || c.y < m || c.x > bgr.cols - 1 - m || c.y > bgr.rows - 1 - m;
+  }
+  return true;
+}
+
+bool FlightSoftware::reacquire(const cv::Mat& bgr) {
+  // The target is the cell of the (possibly partial) grid nearest the last box.
+  analyse_shelf(bgr, tag_detector_, config_, view_);
+  update_view_telemetry();
+  if (!view_.grid.valid) return false;
+  const cv::Point2d last = centre_of(box_px_);
+  const double gate = 0.5 * std::min(box_px_.width, box_px_.height);
+  std::optional<std::array<int, 4>> best;
+  double best_d = gate;
+  for (int r = 0; r + 1 < view_.grid.rows; ++r) {
+    for (int c = 0; c + 1 < view_.grid.columns; ++c) {
+      const auto idx = cell_corner_indices(view_.grid, r, c);
+      if (!idx) continue;
+      cv::Point2d m(0, 0);
+      for (int i : *idx) m += 0.25 * view_.tags[static_cast<size_t>(i)].centre_px;
+      const double d = cv::norm(m - last);
+      if (d < best_d) {
+        best_d = d;
+        best = idx;
+      }
+    }
+  }
+  if (!best) return false;
+  for (size_t k = 0; k < 4; ++k) corner_px_[k] = view_.tags[static_cast<size_t>((*best)[k])].centre_px;
+  if (!measure_target(bgr, box_px_)) return false;
+  start_tracker(bgr, box_px_);
+  return true;
+}
+
+bool FlightSoftware::crossing_allowed(const PoseEstimate& pose, std::string& why) const {
+  const MissionParams& m = config_.mission;
+  const Eigen::Vector2d opening = cell_opening_m(config_.shelf, *target_);
+  const double psi = std::abs(pose.yaw_rad);
+  // Footprint across the opening of a vehicle turned by psi; the crossing is flown straight
+  // along the heading, so the lateral position drifts by tan(psi) per metre forward.
+  const double footprint = m.vehicle_size_m.y() * std::cos(psi) + m.vehicle_size_m.x() * std::sin(psi);
+  const double tol_y = 0.5 * (opening.x() - footprint) - m.crossing_margin_m;
+  const double tol_z = 0.5 * (opening.y() - m.vehicle_size_m.z()) - m.crossing_margin_m;
+  const Eigen::Vector3d p = pose.p_FB_m();
+  const double to_front = std::max(0.0, -p.x()), to_back = to_front + config_.shelf.depth_m;
+  const double y_front = p.y() + to_front * std::tan(pose.yaw_rad);
+  const double y_back = p.y() + to_back * std::tan(pose.yaw_rad);
+  if (psi > m.crossing_yaw_tolerance_rad) {
+    why = "heading off the cell normal";
+  } else if (std::abs(y_front) > tol_y || std::abs(y_back) > tol_y) {
+    why = "off-centre laterally";
+  } else if (std::abs(p.z()) > tol_z) {
+    why = "off-centre vertically";
+  } else {
+    return true;
+  }
+  return false;
+}
+
+void FlightSoftware::approach(const cv::Mat& bgr) {
+  const ControlGains& g = config_.control;
+  const CameraIntrinsics& k = config_.camera;
+  cv::Rect2d predicted = box_px_;
+  telemetry_.tracker_ok = tracker_ && tracker_->update(bgr, predicted);
+  if (!telemetry_.tracker_ok) predicted = box_px_;
+  const bool found = measure_target(bgr, predicted);
+  telemetry_.tracked_box_px = box_px_;
+  const double dt = control_dt_s();
+  if (found) {
+    lost_since_ns_.reset();
+    back_off_since_ns_.reset();
+    // Re-seed the tracker when it failed or drifted off the tags.
+    const cv::Rect2d overlap = predicted & box_px_;
+    const double iou = overlap.area() / (predicted.area() + box_px_.area() - overlap.area());
+    if (!telemetry_.tracker_ok || iou < 0.7) start_tracker(bgr, box_px_);
+    const PoseEstimate& pose = *pose_K_;
+    telemetry_.pose = pose;
+    telemetry_.pose_in_cell_frame = true;
+    const cv::Point2d c = centre_of(box_px_);
+    const double range_m = std::max(0.05, -pose.X_FC.translation().x());
+    const double e_z = (k.cy_px - c.y) * range_m / k.fy_px;   // eq. 11
+    const double e_psi = std::atan((k.cx_px - c.x) / k.fx_px);  // eq. 13, 14
+    const double psi = pose.yaw_rad;
+    VelocityCommand v;
+    v.vx_B_mps = g.forward_speed_mps;                                              // eq. 10
+    v.vz_mps = pi_z_.update(e_z, dt);                                              // eq. 12
+    v.yaw_rate_radps = pi_psi_.update(e_psi, dt);                                  // eq. 15
+    v.vy_B_mps = bang_off_bang(psi, g.psi_lateral_threshold_rad, g.lateral_speed_mps);  // Fig. 19
+    set_velocity(v);
+    telemetry_.e_z_m = e_z;
+    telemetry_.e_psi_rad = e_psi;
+    telemetry_.psi_cell_rad = psi;
+    telemetry_.lateral_mps = v.vy_B_mps;
+    return;
+  }
+  // The corner tags are gone. Close and at the border: they left the view; cross if centred.
+  if (pose_K_ && near_edge_ && -pose_K_->p_FB_m().x() <= config_.mission.cross_range_max_m) {
+    std::string why;
+    if (crossing_allowed(*pose_K_, why)) {
+      const double distance = -pose_K_->p_FB_m().x() + config_.shelf.depth_m +
+                              0.5 * config_.mission.vehicle_size_m.x() +
+                              config_.mission.beyond_distance_m;
+      cross_duration_ns_ = seconds_to_ns(distance / g.crossing_speed_mps);
+      enter(Phase::Cross, "corner tags left the view: crossing " + cell_text(*target_));
+      set_velocity({g.crossing_speed_mps, 0.0, 0.0, 0.0});
+      return;
+    }
+    if (!back_off_since_ns_) {
+      if (++crossing_refusals_ >= config_.mission.crossing_attempts) {
+        land(Outcome::Aborted, "could not centre on the target cell");
+        return;
+      }
+      back_off_since_ns_ = now_ns_;
+      telemetry_.event = "not centred (" + why + "): backing off";
+    }
+    set_velocity({-g.back_off_speed_mps, 0.0, 0.0, 0.0});
+    pi_z_.reset();
+    pi_psi_.reset();
+    return;
+  }
+  if (back_off_since_ns_) {  // keep backing off until the tags are back
+    set_velocity({-g.back_off_speed_mps, 0.0, 0.0, 0.0});
+    return;
+  }
+  // Lost: hover, and look for the target among the tags of the whole frame.
+  if (!lost_since_ns_) {
+    lost_since_ns_ = now_ns_;
+    telemetry_.event = "target lost: hovering to re-acquire";
+  }
+  hover();
+  if (reacquire(bgr)) {
+    lost_since_ns_.reset();
+    telemetry_.event = "target re-acquired";
+  }
+}
+
+}  // namespace shelfcross::flight_sw

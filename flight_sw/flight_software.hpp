@@ -1,0 +1,234 @@
+#pragma once
+// The flight software's one entry point, used unchanged by the co-simulation and by
+// tello_pilot: stamped camera frames, state records and SDK replies in, SDK commands out.
+//
+//   FlightSoftware fsw(load_flight_config("shelf.yaml"));
+//   send(fsw.start(t0));                 // "command"; then "streamon", "takeoff" after "ok"s
+//   for (each input in stamp order) send(fsw.step(input));
+//   until fsw.finished(); fsw.result(), fsw.inventory_json()
+//
+// Time is the stamp of each input (t_ns); an input stamped earlier than one already handled
+// is handled at the latest stamp seen. Nothing here reads a clock or draws a random number:
+// the same inputs give the same commands.
+//
+// Phases (each with a timeout; a timed-out airborne phase lands):
+//   EnterSdk --ok--> StartVideo --ok--> WaitVideo --first frame, battery ok--> TakeOff
+//   TakeOff --ok (or reply lost while the height says airborne)--> FindShelf
+//   FindShelf --whole grid in view--> GoToViewpoint --at the optimal viewpoint, settled-->
+//   TakeInventory --inventory_frames full views read--> Approach (target = empty cell nearest
+//   the image centre) --corner tags leave the view, centred within tolerance--> Cross
+//   --distance past the back face flown (timed)--> Land --ok--> Done
+// Failsafes: no frame for video_hover_s: hover (rc 0 0 0 0); for video_land_s: land (not while
+// crossing: the crossing is open loop and stopping inside the shelf is worse). Target lost:
+// hover and re-acquire from the tags, give up after target_lost_s and land. Battery below
+// low_battery_pct: land (after the crossing if crossing). Corner tags leaving the view while
+// not centred: back off until they are back (then approach again), give up after back_off_s
+// of backing off or at the crossing_attempts-th off-centre arrival. Takeoff refused or
+// unanswered: retried command_retries times, then the mission ends on the ground.
+//
+// Lateral law sign (paper Fig. 19): the yaw loop keeps the target cell centred in the image,
+// so the camera looks at the cell centre. A vehicle displaced to the left of the cell normal
+// (y_K > 0; y left) must then be turned right to see it: psi = atan2(-y_K, -x_K) < 0. So
+// psi < -psi_L means "left of the normal": move right, vy_B = -V_y; psi > psi_L means right of
+// it: move left, vy_B = +V_y. Hence vy_B = bang_off_bang(psi, psi_L, V_y), which drives y_K
+// and with it psi to zero: the path straightens onto the cell normal.
+// Vertical: dy_im = cy - v_box (pixels, > 0 when the target is above the principal point);
+// e_z = dy_im * range / fy (metres, eq. 11 with k_e = fy / range); vz = PI(e_z) climbs toward
+// it. Heading: dx_im = u_box - cx; e_psi = atan(-dx_im / fx) (eq. 13-14 with k_dpsi = 1,
+// > 0 when the target is left); yaw_rate = PI(e_psi) turns left toward it (CCW positive,
+// sent as d = -yaw_rate * rc_per_radps_yaw, the SDK's d being clockwise).
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/tracking.hpp>  // declares the trackers tracking_legacy.hpp derives from
+#include <opencv2/tracking/tracking_legacy.hpp>
+
+#include "flight_sw/config.hpp"
+#include "flight_sw/control.hpp"
+#include "flight_sw/inventory.hpp"
+#include "flight_sw/navigation.hpp"
+#include "flight_sw/perception.hpp"
+#include "flight_sw/sdk_link.hpp"
+#include "shelfcross/camera.hpp"
+#include "shelfcross/sdk_messages.hpp"
+
+namespace shelfcross::flight_sw {
+
+using Input = std::variant<CameraFrame, StateRecord, SdkReply>;
+
+enum class Phase {
+  Idle,
+  EnterSdk,
+  StartVideo,
+  WaitVideo,
+  TakeOff,
+  FindShelf,
+  GoToViewpoint,
+  TakeInventory,
+  Approach,
+  Cross,
+  Land,
+  Done
+};
+const char* phase_name(Phase phase);
+
+enum class Outcome {
+  Running,
+  Crossed,      ///< inventory taken, an empty cell crossed, landed beyond the shelf
+  NoEmptyCell,  ///< inventory taken, no crossable empty cell: landed in front of the shelf
+  Aborted       ///< gave up (reason says why); landed if it had taken off
+};
+const char* outcome_name(Outcome outcome);
+
+struct MissionResult {
+  Outcome outcome = Outcome::Running;
+  std::string reason;   ///< why it ended ("crossed cell L2 C3", "video lost", ...)
+  bool landed = false;  ///< a land command was acknowledged (false if it never took off)
+};
+
+/// One tag of the last analysed frame.
+struct TagTelemetry {
+  cv::Point2d centre_px;
+  double area_px = 0.0;
+  int tag_row = -1;     ///< -1 when not classified
+  int tag_column = -1;
+};
+
+/// What the flight software is doing, for logs. Updated on every input.
+struct Telemetry {
+  TimeNs t_ns = 0;
+  Phase phase = Phase::Idle;
+  std::string event;  ///< the last notable event (phase change, failsafe, refusal)
+  // Perception
+  std::vector<TagTelemetry> tags;
+  bool grid_valid = false;
+  int grid_rows = 0;
+  int grid_columns = 0;
+  bool full_view = false;
+  std::string grid_refusal;
+  int markers_seen = 0;
+  // Target and navigation
+  std::optional<CellIndex> target;
+  std::optional<cv::Rect2d> tracked_box_px;
+  bool tracker_ok = false;
+  /// Body pose from vision: in the target cell's frame K during the approach, in the grid
+  /// frame G while going to the viewpoint.
+  std::optional<PoseEstimate> pose;
+  bool pose_in_cell_frame = false;
+  // Control errors and commands
+  double e_z_m = 0.0;
+  double e_psi_rad = 0.0;
+  double psi_cell_rad = 0.0;   ///< heading relative to the cell normal (lateral law input)
+  double lateral_mps = 0.0;    ///< bang-off-bang output
+  Eigen::Vector3d e1_G_m = Eigen::Vector3d::Zero();  ///< to the optimal viewpoint
+  VelocityCommand velocity;    ///< last commanded
+  RcSticks rc;                 ///< last sent
+  // Vehicle and link
+  bool video_stalled = false;
+  int battery_pct = -1;
+  double height_m = 0.0;
+  int stale_replies = 0;
+  int bad_frames = 0;  ///< frames of the wrong size or type, ignored
+};
+
+class FlightSoftware {
+ public:
+  /// Throws std::invalid_argument for an invalid configuration (validate_flight_config).
+  explicit FlightSoftware(FlightConfig config);
+
+  /// The opening command ("command"); call once, before step.
+  std::vector<SdkCommand> start(TimeNs t_ns);
+  /// Everything else: one input, the commands it causes (each stamped with the input's time).
+  std::vector<SdkCommand> step(const Input& input);
+
+  const Telemetry& telemetry() const { return telemetry_; }
+  Phase phase() const { return phase_; }
+  bool finished() const { return phase_ == Phase::Done; }
+  MissionResult result() const { return result_; }
+  const Inventory& inventory() const { return inventory_; }
+  std::string inventory_json() const { return inventory_.to_json(); }
+  const FlightConfig& config() const { return config_; }
+
+ private:
+  // Input handlers
+  void on_reply(const SdkReply& reply);
+  void on_state(const StateRecord& state);
+  void on_frame(const CameraFrame& frame);
+  void on_completion(const SdkLink::Completion& c);
+  void supervise();
+  // Phase behaviours on a frame
+  void find_shelf(const cv::Mat& bgr);
+  void go_to_viewpoint(const cv::Mat& bgr, bool view_fresh);
+  void take_inventory(const cv::Mat& bgr);
+  void approach(const cv::Mat& bgr);
+  // Approach helpers
+  bool select_target(const cv::Mat& bgr);
+  bool measure_target(const cv::Mat& bgr, const cv::Rect2d& predicted);
+  bool reacquire(const cv::Mat& bgr);
+  void start_tracker(const cv::Mat& bgr, const cv::Rect2d& box);
+  bool crossing_allowed(const PoseEstimate& pose_K, std::string& why) const;
+  // Actions
+  void enter(Phase phase, const std::string& event);
+  void command_takeoff();
+  void land(Outcome outcome, const std::string& reason);
+  void abort_on_ground(const std::string& reason);
+  void set_velocity(const VelocityCommand& v);
+  void hover();
+  void emit_rc(bool force);
+  void update_view_telemetry();
+  double control_dt_s();
+  bool airborne_phase() const;
+  bool vision_phase() const;
+
+  FlightConfig config_;
+  SdkLink link_;
+  TagDetector tag_detector_;
+  MarkerDetector marker_detector_;
+  Inventory inventory_;
+  PiController pi_z_, pi_psi_;
+
+  Phase phase_ = Phase::Idle;
+  TimeNs now_ns_ = 0;
+  TimeNs phase_start_ns_ = 0;
+  int attempts_ = 0;  ///< attempts of the current non-rc command
+  MissionResult result_;
+  Outcome pending_outcome_ = Outcome::Aborted;  ///< the outcome a Land phase ends in
+  std::optional<StateRecord> state_;
+  std::optional<TimeNs> last_frame_ns_;
+  TimeNs airborne_since_ns_ = 0;  ///< video-stall timer floor: frames are needed from here
+  std::optional<TimeNs> last_rc_ns_;
+  std::optional<TimeNs> last_control_ns_;
+  VelocityCommand velocity_;
+  bool video_stalled_ = false;
+
+  // Perception state (buffers reused frame to frame)
+  ShelfView view_;
+  std::vector<MarkerSighting> markers_;
+  std::vector<TagBlob> roi_tags_;
+  // Viewpoint
+  Eigen::Vector3d viewpoint_G_m_;
+  int settled_frames_ = 0;
+  std::optional<TimeNs> last_full_view_ns_;
+  // Target
+  std::optional<CellIndex> target_;
+  cv::Ptr<cv::legacy::Tracker> tracker_;
+  cv::Rect2d box_px_;                   ///< tracked box: corner tag centres +- half a tag
+  std::array<cv::Point2d, 4> corner_px_;  ///< last measured corner tag centres
+  std::optional<PoseEstimate> pose_K_;  ///< last pose in the cell frame
+  bool near_edge_ = false;              ///< a corner tag was about to leave the view
+  std::optional<TimeNs> lost_since_ns_;
+  std::optional<TimeNs> back_off_since_ns_;
+  int crossing_refusals_ = 0;           ///< off-centre arrivals at the cell so far
+  // Crossing
+  TimeNs cross_duration_ns_ = 0;
+
+  Telemetry telemetry_;
+  std::vector<SdkCommand> out_;  ///< the commands of the input being handled
+};
+
+}  // namespace shelfcross::flight_sw

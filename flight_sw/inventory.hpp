@@ -1,0 +1,64 @@
+#pragma once
+// The inventory of one shelf: which box (marker ID) sits in which cell, which cells are empty.
+// Built from full-view frames: each frame that shows the whole front grid is one observation
+// of every cell. A box counts once N frames (marker_min_agreeing_frames) have seen its ID in
+// the same cell and no other ID has been seen there as often; a cell counts as empty once N
+// frames have seen it and no marker was ever seen in it (a flickering sighting leaves the cell
+// "uncertain": never listed, never chosen as a target).
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "flight_sw/perception.hpp"
+
+namespace shelfcross::flight_sw {
+
+struct BoxEntry {
+  int id = 0;
+  int shelf = 0;   ///< shelf index in the mission, from 0
+  int level = 0;   ///< from the floor, from 1
+  int column = 0;  ///< from the left as seen on approach, from 1
+  bool operator==(const BoxEntry&) const = default;
+};
+
+class Inventory {
+ public:
+  Inventory() = default;
+  Inventory(int shelf_index, int levels, int columns, int min_agreeing_frames);
+
+  /// One full-view frame: the (cell, marker id) sightings it produced.
+  void observe(const std::vector<std::pair<CellIndex, int>>& sightings);
+
+  int frames() const { return frames_; }
+  int levels() const { return levels_; }
+  int columns() const { return columns_; }
+  /// The box decided in a cell, if any.
+  std::optional<int> box_at(CellIndex cell) const;
+  /// Whether a cell is decided empty.
+  bool is_empty(CellIndex cell) const;
+  /// Decided boxes, ordered by level then column.
+  std::vector<BoxEntry> boxes() const;
+  /// Decided empty cells, ordered by level then column.
+  std::vector<CellIndex> empty_cells() const;
+  /// Cells neither decided a box nor empty.
+  std::vector<CellIndex> uncertain_cells() const;
+
+  /// {"shelf":0,"levels":4,"columns":4,"frames":5,
+  ///  "boxes":[{"id":7,"shelf":0,"level":1,"column":2},...],
+  ///  "empty":[{"level":1,"column":1},...],"uncertain":[...]}
+  std::string to_json() const;
+
+ private:
+  size_t slot(CellIndex cell) const;  ///< index into counts_
+  const std::map<int, int>& counts(CellIndex cell) const { return counts_[slot(cell)]; }
+  int shelf_ = 0;
+  int levels_ = 0;
+  int columns_ = 0;
+  int min_agreeing_ = 1;
+  int frames_ = 0;
+  std::vector<std::map<int, int>> counts_;  ///< per cell (row-major by level): id -> frames
+};
+
+}  // namespace shelfcross::flight_sw

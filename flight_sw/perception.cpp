@@ -1,0 +1,362 @@
+#include "flight_sw/perception.hpp"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <limits>
+#include <map>
+
+#include <opencv2/imgproc.hpp>
+
+namespace shelfcross::flight_sw {
+
+std::optional<int> aruco_dictionary_id(const std::string& name) {
+  static const std::map<std::string, int> kNames = {
+      {"DICT_4X4_50", cv::aruco::DICT_4X4_50},
+      {"DICT_4X4_100", cv::aruco::DICT_4X4_100},
+      {"DICT_4X4_250", cv::aruco::DICT_4X4_250},
+      {"DICT_4X4_1000", cv::aruco::DICT_4X4_1000},
+      {"DICT_5X5_50", cv::aruco::DICT_5X5_50},
+      {"DICT_5X5_100", cv::aruco::DICT_5X5_100},
+      {"DICT_5X5_250", cv::aruco::DICT_5X5_250},
+      {"DICT_5X5_1000", cv::aruco::DICT_5X5_1000},
+      {"DICT_6X6_50", cv::aruco::DICT_6X6_50},
+      {"DICT_6X6_100", cv::aruco::DICT_6X6_100},
+      {"DICT_6X6_250", cv::aruco::DICT_6X6_250},
+      {"DICT_6X6_1000", cv::aruco::DICT_6X6_1000},
+      {"DICT_7X7_50", cv::aruco::DICT_7X7_50},
+      {"DICT_7X7_100", cv::aruco::DICT_7X7_100},
+      {"DICT_7X7_250", cv::aruco::DICT_7X7_250},
+      {"DICT_7X7_1000", cv::aruco::DICT_7X7_1000},
+      {"DICT_ARUCO_ORIGINAL", cv::aruco::DICT_ARUCO_ORIGINAL},
+      {"DICT_APRILTAG_16h5", cv::aruco::DICT_APRILTAG_16h5},
+      {"DICT_APRILTAG_25h9", cv::aruco::DICT_APRILTAG_25h9},
+      {"DICT_APRILTAG_36h10", cv::aruco::DICT_APRILTAG_36h10},
+      {"DICT_APRILTAG_36h11", cv::aruco::DICT_APRILTAG_36h11},
+  };
+  const auto it = kNames.find(name);
+  if (it == kNames.end()) return std::nullopt;
+  return it->second;
+}
+
+// ---- Tags ----
+
+TagDetector::TagDetector(const PerceptionParams& params) : params_(params) {}
+
+void TagDetector::detect(const cv::Mat& bgr, cv::Rect roi, std::vector<TagBlob>& out) {
+  assert(bgr.type() == CV_8UC3);
+  roi &= cv::Rect(0, 0, bgr.cols, bgr.rows);
+  if (roi.empty()) return;
+  cv::cvtColor(bgr(roi), hsv_, cv::COLOR_BGR2HSV);
+  const HsvRange& r = params_.tag_hsv;
+  if (r.hue_min <= r.hue_max) {
+    cv::inRange(hsv_, cv::Scalar(r.hue_min, r.sat_min, r.val_min),
+                cv::Scalar(r.hue_max, r.sat_max, r.val_max), mask_);
+  } else {  // the range wraps through red: [hue_min, 179] or [0, hue_max]
+    cv::inRange(hsv_, cv::Scalar(r.hue_min, r.sat_min, r.val_min),
+                cv::Scalar(179, r.sat_max, r.val_max), mask_);
+    cv::inRange(hsv_, cv::Scalar(0, r.sat_min, r.val_min),
+                cv::Scalar(r.hue_max, r.sat_max, r.val_max), mask_wrap_);
+    cv::bitwise_or(mask_, mask_wrap_, mask_);
+  }
+  const int n = cv::connectedComponentsWithStats(mask_, labels_, stats_, centroids_, 8, CV_32S);
+  for (int i = 1; i < n; ++i) {  // label 0 is the background
+    const int* s = stats_.ptr<int>(i);
+    const double area = s[cv::CC_STAT_AREA];
+    const int w = s[cv::CC_STAT_WIDTH], h = s[cv::CC_STAT_HEIGHT];
+    if (area < params_.min_tag_area_px) continue;
+    if (area < params_.min_fill_ratio * w * h) continue;  // ragged or hollow: not a tag
+    if (std::max(w, h) > params_.max_aspect_ratio * std::min(w, h)) continue;  // a bar edge
+    const double* c = centroids_.ptr<double>(i);
+    out.push_back({cv::Point2d(c[0] + roi.x, c[1] + roi.y), area,
+                   cv::Rect(s[cv::CC_STAT_LEFT] + roi.x, s[cv::CC_STAT_TOP] + roi.y, w, h)});
+  }
+}
+
+double keep_front_shelf(std::vector<TagBlob>& blobs, double threshold) {
+  double largest = 0.0;
+  for (const TagBlob& b : blobs) largest = std::max(largest, b.area_px);
+  std::erase_if(blobs, [&](const TagBlob& b) { return b.area_px < threshold * largest; });
+  return largest;
+}
+
+double tag_scale_px_per_m(const std::vector<TagBlob>& blobs, const KnownShelf& shelf) {
+  if (blobs.empty()) return 0.0;
+  if (blobs.size() == 1) return std::sqrt(blobs[0].area_px) / shelf.tag_size_m;
+  std::vector<double> nearest(blobs.size(), std::numeric_limits<double>::infinity());
+  for (size_t i = 0; i < blobs.size(); ++i) {
+    for (size_t j = i + 1; j < blobs.size(); ++j) {
+      const double d = cv::norm(blobs[i].centre_px - blobs[j].centre_px);
+      nearest[i] = std::min(nearest[i], d);
+      nearest[j] = std::min(nearest[j], d);
+    }
+  }
+  auto mid = nearest.begin() + static_cast<std::ptrdiff_t>(nearest.size() / 2);
+  std::nth_element(nearest.begin(), mid, nearest.end());
+  const double min_pitch = std::min(
+      *std::min_element(shelf.column_pitch_m.begin(), shelf.column_pitch_m.end()),
+      *std::min_element(shelf.row_pitch_m.begin(), shelf.row_pitch_m.end()));
+  return *mid / min_pitch;
+}
+
+// ---- Grid: eq. 2, 3, 4 ----
+
+GridLimits grid_limits(double w, double h) {
+  assert(w > 0.0 && h > 0.0);
+  const double diag = std::hypot(w, h);
+  const double lo = std::min(w, h);
+  GridLimits l;
+  if (w >= h) {
+    l.dx_lim_px = lo * lo / diag;
+    l.dy_lim_px = w * h / diag;
+  } else {
+    l.dx_lim_px = w * h / diag;
+    l.dy_lim_px = lo * lo / diag;
+  }
+  l.theta_lim_rad = std::atan(lo / std::max(w, h));
+  return l;
+}
+
+GridLimits grid_limits(const KnownShelf& shelf, double px_per_m) {
+  const auto [w_min, w_max] = std::minmax_element(shelf.column_pitch_m.begin(), shelf.column_pitch_m.end());
+  const auto [h_min, h_max] = std::minmax_element(shelf.row_pitch_m.begin(), shelf.row_pitch_m.end());
+  GridLimits l = grid_limits(*w_max * px_per_m, *h_max * px_per_m);
+  l.theta_lim_rad = std::min({l.theta_lim_rad,
+                              std::acos(std::min(1.0, l.dy_lim_px / (*h_min * px_per_m))),
+                              std::acos(std::min(1.0, l.dx_lim_px / (*w_min * px_per_m)))});
+  return l;
+}
+
+namespace {
+
+// Eq. 2 along one axis: chains of points, each the nearest along `a` (strictly ahead) within
+// |b_Q - b_P| <= lim of the previous one. Starts from the unassigned point with the smallest
+// `a` (the corner end of its line). a = x, b = y for rows; a = y, b = x for columns.
+template <class A, class B>
+std::vector<std::vector<int>> stair_chains(const std::vector<cv::Point2d>& p, A a, B b, double lim) {
+  const size_t n = p.size();
+  std::vector<int> order(n);
+  for (size_t i = 0; i < n; ++i) order[i] = static_cast<int>(i);
+  std::stable_sort(order.begin(), order.end(), [&](int i, int j) { return a(p[i]) < a(p[j]); });
+  std::vector<char> used(n, 0);
+  std::vector<std::vector<int>> chains;
+  for (int start : order) {
+    if (used[start]) continue;
+    std::vector<int> chain{start};
+    used[start] = 1;
+    int cur = start;
+    for (;;) {
+      int best = -1;
+      double best_da = std::numeric_limits<double>::infinity();
+      for (int q : order) {
+        if (used[q]) continue;
+        const double da = a(p[q]) - a(p[cur]);
+        if (da <= 0.0 || std::abs(b(p[q]) - b(p[cur])) > lim) continue;
+        if (da < best_da) {
+          best_da = da;
+          best = q;
+        }
+      }
+      if (best < 0) break;
+      chain.push_back(best);
+      used[best] = 1;
+      cur = best;
+    }
+    chains.push_back(std::move(chain));
+  }
+  return chains;
+}
+
+}  // namespace
+
+TagGrid classify_grid(const std::vector<cv::Point2d>& pts, const GridLimits& lim,
+                      double orthogonality_tolerance_rad) {
+  TagGrid g;
+  const size_t n = pts.size();
+  g.row.assign(n, -1);
+  g.column.assign(n, -1);
+  if (n == 0) {
+    g.refusal = "no tags";
+    return g;
+  }
+  auto px = [](const cv::Point2d& q) { return q.x; };
+  auto py = [](const cv::Point2d& q) { return q.y; };
+  const auto rows = stair_chains(pts, px, py, lim.dy_lim_px);
+  const auto cols = stair_chains(pts, py, px, lim.dx_lim_px);
+
+  // Rotation from the summed chain steps: rows run along u = (cos t, sin t), columns (top to
+  // bottom) along v = (-sin t, cos t).
+  cv::Point2d row_sum(0, 0), col_sum(0, 0);
+  int row_steps = 0, col_steps = 0;
+  for (const auto& c : rows) {
+    for (size_t k = 1; k < c.size(); ++k, ++row_steps) row_sum += pts[c[k]] - pts[c[k - 1]];
+  }
+  for (const auto& c : cols) {
+    for (size_t k = 1; k < c.size(); ++k, ++col_steps) col_sum += pts[c[k]] - pts[c[k - 1]];
+  }
+  const double theta_r = row_steps ? std::atan2(row_sum.y, row_sum.x) : 0.0;
+  const double theta_c = col_steps ? std::atan2(-col_sum.x, col_sum.y) : 0.0;
+  auto deg = [](double r) { return std::to_string(r * 180.0 / M_PI); };
+  if (std::abs(theta_r) >= lim.theta_lim_rad || std::abs(theta_c) >= lim.theta_lim_rad) {
+    g.refusal = "grid rotated past the limit angle (rows " + deg(theta_r) + " deg, columns " +
+                deg(theta_c) + " deg, limit " + deg(lim.theta_lim_rad) + " deg)";
+    return g;
+  }
+  if (row_steps && col_steps && std::abs(theta_r - theta_c) > orthogonality_tolerance_rad) {
+    g.refusal = "row and column directions disagree (" + deg(theta_r) + " vs " + deg(theta_c) +
+                " deg): rotation near or past the limit";
+    return g;
+  }
+  const double t = row_steps && col_steps ? 0.5 * (theta_r + theta_c) : (row_steps ? theta_r : theta_c);
+  g.rotation_rad = t;
+  const cv::Point2d u(std::cos(t), std::sin(t)), v(-std::sin(t), std::cos(t));
+
+  // Order the lines: rows by their mean along v (largest = lowest in the image = row 0),
+  // columns by their mean along u (smallest = leftmost = column 0).
+  auto order_lines = [&](const std::vector<std::vector<int>>& lines, const cv::Point2d& axis,
+                         bool descending, std::vector<int>& label) {
+    std::vector<std::pair<double, size_t>> key;
+    for (size_t i = 0; i < lines.size(); ++i) {
+      double s = 0.0;
+      for (int k : lines[i]) s += pts[k].dot(axis);
+      s /= static_cast<double>(lines[i].size());
+      key.emplace_back(descending ? -s : s, i);
+    }
+    std::sort(key.begin(), key.end());
+    for (size_t rank = 0; rank < key.size(); ++rank) {
+      for (int k : lines[key[rank].second]) label[k] = static_cast<int>(rank);
+    }
+  };
+  order_lines(rows, v, true, g.row);
+  order_lines(cols, u, false, g.column);
+  g.rows = static_cast<int>(rows.size());
+  g.columns = static_cast<int>(cols.size());
+
+  // Consistency: one point per (row, column); columns increase along each row chain and rows
+  // decrease (upward is +row) along each column chain (top to bottom).
+  g.index.assign(static_cast<size_t>(g.rows * g.columns), -1);
+  for (size_t k = 0; k < n; ++k) {
+    int& slot = g.index[static_cast<size_t>(g.row[k] * g.columns + g.column[k])];
+    if (slot >= 0) {
+      g.refusal = "two tags on one grid position: classification inconsistent";
+      return g;
+    }
+    slot = static_cast<int>(k);
+  }
+  for (const auto& c : rows) {
+    for (size_t k = 1; k < c.size(); ++k) {
+      if (g.column[c[k]] <= g.column[c[k - 1]]) {
+        g.refusal = "row chain crosses columns backwards: classification inconsistent";
+        return g;
+      }
+    }
+  }
+  for (const auto& c : cols) {
+    for (size_t k = 1; k < c.size(); ++k) {
+      if (g.row[c[k]] >= g.row[c[k - 1]]) {
+        g.refusal = "column chain crosses rows backwards: classification inconsistent";
+        return g;
+      }
+    }
+  }
+  g.valid = true;
+  return g;
+}
+
+std::optional<std::array<int, 4>> cell_corner_indices(const TagGrid& grid, int r, int c) {
+  if (!grid.valid || r < 0 || c < 0 || r + 1 >= grid.rows || c + 1 >= grid.columns) {
+    return std::nullopt;
+  }
+  const std::array<int, 4> idx{grid.at(r, c), grid.at(r, c + 1), grid.at(r + 1, c + 1),
+                               grid.at(r + 1, c)};
+  for (int i : idx) {
+    if (i < 0) return std::nullopt;
+  }
+  return idx;
+}
+
+// ---- Markers ----
+
+MarkerDetector::MarkerDetector(const std::string& dictionary_name) {
+  const auto id = aruco_dictionary_id(dictionary_name);
+  if (!id) throw std::invalid_argument("unknown ArUco dictionary '" + dictionary_name + "'");
+  dictionary_ = cv::aruco::getPredefinedDictionary(*id);
+  parameters_ = cv::aruco::DetectorParameters::create();
+  parameters_->cornerRefinementMethod = cv::aruco::CORNER_REFINE_SUBPIX;
+}
+
+void MarkerDetector::detect(const cv::Mat& bgr, std::vector<MarkerSighting>& out) {
+  cv::cvtColor(bgr, gray_, cv::COLOR_BGR2GRAY);
+  corners_.clear();
+  ids_.clear();
+  cv::aruco::detectMarkers(gray_, dictionary_, corners_, ids_, parameters_, rejected_);
+  for (size_t i = 0; i < ids_.size(); ++i) {
+    MarkerSighting m;
+    m.id = ids_[i];
+    cv::Point2d c(0, 0);
+    for (size_t k = 0; k < 4; ++k) {
+      m.corners_px[k] = corners_[i][k];
+      c += cv::Point2d(corners_[i][k]);
+    }
+    m.centre_px = c * 0.25;
+    m.area_px = std::abs(cv::contourArea(corners_[i]));
+    out.push_back(m);
+  }
+}
+
+// ---- The front shelf in one frame ----
+
+void analyse_shelf(const cv::Mat& bgr, TagDetector& detector, const FlightConfig& config,
+                   ShelfView& view) {
+  view.tags.clear();
+  view.full = false;
+  view.grid = TagGrid{};
+  detector.detect(bgr, cv::Rect(0, 0, bgr.cols, bgr.rows), view.tags);
+  view.largest_tag_area_px = keep_front_shelf(view.tags, config.perception.area_ratio_threshold);
+  view.px_per_m = tag_scale_px_per_m(view.tags, config.shelf);
+  if (view.tags.empty()) {
+    view.grid.refusal = "no tags";
+    return;
+  }
+  std::vector<cv::Point2d> pts;
+  pts.reserve(view.tags.size());
+  for (const TagBlob& b : view.tags) pts.push_back(b.centre_px);
+  view.grid = classify_grid(pts, grid_limits(config.shelf, view.px_per_m),
+                            config.perception.grid_orthogonality_tolerance_rad);
+  if (!view.grid.valid) return;
+  const int expect_rows = config.shelf.levels() + 1, expect_cols = config.shelf.columns() + 1;
+  view.full = view.grid.rows == expect_rows && view.grid.columns == expect_cols &&
+              static_cast<int>(view.tags.size()) == expect_rows * expect_cols;
+}
+
+std::array<cv::Point2d, 4> cell_quad(const ShelfView& view, CellIndex cell) {
+  const auto idx = cell_corner_indices(view.grid, cell.level - 1, cell.column - 1);
+  assert(idx);
+  std::array<cv::Point2d, 4> q;
+  for (size_t k = 0; k < 4; ++k) q[k] = view.tags[static_cast<size_t>((*idx)[k])].centre_px;
+  return q;
+}
+
+std::vector<std::pair<CellIndex, int>> assign_markers(const ShelfView& view,
+                                                      const std::vector<MarkerSighting>& markers,
+                                                      const FlightConfig& config) {
+  assert(view.full);
+  std::vector<std::pair<CellIndex, int>> out;
+  const double side = config.shelf.marker_size_m * view.px_per_m;
+  const double expected_area = side * side;
+  for (const MarkerSighting& m : markers) {
+    if (m.area_px < config.perception.marker_area_ratio_threshold * expected_area) continue;
+    for (int level = 1; level <= config.shelf.levels(); ++level) {
+      for (int column = 1; column <= config.shelf.columns(); ++column) {
+        const auto q = cell_quad(view, {level, column});
+        const std::vector<cv::Point2f> poly(q.begin(), q.end());
+        if (cv::pointPolygonTest(poly, cv::Point2f(m.centre_px), false) > 0) {
+          out.push_back({{level, column}, m.id});
+        }
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace shelfcross::flight_sw

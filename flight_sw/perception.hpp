@@ -1,0 +1,166 @@
+#pragma once
+// Perception (paper section 3, METHOD.md section 2): colour tags, the front-shelf test of
+// eq. 1, the stair classification of the tag grid (eq. 2 with the limits of eq. 3 and 4),
+// ArUco markers and their cells.
+//
+// Image coordinates are OpenCV's: x right, y down, pixels, pixel centres at integer
+// coordinates (the convention of cv::projectPoints and of blob moments).
+// Grid indices: tag row 0 is the lowest row of tags in view, tag column 0 the leftmost (as
+// seen on approach). With the whole grid in view, tag row j is beam j of the shelf (beam 0 the
+// lowest) and tag column i is post i (post 0 the leftmost); cell (level L, column C), both
+// from 1, lies between tag rows L-1, L and tag columns C-1, C.
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <opencv2/aruco.hpp>
+#include <opencv2/core.hpp>
+
+#include "flight_sw/config.hpp"
+
+namespace shelfcross::flight_sw {
+
+/// OpenCV's id of a predefined ArUco dictionary name ("DICT_4X4_50", ...); empty if unknown.
+std::optional<int> aruco_dictionary_id(const std::string& name);
+
+/// One colour-tag blob.
+struct TagBlob {
+  cv::Point2d centre_px;  ///< centroid of the blob
+  double area_px = 0.0;   ///< pixel count
+  cv::Rect bbox_px;
+};
+
+/// Paper section 3 item 2: keep the tag colour (HSV range, hue may wrap through red), split
+/// the mask into 8-connected blobs, reject blobs by area and shape (fill ratio, aspect).
+/// Keeps its buffers between calls so that a steady stream of frames allocates nothing.
+class TagDetector {
+ public:
+  explicit TagDetector(const PerceptionParams& params);
+  /// Appends to `out` the tags found inside `roi` of `bgr` (clipped to the image), in image
+  /// coordinates. Blob order is OpenCV's label order (raster order of first pixels).
+  void detect(const cv::Mat& bgr, cv::Rect roi, std::vector<TagBlob>& out);
+
+ private:
+  PerceptionParams params_;
+  cv::Mat hsv_, mask_, mask_wrap_, labels_, stats_, centroids_;
+};
+
+/// Eq. 1: R_A = S_T / L_T with S_T a tag's area and L_T the largest tag area in `blobs`; tags
+/// with R_A < threshold belong to shelves behind the front one and are removed (order kept).
+/// Returns L_T (0 when empty).
+double keep_front_shelf(std::vector<TagBlob>& blobs, double threshold);
+
+/// Image scale at the front tags, px per metre. With two tags or more: the median distance
+/// from each tag to its nearest neighbour over the smallest pitch of the shelf (the nearest
+/// neighbour in a grid is one smallest pitch away whatever the rotation, and spacing is
+/// measured far more precisely than blob area). With one tag: sqrt(area) / tag side.
+double tag_scale_px_per_m(const std::vector<TagBlob>& blobs, const KnownShelf& shelf);
+
+/// The stair-classification windows and the rotation up to which they work.
+struct GridLimits {
+  double dx_lim_px = 0.0;      ///< column window: |x_Q - x_P| <= dx_lim
+  double dy_lim_px = 0.0;      ///< row window: |y_Q - y_P| <= dy_lim
+  double theta_lim_rad = 0.0;  ///< largest grid rotation classified correctly
+};
+
+/// Eq. 3 and 4 for a uniform grid of column spacing w and row spacing h (same unit):
+///   w >= h: dx_lim = h^2 / sqrt(w^2+h^2), dy_lim = w h / sqrt(w^2+h^2)
+///   w <  h: dx_lim = w h / sqrt(w^2+h^2), dy_lim = w^2 / sqrt(w^2+h^2)
+///   theta_L = atan(min(w,h) / max(w,h)).
+GridLimits grid_limits(double w, double h);
+
+/// Limits for the known (possibly non-uniform) shelf at `px_per_m`. Eq. 3 takes the largest
+/// column and row pitches (the farthest co-row / co-column neighbour must stay inside the
+/// window, W sin(theta) <= dy_lim); a smaller pitch brings the neighbour of the other family
+/// closer (its offset is h_min cos(theta) across rows, w_min cos(theta) across columns), so
+/// theta_L is lowered to min(eq. 4, acos(dy_lim / h_min), acos(dx_lim / w_min)). For a
+/// uniform grid this is eq. 4 exactly.
+GridLimits grid_limits(const KnownShelf& shelf, double px_per_m);
+
+/// The result of the stair classification of a set of points.
+struct TagGrid {
+  bool valid = false;
+  std::string refusal;      ///< why not valid
+  std::vector<int> row;     ///< per input point: tag row, 0 = lowest
+  std::vector<int> column;  ///< per input point: tag column, 0 = leftmost
+  int rows = 0;
+  int columns = 0;
+  double rotation_rad = 0.0;  ///< image angle of the rows, atan2(dy, dx), y down
+  std::vector<int> index;     ///< rows x columns, row-major: point index or -1
+
+  int at(int tag_row, int tag_column) const {
+    return index[static_cast<size_t>(tag_row * columns + tag_column)];
+  }
+};
+
+/// Eq. 2: rows by chaining from the leftmost unassigned point to the nearest (in x) point to
+/// its right within |dy| <= dy_lim, until none is left; columns alike from the topmost point
+/// downward within |dx| <= dx_lim. Refuses (valid = false, never a guess) when the grid is
+/// rotated by theta_L or more, when the row and column directions disagree by more than
+/// `orthogonality_tolerance_rad`, or when two points fall on one (row, column).
+TagGrid classify_grid(const std::vector<cv::Point2d>& points_px, const GridLimits& limits,
+                      double orthogonality_tolerance_rad);
+
+/// Corner tag points of cell (tag row r, tag column c)..(r+1, c+1) in the order
+/// bottom-left, bottom-right, top-right, top-left (as seen on approach); empty if one is
+/// missing from the grid.
+std::optional<std::array<int, 4>> cell_corner_indices(const TagGrid& grid, int tag_row,
+                                                      int tag_column);
+
+/// One ArUco marker in an image.
+struct MarkerSighting {
+  int id = 0;
+  std::array<cv::Point2f, 4> corners_px;
+  cv::Point2d centre_px;
+  double area_px = 0.0;
+};
+
+/// cv::aruco::detectMarkers with the configured dictionary; keeps its buffers.
+class MarkerDetector {
+ public:
+  explicit MarkerDetector(const std::string& dictionary_name);
+  void detect(const cv::Mat& bgr, std::vector<MarkerSighting>& out);
+
+ private:
+  cv::Ptr<cv::aruco::Dictionary> dictionary_;
+  cv::Ptr<cv::aruco::DetectorParameters> parameters_;
+  cv::Mat gray_;
+  std::vector<std::vector<cv::Point2f>> corners_, rejected_;
+  std::vector<int> ids_;
+};
+
+/// A cell by its shelf numbering: level from the floor, column from the left, both from 1.
+struct CellIndex {
+  int level = 0;
+  int column = 0;
+  bool operator==(const CellIndex&) const = default;
+};
+
+/// What one frame shows of the front shelf.
+struct ShelfView {
+  std::vector<TagBlob> tags;  ///< front-shelf tags (after eq. 1)
+  double largest_tag_area_px = 0.0;
+  double px_per_m = 0.0;
+  TagGrid grid;
+  bool full = false;  ///< the whole known grid is in view and classified
+};
+
+/// Analyses a whole frame: tags, eq. 1, scale, grid. `full` when the grid has exactly the
+/// known (columns + 1) x (levels + 1) tags.
+void analyse_shelf(const cv::Mat& bgr, TagDetector& detector, const FlightConfig& config,
+                   ShelfView& view);
+
+/// Markers of boxes on the front shelf (eq. 1 on marker area against the area expected at the
+/// front tags' scale) assigned to the cell whose four corner tags enclose their centre.
+/// `view` must be full. Returns (cell, marker id) pairs.
+std::vector<std::pair<CellIndex, int>> assign_markers(const ShelfView& view,
+                                                      const std::vector<MarkerSighting>& markers,
+                                                      const FlightConfig& config);
+
+/// Image quadrilateral of a cell of a full view (bottom-left, bottom-right, top-right,
+/// top-left tag centres).
+std::array<cv::Point2d, 4> cell_quad(const ShelfView& view, CellIndex cell);
+
+}  // namespace shelfcross::flight_sw

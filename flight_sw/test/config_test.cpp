@@ -1,0 +1,60 @@
+// Configuration: the shipped sample reads to the defaults; bad input is refused with file:line.
+
+#include <gtest/gtest.h>
+
+#include "config/strict_yaml.hpp"
+#include "flight_sw/config.hpp"
+#include "flight_sw/flight_software.hpp"
+
+namespace shelfcross::flight_sw {
+namespace {
+
+TEST(FlightConfigYaml, SampleFileReadsToTheDocumentedDefaults) {
+  const FlightConfig c = load_flight_config(SHELFCROSS_SOURCE_DIR "/flight_sw/config/paper_test_shelf.yaml");
+  const FlightConfig d;
+  EXPECT_EQ(c.shelf.column_pitch_m, d.shelf.column_pitch_m);
+  EXPECT_EQ(c.shelf.row_pitch_m, d.shelf.row_pitch_m);
+  EXPECT_EQ(c.camera, d.camera);
+  EXPECT_EQ(c.mount, d.mount);
+  EXPECT_EQ(c.perception.tag_hsv.hue_min, d.perception.tag_hsv.hue_min);
+  EXPECT_DOUBLE_EQ(c.control.psi_lateral_threshold_rad, d.control.psi_lateral_threshold_rad);
+  EXPECT_DOUBLE_EQ(c.rc.rc_per_radps_yaw, d.rc.rc_per_radps_yaw);
+  EXPECT_DOUBLE_EQ(c.timeouts.video_land_s, d.timeouts.video_land_s);
+  EXPECT_EQ(c.mission.vehicle_size_m, d.mission.vehicle_size_m);
+  FlightSoftware fsw(c);  // valid for the entry point
+}
+
+void expect_refused(const std::string& yaml, int line, const std::string& words) {
+  try {
+    parse_flight_config(yaml, "test.yaml");
+    ADD_FAILURE() << "accepted: " << yaml;
+  } catch (const config::ConfigError& e) {
+    EXPECT_EQ(e.line(), line) << e.what();
+    EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).rfind("test.yaml:", 0), 0u) << e.what();
+  }
+}
+
+TEST(FlightConfigYaml, BadInputIsRefusedWithFileAndLine) {
+  const std::string shelf = "shelf:\n  column_pitch_m: [0.34, 0.48]\n  row_pitch_m: [0.34]\n";
+  EXPECT_NO_THROW(parse_flight_config(shelf, "test.yaml"));
+  expect_refused(shelf + "  aruco_dictionary: DICT_9X9\n", 4, "unknown ArUco dictionary");
+  expect_refused(shelf + "control:\n  kp_z: fast\n", 5, "kp_z");
+  expect_refused(shelf + "control:\n  kp_zz: 1.0\n", 5, "kp_zz");
+  expect_refused(shelf + "timeouts:\n  video_hover_s: 4.0\n", 5, "video_land_s");
+  expect_refused(shelf + "perception:\n  tag_hsv: {hue_min: 200}\n", 5, "hue_min");
+  expect_refused("shelf:\n  column_pitch_m: [0.34, -1]\n  row_pitch_m: [0.34]\n", 2, "column_pitch_m");
+  expect_refused("shelf:\n  row_pitch_m: [0.34]\n", 2, "column_pitch_m");  // the mapping's line
+}
+
+TEST(FlightConfigCode, InvalidConfigBuiltByCodeIsRefused) {
+  FlightConfig c;
+  c.shelf.column_pitch_m.clear();
+  EXPECT_THROW(FlightSoftware{c}, std::invalid_argument);
+  FlightConfig d;
+  d.timeouts.video_land_s = 0.1;
+  EXPECT_THROW(validate_flight_config(d), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace shelfcross::flight_sw

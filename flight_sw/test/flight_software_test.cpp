@@ -1,0 +1,385 @@
+// The entry point: SDK protocol, phase transitions, every failsafe, a whole mission against a
+// kinematic vehicle seeing drawn frames, and determinism.
+//
+// The test vehicle is kinematic: rc sticks are velocities through the configured gains
+// (exactly what the flight software assumes), takeoff puts it at 1 m. It is a harness for
+// driving the entry point with consistent stamped inputs, not a model of the Tello.
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <functional>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "flight_sw/flight_software.hpp"
+#include "shelf_drawing.hpp"
+
+namespace shelfcross::flight_sw {
+namespace {
+
+constexpr TimeNs kMs = 1'000'000;
+
+struct Options {
+  std::int64_t frame_rate_hz = 15;
+  std::function<bool(TimeNs)> frames_on = [](TimeNs) { return true; };
+  std::function<int(TimeNs)> battery = [](TimeNs) { return 90; };
+  std::vector<std::string> takeoff_replies = {"ok"};  ///< per attempt; "" = no reply
+  Eigen::Vector3d start_W_m = Eigen::Vector3d(0.3, 0.0, 0.0);
+  double start_yaw_rad = 0.0;
+  bool blank_frames = false;  ///< frames show only the wall
+  double blank_after_approach_s = -1.0;  ///< >= 0: frames go blank this long into the approach
+};
+
+class Harness {
+ public:
+  explicit Harness(Options o = {}, FlightConfig config = {})
+      : o_(std::move(o)), fsw_(config), config_(config), drawer_(config.camera, true) {
+    testing::DrawnShelf front = testing::paper_shelf({3.0, 0.0, 0.0});
+    front.boxes = {{2, 2, 4}, {3, 2, 9}, {3, 3, 17}, {1, 1, 21}, {4, 4, 30}};
+    testing::DrawnShelf behind = testing::paper_shelf({5.6, 0.0, 0.0});
+    behind.boxes = {{2, 3, 44}};
+    scene_.shelves = {front, behind};
+    p_WB_ = o_.start_W_m;
+    yaw_ = o_.start_yaw_rad;
+  }
+
+  /// Runs until the flight software finishes or t_end_s.
+  void run(double t_end_s) {
+    handle(fsw_.start(0));
+    const TimeNs end = seconds_to_ns(t_end_s);
+    std::int64_t frame_k = 1, state_k = 1;
+    while (!fsw_.finished() && t_ < end) {
+      const TimeNs t_frame = tick_time_ns(frame_k, o_.frame_rate_hz);
+      const TimeNs t_state = tick_time_ns(state_k, 10);
+      const TimeNs t_reply = replies_.empty() ? end : replies_.front().t_ns;
+      const TimeNs t_next = std::min({t_frame, t_state, t_reply, end});
+      advance(t_next);
+      if (t_next == t_reply && !replies_.empty()) {
+        const SdkReply r = replies_.front();
+        replies_.pop_front();
+        handle(fsw_.step(r));
+      } else if (t_next == t_state) {
+        ++state_k;
+        StateRecord s;
+        s.t_ns = t_;
+        s.yaw_rad = yaw_;
+        s.height_m = p_WB_.z();
+        s.battery_pct = o_.battery(t_);
+        handle(fsw_.step(s));
+      } else if (t_next == t_frame) {
+        ++frame_k;
+        if (fsw_.phase() == Phase::Approach && !approach_t_) approach_t_ = t_;
+        const bool blank = o_.blank_frames || (o_.blank_after_approach_s >= 0.0 && approach_t_ &&
+                                               t_ - *approach_t_ > seconds_to_ns(o_.blank_after_approach_s));
+        if (video_on_ && o_.frames_on(t_)) {
+          CameraFrame f;
+          f.t_ns = t_;
+          f.index = frame_k;
+          f.bgr = blank ? cv::Mat(config_.camera.height_px, config_.camera.width_px, CV_8UC3,
+                                            cv::Scalar(185, 185, 180))
+                                  : drawer_.draw(scene_, testing::camera_pose_W(p_WB_, yaw_, 0, 0, config_.mount));
+          phases_.push_back(fsw_.phase());
+          handle(fsw_.step(f));
+          phases_.push_back(fsw_.phase());
+        }
+      }
+    }
+  }
+
+  FlightSoftware& fsw() { return fsw_; }
+  const std::vector<SdkCommand>& commands() const { return log_; }
+  std::vector<std::string> non_rc() const {
+    std::vector<std::string> v;
+    for (const auto& c : log_) {
+      if (c.text.rfind("rc ", 0) != 0) v.push_back(c.text);
+    }
+    return v;
+  }
+  bool saw_phase(Phase p) const { return std::find(phases_.begin(), phases_.end(), p) != phases_.end(); }
+  const std::vector<Eigen::Vector4d>& track() const { return track_; }  // t, x, y, z
+  const Eigen::Vector3d& position() const { return p_WB_; }
+  TimeNs now() const { return t_; }
+
+ private:
+  void handle(const std::vector<SdkCommand>& cmds) {
+    for (const SdkCommand& c : cmds) {
+      EXPECT_EQ(c.t_ns, t_);
+      log_.push_back(c);
+      if (c.text.rfind("rc ", 0) == 0) {
+        EXPECT_TRUE(airborne_) << "rc while on the ground";
+        std::istringstream in(c.text.substr(3));
+        in >> rc_.a >> rc_.b >> rc_.c >> rc_.d;
+        for (int v : {rc_.a, rc_.b, rc_.c, rc_.d}) EXPECT_LE(std::abs(v), 100);
+        continue;
+      }
+      EXPECT_TRUE(replies_.empty()) << "'" << c.text << "' sent while a reply is outstanding";
+      if (c.text == "command") {
+        replies_.push_back({t_ + 20 * kMs, "ok"});
+      } else if (c.text == "streamon") {
+        replies_.push_back({t_ + 20 * kMs, "ok"});
+        video_on_ = true;
+      } else if (c.text == "takeoff") {
+        const size_t k = std::min(takeoff_attempt_++, o_.takeoff_replies.size() - 1);
+        const std::string& reply = o_.takeoff_replies[k];
+        if (reply == "ok") {
+          airborne_ = true;
+          p_WB_.z() = 1.0;
+        }
+        if (!reply.empty()) replies_.push_back({t_ + 1500 * kMs, reply});
+      } else if (c.text == "land") {
+        replies_.push_back({t_ + 1000 * kMs, "ok"});
+        landing_ = true;
+      }
+    }
+  }
+
+  // Kinematics: rc through the configured gains, in the heading frame.
+  void advance(TimeNs t_next) {
+    while (t_ < t_next) {
+      const TimeNs dt_ns = std::min<TimeNs>(5 * kMs, t_next - t_);
+      const double dt = ns_to_seconds(dt_ns);
+      if (airborne_ && !landing_) {
+        const double vx = rc_.b / config_.rc.rc_per_mps_horizontal;
+        const double vy = -rc_.a / config_.rc.rc_per_mps_horizontal;
+        p_WB_.x() += (std::cos(yaw_) * vx - std::sin(yaw_) * vy) * dt;
+        p_WB_.y() += (std::sin(yaw_) * vx + std::cos(yaw_) * vy) * dt;
+        p_WB_.z() += rc_.c / config_.rc.rc_per_mps_vertical * dt;
+        yaw_ += -rc_.d / config_.rc.rc_per_radps_yaw * dt;
+      }
+      t_ += dt_ns;
+      track_.push_back({ns_to_seconds(t_), p_WB_.x(), p_WB_.y(), p_WB_.z()});
+    }
+  }
+
+  Options o_;
+  FlightSoftware fsw_;
+  FlightConfig config_;
+  testing::Scene scene_;
+  testing::Drawer drawer_;
+  TimeNs t_ = 0;
+  std::optional<TimeNs> approach_t_;
+  Eigen::Vector3d p_WB_;
+  double yaw_ = 0.0;
+  bool video_on_ = false, airborne_ = false, landing_ = false;
+  size_t takeoff_attempt_ = 0;
+  RcSticks rc_;
+  std::deque<SdkReply> replies_;
+  std::vector<SdkCommand> log_;
+  std::vector<Phase> phases_;
+  std::vector<Eigen::Vector4d> track_;
+};
+
+// ---- SDK protocol and start-up ----
+
+TEST(FlightSoftware, OpeningSequenceWaitsForEachOkAndTheFirstFrame) {
+  FlightSoftware fsw{FlightConfig{}};
+  EXPECT_EQ(fsw.start(0), (std::vector<SdkCommand>{{0, "command"}}));
+  EXPECT_EQ(fsw.phase(), Phase::EnterSdk);
+  StateRecord s;
+  s.t_ns = 5 * kMs;
+  EXPECT_TRUE(fsw.step(s).empty());  // nothing while "command" is outstanding
+  EXPECT_EQ(fsw.step(SdkReply{10 * kMs, "ok"}), (std::vector<SdkCommand>{}))
+      << "the gap of 0.1 s between non-rc commands holds streamon back";
+  EXPECT_EQ(fsw.step(StateRecord{.t_ns = 100 * kMs}), (std::vector<SdkCommand>{{100 * kMs, "streamon"}}));
+  EXPECT_TRUE(fsw.step(SdkReply{300 * kMs, "ok"}).empty());
+  EXPECT_EQ(fsw.phase(), Phase::WaitVideo);
+  EXPECT_TRUE(fsw.step(StateRecord{.t_ns = 400 * kMs}).empty()) << "no takeoff before video";
+  CameraFrame f{500 * kMs, 1, cv::Mat(720, 960, CV_8UC3, cv::Scalar(0, 0, 0))};
+  EXPECT_EQ(fsw.step(f), (std::vector<SdkCommand>{{500 * kMs, "takeoff"}}));
+  EXPECT_TRUE(fsw.step(SdkReply{4 * kNsPerSecond, "ok"}).size() <= 1);
+  EXPECT_EQ(fsw.phase(), Phase::FindShelf);
+  // A stale reply (nothing outstanding) is dropped and counted.
+  fsw.step(SdkReply{4 * kNsPerSecond + kMs, "ok"});
+  EXPECT_EQ(fsw.telemetry().stale_replies, 1);
+  EXPECT_EQ(fsw.phase(), Phase::FindShelf);
+}
+
+TEST(FlightSoftware, TakeoffRefusedIsRetriedThenGivenUpOnTheGround) {
+  Options o;
+  o.takeoff_replies = {"error No valid imu"};
+  o.blank_frames = true;
+  Harness h(o);
+  h.run(60.0);
+  const auto cmds = h.non_rc();
+  EXPECT_EQ(std::count(cmds.begin(), cmds.end(), "takeoff"), 4);  // 1 + 3 retries
+  EXPECT_EQ(std::count(cmds.begin(), cmds.end(), "land"), 0);
+  ASSERT_TRUE(h.fsw().finished());
+  EXPECT_EQ(h.fsw().result().outcome, Outcome::Aborted);
+  EXPECT_FALSE(h.fsw().result().landed);
+  EXPECT_NE(h.fsw().result().reason.find("takeoff failed"), std::string::npos);
+}
+
+TEST(FlightSoftware, TakeoffRetriedAfterAnErrorThenFlies) {
+  Options o;
+  o.takeoff_replies = {"error", "ok"};
+  o.blank_frames = true;
+  Harness h(o);
+  h.run(8.0);
+  const auto cmds = h.non_rc();
+  EXPECT_EQ(std::count(cmds.begin(), cmds.end(), "takeoff"), 2);
+  EXPECT_EQ(h.fsw().phase(), Phase::FindShelf);
+}
+
+TEST(FlightSoftware, LostTakeoffReplyCountsWhenTheHeightSaysAirborne) {
+  Options o;
+  o.takeoff_replies = {""};  // the drone took off but the reply never came
+  o.blank_frames = true;
+  Harness h(o);
+  h.run(1.0);
+  // Airborne in the harness only with an "ok": set the height by hand through a state record.
+  FlightSoftware& fsw = h.fsw();
+  EXPECT_EQ(fsw.phase(), Phase::TakeOff);
+  StateRecord s;
+  s.t_ns = h.now() + 19 * kNsPerSecond;
+  s.height_m = 0.9;
+  fsw.step(s);
+  s.t_ns += 2 * kNsPerSecond;  // past the 20 s reply timeout
+  fsw.step(s);
+  EXPECT_EQ(fsw.phase(), Phase::FindShelf);
+}
+
+TEST(FlightSoftware, LowBatteryBeforeTakeoffStaysOnTheGround) {
+  Options o;
+  o.battery = [](TimeNs) { return 20; };
+  Harness h(o);
+  h.run(5.0);
+  ASSERT_TRUE(h.fsw().finished());
+  EXPECT_EQ(h.non_rc(), (std::vector<std::string>{"command", "streamon"}));
+  EXPECT_EQ(h.fsw().result().outcome, Outcome::Aborted);
+}
+
+// ---- Failsafes in flight ----
+
+TEST(FlightSoftware, VideoStallHoversThenLands) {
+  Options o;
+  o.blank_frames = true;
+  o.frames_on = [](TimeNs t) { return t < 4 * kNsPerSecond; };
+  Harness h(o);
+  h.run(20.0);
+  ASSERT_TRUE(h.fsw().finished());
+  EXPECT_EQ(h.fsw().result().reason, "video lost");
+  EXPECT_TRUE(h.fsw().result().landed);
+  // The last frame came at < 4 s: hover (rc 0 0 0 0) sent from a state record 0.5 s later,
+  // land 3 s later, nothing but hover in between.
+  TimeNs hover_t = -1, land_t = -1;
+  for (const auto& c : h.commands()) {
+    if (c.t_ns > 4 * kNsPerSecond && hover_t < 0 && c.text.rfind("rc", 0) == 0) {
+      EXPECT_EQ(c.text, "rc 0 0 0 0");
+      hover_t = c.t_ns;
+    }
+    if (c.text == "land") land_t = c.t_ns;
+    if (c.t_ns > 4 * kNsPerSecond && c.text.rfind("rc", 0) == 0) EXPECT_EQ(c.text, "rc 0 0 0 0");
+  }
+  const double last_frame_s = std::floor(4.0 * 15 - 1e-9) / 15.0;
+  EXPECT_NEAR(ns_to_seconds(hover_t) - last_frame_s, 0.5, 0.1 + 1e-9);
+  EXPECT_NEAR(ns_to_seconds(land_t) - last_frame_s, 3.0, 0.1 + 1e-9);
+}
+
+TEST(FlightSoftware, ShelfNotFoundSearchesByYawThenTimesOut) {
+  Options o;
+  o.blank_frames = true;
+  Harness h(o);
+  h.run(60.0);
+  ASSERT_TRUE(h.fsw().finished());
+  EXPECT_EQ(h.fsw().result().reason, "shelf not found");
+  // 0.3 rad/s counter-clockwise search: d = -0.3 * 66.7 = -20 (the SDK's d is clockwise).
+  bool searched = false;
+  for (const auto& c : h.commands()) searched = searched || c.text == "rc 0 0 0 -20";
+  EXPECT_TRUE(searched);
+}
+
+TEST(FlightSoftware, LowBatteryInFlightLands) {
+  Options o;
+  o.battery = [](TimeNs t) { return t < 6 * kNsPerSecond ? 60 : 12; };
+  Harness h(o);
+  h.run(20.0);
+  ASSERT_TRUE(h.fsw().finished());
+  EXPECT_EQ(h.fsw().result().reason, "low battery (12%)");
+  EXPECT_TRUE(h.fsw().result().landed);
+}
+
+TEST(FlightSoftware, TargetLostHoversThenGivesUp) {
+  Options o;
+  o.blank_after_approach_s = 1.0;
+  Harness h(o);
+  h.run(40.0);
+  ASSERT_TRUE(h.fsw().finished());
+  EXPECT_EQ(h.fsw().result().reason, "target lost");
+  EXPECT_TRUE(h.fsw().result().landed);
+  // After the target vanished: only hover commands until the land.
+  const auto& cmds = h.commands();
+  const auto land = std::find_if(cmds.begin(), cmds.end(), [](const SdkCommand& c) { return c.text == "land"; });
+  ASSERT_NE(land, cmds.end());
+  int hovers = 0;
+  for (auto it = cmds.begin(); it != land; ++it) {
+    if (land->t_ns - it->t_ns < 3 * kNsPerSecond && it->text.rfind("rc", 0) == 0) {
+      EXPECT_EQ(it->text, "rc 0 0 0 0");
+      ++hovers;
+    }
+  }
+  EXPECT_GT(hovers, 20);
+}
+
+TEST(FlightSoftware, NeverCrossesOffCentreBacksOffAndGivesUp) {
+  FlightConfig c;
+  // Leave 2 mm of lateral tolerance in the 32 cm opening: the vehicle cannot be centred so
+  // finely, so the tags leave the view without permission to cross.
+  c.mission.crossing_margin_m = 0.112;
+  Harness h(Options{}, c);
+  h.run(60.0);
+  ASSERT_TRUE(h.fsw().finished());
+  EXPECT_FALSE(h.saw_phase(Phase::Cross));
+  EXPECT_EQ(h.fsw().result().reason, "could not centre on the target cell");
+  bool backed_off = false;
+  for (const auto& cmd : h.commands()) backed_off = backed_off || cmd.text == "rc 0 -20 0 0";
+  EXPECT_TRUE(backed_off);
+  EXPECT_LT(h.position().x(), 3.0 - 0.1) << "stayed in front of the shelf";
+}
+
+// ---- The whole mission ----
+
+TEST(FlightSoftware, WholeMissionInventoriesAndCrossesTheEmptyCell) {
+  Harness h;
+  h.run(60.0);
+  FlightSoftware& fsw = h.fsw();
+  ASSERT_TRUE(fsw.finished()) << phase_name(fsw.phase()) << ": " << fsw.telemetry().event;
+  EXPECT_EQ(fsw.result().outcome, Outcome::Crossed) << fsw.result().reason;
+  EXPECT_TRUE(fsw.result().landed);
+  for (Phase p : {Phase::FindShelf, Phase::GoToViewpoint, Phase::TakeInventory, Phase::Approach, Phase::Cross}) {
+    EXPECT_TRUE(h.saw_phase(p)) << phase_name(p);
+  }
+  const std::vector<BoxEntry> expected = {{21, 0, 1, 1}, {4, 0, 2, 2}, {9, 0, 3, 2}, {17, 0, 3, 3}, {30, 0, 4, 4}};
+  EXPECT_EQ(fsw.inventory().boxes(), expected);
+  EXPECT_EQ(fsw.inventory().empty_cells().size(), 11u);
+  // The target: of the four cells around the image centre only (2, 3) is empty.
+  ASSERT_TRUE(fsw.telemetry().target);
+  EXPECT_EQ(*fsw.telemetry().target, (CellIndex{2, 3}));
+  // Through the opening of cell (2, 3): y between posts 2 and 3 (0 and -0.34 m), z between
+  // beams 1 and 2 (0.64 and 0.98 m), less the posts, beams and the vehicle's half size.
+  bool inside = false;
+  for (const auto& s : h.track()) {
+    if (s[1] < 3.0 || s[1] > 3.34) continue;
+    inside = true;
+    EXPECT_GT(s[2], -0.33 + 0.0925 / 2) << "t " << s[0];
+    EXPECT_LT(s[2], -0.01 - 0.0925 / 2) << "t " << s[0];
+    EXPECT_GT(s[3], 0.65 + 0.041 / 2) << "t " << s[0];
+    EXPECT_LT(s[3], 0.97 - 0.041 / 2) << "t " << s[0];
+  }
+  EXPECT_TRUE(inside) << "never reached the shelf";
+  EXPECT_GT(h.position().x(), 3.34 + 0.4) << "landed beyond the shelf";
+  EXPECT_EQ(fsw.inventory_json().rfind("{\"shelf\":0,\"levels\":4,\"columns\":4,", 0), 0u);
+}
+
+TEST(FlightSoftware, SameInputsGiveTheSameCommands) {
+  Harness a, b;
+  a.run(14.0);
+  b.run(14.0);
+  ASSERT_GT(a.commands().size(), 100u);
+  EXPECT_TRUE(a.saw_phase(Phase::Approach)) << "the comparison should cover the approach";
+  EXPECT_EQ(a.commands(), b.commands());
+}
+
+}  // namespace
+}  // namespace shelfcross::flight_sw

@@ -1,0 +1,79 @@
+// Inventory: boxes of a drawn shelf in known cells, levels and columns numbered from the floor
+// and the left; a box on the shelf behind seen through an empty cell is not counted; votes.
+
+#include <gtest/gtest.h>
+
+#include "flight_sw/inventory.hpp"
+#include "flight_sw/perception.hpp"
+#include "shelf_drawing.hpp"
+
+namespace shelfcross::flight_sw {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+TEST(Inventory, DrawnShelfWithBoxesInKnownCellsIsExact) {
+  testing::Scene scene;
+  testing::DrawnShelf front = testing::paper_shelf({3.0, 0.0, 0.0});
+  front.boxes = {{1, 2, 7}, {2, 4, 3}, {3, 1, 12}, {4, 3, 25}, {1, 4, 0}};
+  testing::DrawnShelf behind = testing::paper_shelf({5.6, 0.0, 0.0});
+  // Behind the empty front cell (level 2, column 2): must not be listed.
+  behind.boxes = {{2, 2, 41}, {3, 3, 33}};
+  scene.shelves = {front, behind};
+  FlightConfig config;
+  TagDetector tags(config.perception);
+  MarkerDetector markers(config.shelf.aruco_dictionary);
+  Inventory inv(0, 4, 4, config.perception.marker_min_agreeing_frames);
+  const testing::Drawer drawer(config.camera, true);
+  // Three frames hovering near the optimal viewpoint (2.1 m), slightly different each.
+  const std::vector<Eigen::Vector4d> poses = {{0.85, 0.0, 0.98, 0.0}, {0.88, 0.04, 0.96, 2.0},
+                                              {0.83, -0.03, 1.0, -1.5}};
+  for (const auto& p : poses) {
+    const cv::Mat img = drawer.draw(scene, testing::camera_pose_W(p.head<3>(), p[3] * kDeg));
+    ShelfView view;
+    analyse_shelf(img, tags, config, view);
+    ASSERT_TRUE(view.full) << view.grid.refusal;
+    std::vector<MarkerSighting> seen;
+    markers.detect(img, seen);
+    ASSERT_GE(seen.size(), 5u);  // the front boxes at least; behind ones may show too
+    inv.observe(assign_markers(view, seen, config));
+  }
+  const std::vector<BoxEntry> expected = {{7, 0, 1, 2}, {0, 0, 1, 4}, {3, 0, 2, 4}, {12, 0, 3, 1}, {25, 0, 4, 3}};
+  EXPECT_EQ(inv.boxes(), expected);
+  EXPECT_EQ(inv.empty_cells().size(), 11u);
+  EXPECT_TRUE(inv.is_empty({2, 2}));
+  EXPECT_TRUE(inv.uncertain_cells().empty());
+  EXPECT_EQ(inv.to_json(),
+            "{\"shelf\":0,\"levels\":4,\"columns\":4,\"frames\":3,\"boxes\":["
+            "{\"id\":7,\"shelf\":0,\"level\":1,\"column\":2},{\"id\":0,\"shelf\":0,\"level\":1,\"column\":4},"
+            "{\"id\":3,\"shelf\":0,\"level\":2,\"column\":4},{\"id\":12,\"shelf\":0,\"level\":3,\"column\":1},"
+            "{\"id\":25,\"shelf\":0,\"level\":4,\"column\":3}],\"empty\":["
+            "{\"level\":1,\"column\":1},{\"level\":1,\"column\":3},{\"level\":2,\"column\":1},"
+            "{\"level\":2,\"column\":2},{\"level\":2,\"column\":3},{\"level\":3,\"column\":2},"
+            "{\"level\":3,\"column\":3},{\"level\":3,\"column\":4},{\"level\":4,\"column\":1},"
+            "{\"level\":4,\"column\":2},{\"level\":4,\"column\":4}],\"uncertain\":[]}");
+}
+
+TEST(Inventory, MarkersMustAgreeOverNFrames) {
+  Inventory inv(0, 2, 2, 3);
+  // Cell (1,1): ID 5 three times -> a box. Cell (1,2): ID 6 twice -> uncertain.
+  // Cell (2,1): ID 8 three times and ID 9 three times -> disagreement, uncertain.
+  for (int f = 0; f < 3; ++f) {
+    std::vector<std::pair<CellIndex, int>> s = {{{1, 1}, 5}, {{2, 1}, 8}, {{2, 1}, 9}};
+    if (f < 2) s.push_back({{1, 2}, 6});
+    inv.observe(s);
+  }
+  EXPECT_EQ(inv.box_at({1, 1}), 5);
+  EXPECT_FALSE(inv.box_at({1, 2}));
+  EXPECT_FALSE(inv.is_empty({1, 2}));
+  EXPECT_FALSE(inv.box_at({2, 1}));
+  EXPECT_TRUE(inv.is_empty({2, 2}));
+  EXPECT_EQ(inv.uncertain_cells(), (std::vector<CellIndex>{{1, 2}, {2, 1}}));
+  // Before N frames nothing is decided.
+  Inventory early(0, 1, 1, 3);
+  early.observe({});
+  EXPECT_FALSE(early.is_empty({1, 1}));
+}
+
+}  // namespace
+}  // namespace shelfcross::flight_sw

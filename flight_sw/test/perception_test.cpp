@@ -1,0 +1,221 @@
+// Perception: eq. 1 (front shelf), eq. 2-4 (stair classification and its limits), tags under
+// lighting changes, on synthetic drawn images.
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "flight_sw/navigation.hpp"
+#include "flight_sw/perception.hpp"
+#include "shelf_drawing.hpp"
+
+namespace shelfcross::flight_sw {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+TEST(GridLimits, Eq3Eq4HandComputedWideColumns) {
+  // w = 0.48 > h = 0.34: sqrt(w^2 + h^2) = 0.588218...
+  const GridLimits l = grid_limits(0.48, 0.34);
+  EXPECT_NEAR(l.dx_lim_px, 0.34 * 0.34 / 0.5882176467, 1e-9);  // 0.196526
+  EXPECT_NEAR(l.dx_lim_px, 0.196526, 1e-6);
+  EXPECT_NEAR(l.dy_lim_px, 0.277448, 1e-6);                    // 0.48 * 0.34 / 0.588218
+  EXPECT_NEAR(l.theta_lim_rad, 35.3112 * kDeg, 1e-6);          // atan(0.34 / 0.48)
+}
+
+TEST(GridLimits, Eq3Eq4HandComputedTallRowsAndSquare) {
+  const GridLimits l = grid_limits(0.3, 0.4);  // w < h, sqrt = 0.5
+  EXPECT_NEAR(l.dx_lim_px, 0.24, 1e-12);       // 0.3 * 0.4 / 0.5
+  EXPECT_NEAR(l.dy_lim_px, 0.18, 1e-12);       // 0.3^2 / 0.5
+  EXPECT_NEAR(l.theta_lim_rad, std::atan(0.75), 1e-12);
+  const GridLimits s = grid_limits(2.0, 2.0);
+  EXPECT_NEAR(s.dx_lim_px, std::sqrt(2.0), 1e-12);
+  EXPECT_NEAR(s.dy_lim_px, std::sqrt(2.0), 1e-12);
+  EXPECT_NEAR(s.theta_lim_rad, M_PI / 4.0, 1e-12);
+}
+
+TEST(GridLimits, NonUniformShelfUsesLargestPitchesAndSmallerNeighbours) {
+  KnownShelf paper;  // columns 0.34/0.48, rows 0.34
+  const GridLimits l = grid_limits(paper, 100.0);
+  EXPECT_NEAR(l.dx_lim_px, 19.6526, 1e-3);
+  EXPECT_NEAR(l.dy_lim_px, 27.7448, 1e-3);
+  EXPECT_NEAR(l.theta_lim_rad, 35.3112 * kDeg, 1e-6);
+  // Rows of 0.2 m under columns of 0.5 m: eq. 3 with the largest pitches (0.5, 0.4)...
+  KnownShelf mixed;
+  mixed.column_pitch_m = {0.5, 0.5};
+  mixed.row_pitch_m = {0.4, 0.2};
+  const GridLimits m = grid_limits(mixed, 1.0);
+  const double dy = 0.5 * 0.4 / std::hypot(0.5, 0.4);
+  EXPECT_NEAR(m.dy_lim_px, dy, 1e-12);
+  // ...but the 0.2 m row brings the next row within dy_lim: theta_L = acos(dy / 0.2) = 0.
+  EXPECT_NEAR(m.theta_lim_rad, std::acos(std::min(1.0, dy / 0.2)), 1e-12);
+}
+
+// A grid of posts x beams in metres, scaled to pixels and rotated by theta in the image.
+struct Points {
+  std::vector<cv::Point2d> px;
+  std::vector<int> row, column;
+};
+Points rotated_grid(const KnownShelf& s, double theta_rad, double px_per_m) {
+  Points g;
+  const cv::Point2d centre(480, 360);
+  for (int j = 0; j <= s.levels(); ++j) {
+    for (int i = 0; i <= s.columns(); ++i) {
+      const cv::Point3d p = grid_tag_G(s, i, j);
+      // Image x = -y_G (left is +y), image y = -z_G (up is +z); then rotate.
+      const double x = -p.y * px_per_m, y = -p.z * px_per_m;
+      g.px.push_back(centre + cv::Point2d(std::cos(theta_rad) * x - std::sin(theta_rad) * y,
+                                          std::sin(theta_rad) * x + std::cos(theta_rad) * y));
+      g.row.push_back(j);
+      g.column.push_back(i);
+    }
+  }
+  return g;
+}
+
+void expect_classification(const KnownShelf& s, double theta_rad, bool valid) {
+  const double scale = 300.0;
+  const Points g = rotated_grid(s, theta_rad, scale);
+  const GridLimits lim = grid_limits(s, scale);
+  const TagGrid grid = classify_grid(g.px, lim, 0.17);
+  SCOPED_TRACE("theta " + std::to_string(theta_rad / kDeg) + " deg, limit " +
+               std::to_string(lim.theta_lim_rad / kDeg) + " deg: " + grid.refusal);
+  ASSERT_EQ(grid.valid, valid);
+  if (!valid) return;
+  EXPECT_EQ(grid.rows, s.levels() + 1);
+  EXPECT_EQ(grid.columns, s.columns() + 1);
+  for (size_t k = 0; k < g.px.size(); ++k) {
+    EXPECT_EQ(grid.row[k], g.row[k]);
+    EXPECT_EQ(grid.column[k], g.column[k]);
+  }
+}
+
+KnownShelf shelf_of(std::vector<double> cols, std::vector<double> rows) {
+  KnownShelf s;
+  s.column_pitch_m = std::move(cols);
+  s.row_pitch_m = std::move(rows);
+  return s;
+}
+
+TEST(StairClassification, LabelsUpToJustUnderTheLimitAndRefusesBeyond) {
+  const std::vector<KnownShelf> shelves = {
+      KnownShelf{},                                  // the paper's shelf: 34/48 columns
+      shelf_of({0.4, 0.4, 0.4}, {0.4, 0.4}),         // square cells: limit 45 deg
+      shelf_of({0.5, 0.5, 0.5, 0.5}, {0.3, 0.3, 0.3}),  // wide cells (w > h)
+      shelf_of({0.3, 0.3, 0.3}, {0.45, 0.45, 0.45}),    // tall cells (w < h)
+  };
+  for (const KnownShelf& s : shelves) {
+    const double limit = grid_limits(s, 1.0).theta_lim_rad;
+    for (double sign : {1.0, -1.0}) {
+      for (double theta : {0.0, 5 * kDeg, 15 * kDeg, limit - 2 * kDeg, limit - 0.3 * kDeg}) {
+        expect_classification(s, sign * theta, true);
+      }
+      if (limit < 44 * kDeg) {  // past 45 deg a square grid is itself again, rotated by 90
+        for (double theta : {limit + 0.5 * kDeg, limit + 3 * kDeg, limit + 8 * kDeg}) {
+          expect_classification(s, sign * theta, false);
+        }
+      }
+    }
+  }
+}
+
+TEST(StairClassification, RefusesDuplicatesAndReportsEmpty) {
+  EXPECT_FALSE(classify_grid({}, grid_limits(10, 10), 0.17).valid);
+  const TagGrid one = classify_grid({{5, 5}}, grid_limits(10, 10), 0.17);
+  EXPECT_TRUE(one.valid);
+  EXPECT_EQ(one.rows, 1);
+  EXPECT_EQ(one.columns, 1);
+}
+
+TEST(FrontShelf, Eq1AreaRatioKeepsOnlyTheFrontShelf) {
+  KnownShelf known;
+  testing::Scene scene;
+  scene.shelves = {testing::paper_shelf({3.0, 0.0, 0.0}), testing::paper_shelf({5.5, 0.2, 0.0})};
+  const CameraIntrinsics k;
+  const testing::Drawer drawer(k, true);
+  for (double roll : {0.0, 8 * kDeg}) {
+    for (double pitch : {0.0, 4 * kDeg}) {
+      const cv::Mat img = drawer.draw(scene, testing::camera_pose_W({0.3, 0.05, 0.98}, 0.03, pitch, roll));
+      PerceptionParams p;
+      TagDetector det(p);
+      std::vector<TagBlob> all;
+      det.detect(img, cv::Rect(0, 0, img.cols, img.rows), all);
+      std::vector<TagBlob> front = all;
+      keep_front_shelf(front, p.area_ratio_threshold);
+      // Some tags of the shelf behind show between the bars; eq. 1 drops exactly those.
+      EXPECT_GT(all.size(), 25u) << "the test needs tags of the shelf behind in view";
+      ASSERT_EQ(front.size(), 25u);
+      FlightConfig config;
+      ShelfView view;
+      analyse_shelf(img, det, config, view);
+      EXPECT_TRUE(view.full) << view.grid.refusal;
+    }
+  }
+}
+
+TEST(Tags, DetectedUnderDimLightAndHueWrap) {
+  testing::Scene scene;
+  scene.shelves = {testing::paper_shelf()};
+  const CameraIntrinsics k;
+  const testing::Drawer drawer(k, false);
+  for (double brightness : {1.0, 0.45}) {
+    scene.brightness = brightness;
+    const cv::Mat img = drawer.draw(scene, testing::camera_pose_W({0.9, 0.0, 0.98}, 0.0));
+    TagDetector det{PerceptionParams{}};
+    std::vector<TagBlob> tags;
+    det.detect(img, cv::Rect(0, 0, img.cols, img.rows), tags);
+    EXPECT_EQ(tags.size(), 25u) << "brightness " << brightness;
+  }
+  // Red tags: the hue range wraps through 0.
+  scene.brightness = 1.0;
+  scene.tag_bgr = cv::Scalar(40, 30, 210);
+  const cv::Mat img = drawer.draw(scene, testing::camera_pose_W({0.9, 0.0, 0.98}, 0.0));
+  PerceptionParams red;
+  red.tag_hsv.hue_min = 170;
+  red.tag_hsv.hue_max = 8;
+  TagDetector det(red);
+  std::vector<TagBlob> tags;
+  det.detect(img, cv::Rect(0, 0, img.cols, img.rows), tags);
+  EXPECT_EQ(tags.size(), 25u);
+}
+
+TEST(StairClassification, DrawnShelfRolledUnderAndPastTheLimit) {
+  testing::Scene scene;
+  scene.shelves = {testing::paper_shelf()};
+  const CameraIntrinsics k;
+  const testing::Drawer drawer(k, true);
+  FlightConfig config;
+  TagDetector det(config.perception);
+  for (double roll_deg : {-25.0, 0.0, 12.0, 25.0}) {
+    const cv::Mat img = drawer.draw(scene, testing::camera_pose_W({0.0, 0.0, 0.98}, 0.0, 0.0, roll_deg * kDeg));
+    ShelfView view;
+    analyse_shelf(img, det, config, view);
+    ASSERT_TRUE(view.full) << roll_deg << ": " << view.grid.refusal;
+    // Tag (row j, column i) must be where the projection of post i, beam j is.
+    for (int j = 0; j <= 4; ++j) {
+      for (int i = 0; i <= 4; ++i) {
+        const TagBlob& t = view.tags[static_cast<size_t>(view.grid.at(j, i))];
+        const Eigen::Isometry3d X_CW =
+            testing::camera_pose_W({0.0, 0.0, 0.98}, 0.0, 0.0, roll_deg * kDeg).inverse();
+        const Eigen::Vector3d c = X_CW * testing::shelf_to_world(scene.shelves[0],
+                                                                 {-0.01, testing::post_y(scene.shelves[0], i),
+                                                                  testing::beam_z(scene.shelves[0], j)});
+        std::vector<cv::Point2d> px;
+        cv::projectPoints(std::vector<cv::Point3d>{{c.x(), c.y(), c.z()}}, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0),
+                          cv::Matx33d(k.fx_px, 0, k.cx_px, 0, k.fy_px, k.cy_px, 0, 0, 1),
+                          cv::Vec<double, 5>(k.k1, k.k2, k.p1, k.p2, k.k3), px);
+        EXPECT_LT(cv::norm(px[0] - t.centre_px), 1.0) << "row " << j << " column " << i;
+      }
+    }
+  }
+  // Rolled 40 deg, past the 35.3 deg limit of this shelf: refused, not guessed.
+  const cv::Mat img = drawer.draw(scene, testing::camera_pose_W({-0.2, 0.0, 0.98}, 0.0, 0.0, 40 * kDeg));
+  ShelfView view;
+  analyse_shelf(img, det, config, view);
+  EXPECT_EQ(view.tags.size(), 25u);
+  EXPECT_FALSE(view.grid.valid);
+  EXPECT_FALSE(view.full);
+}
+
+}  // namespace
+}  // namespace shelfcross::flight_sw
