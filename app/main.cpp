@@ -8,6 +8,7 @@
 
 #include "command_registry.hpp"
 #include "config/strict_yaml.hpp"
+#include "verification/results_store.hpp"
 
 int main(int argc, char** argv) {
   using namespace shelfcross::app;
@@ -32,6 +33,9 @@ int main(int argc, char** argv) {
       if (sub->parsed()) return action();
     }
   } catch (const shelfcross::config::ConfigError& e) {
+    std::cerr << "shelfcross: " << e.what() << "\n";
+    return 2;
+  } catch (const shelfcross::verification::ResultsMismatch& e) {
     std::cerr << "shelfcross: " << e.what() << "\n";
     return 2;
   } catch (const UsageError& e) {

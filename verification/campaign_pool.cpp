@@ -65,7 +65,7 @@ std::int64_t run_pending(ResultsStore& store, std::uint64_t campaign_seed, std::
           record = worker->run(index, seed);
         } catch (const std::exception& e) {
           record = RunRecord{index, seed, "{}", "worker_error",
-                             nlohmann::json{{"error", e.what()}}.dump(), std::string(32, '0'), 0.0};
+                             nlohmann::json{{"error", e.what()}}.dump(), std::string(32, '0'), 0.0, "{}"};
         }
         std::lock_guard lock(mutex);
         finished_runs.push_back(std::move(record));

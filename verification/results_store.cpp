@@ -5,7 +5,7 @@
 namespace shelfcross::verification {
 namespace {
 
-constexpr const char* kFormatVersion = "1";
+constexpr const char* kFormatVersion = "2";
 
 void configure(SQLite::Database& db) {
   db.exec("PRAGMA journal_mode=WAL");
@@ -53,7 +53,8 @@ ResultsStore ResultsStore::open_or_create(const std::filesystem::path& db_path, 
     store.db_->exec("CREATE TABLE campaign(key TEXT PRIMARY KEY, value TEXT NOT NULL)");
     store.db_->exec(
         "CREATE TABLE runs(run_index INTEGER PRIMARY KEY, seed TEXT NOT NULL, dispersion_json TEXT NOT NULL,"
-        " outcome TEXT NOT NULL, metrics_json TEXT NOT NULL, run_hash TEXT NOT NULL, wall_s REAL NOT NULL)");
+        " outcome TEXT NOT NULL, metrics_json TEXT NOT NULL, run_hash TEXT NOT NULL, wall_s REAL NOT NULL,"
+        " trace_json TEXT NOT NULL)");
     set_meta(*store.db_, "format_version", kFormatVersion);
     set_meta(*store.db_, "scenario_yaml", meta.scenario_yaml);
     set_meta(*store.db_, "campaign_seed", std::to_string(meta.campaign_seed));
@@ -94,8 +95,8 @@ std::vector<std::int64_t> ResultsStore::finished_indices() const {
 void ResultsStore::insert(const RunRecord& run) {
   SQLite::Transaction tx(*db_);
   SQLite::Statement q(*db_,
-                      "INSERT INTO runs(run_index, seed, dispersion_json, outcome, metrics_json, run_hash, wall_s)"
-                      " VALUES(?, ?, ?, ?, ?, ?, ?)");
+                      "INSERT INTO runs(run_index, seed, dispersion_json, outcome, metrics_json, run_hash, wall_s, trace_json)"
+                      " VALUES(?, ?, ?, ?, ?, ?, ?, ?)");
   q.bind(1, static_cast<std::int64_t>(run.index));
   q.bind(2, std::to_string(run.seed));
   q.bind(3, run.dispersion_json);
@@ -103,6 +104,7 @@ void ResultsStore::insert(const RunRecord& run) {
   q.bind(5, run.metrics_json);
   q.bind(6, run.run_hash);
   q.bind(7, run.wall_s);
+  q.bind(8, run.trace_json);
   q.exec();
   tx.commit();
 }
@@ -110,7 +112,7 @@ void ResultsStore::insert(const RunRecord& run) {
 std::vector<RunRecord> ResultsStore::runs() const {
   std::vector<RunRecord> out;
   SQLite::Statement q(*db_,
-                      "SELECT run_index, seed, dispersion_json, outcome, metrics_json, run_hash, wall_s"
+                      "SELECT run_index, seed, dispersion_json, outcome, metrics_json, run_hash, wall_s, trace_json"
                       " FROM runs ORDER BY run_index");
   while (q.executeStep()) {
     RunRecord r;
@@ -121,6 +123,7 @@ std::vector<RunRecord> ResultsStore::runs() const {
     r.metrics_json = q.getColumn(4).getString();
     r.run_hash = q.getColumn(5).getString();
     r.wall_s = q.getColumn(6).getDouble();
+    r.trace_json = q.getColumn(7).getString();
     out.push_back(std::move(r));
   }
   return out;

@@ -5,7 +5,7 @@
 //   campaign(key TEXT PRIMARY KEY, value TEXT)   format_version, scenario_yaml (fully
 //                                                resolved), campaign_seed, runs_requested
 //   runs(run_index INTEGER PRIMARY KEY, seed TEXT, dispersion_json TEXT, outcome TEXT,
-//        metrics_json TEXT, run_hash TEXT, wall_s REAL)
+//        metrics_json TEXT, run_hash TEXT, wall_s REAL, trace_json TEXT)
 //
 // Durability: WAL with synchronous=FULL, so a committed run survives SIGKILL (and power loss);
 // a run killed mid-way left nothing, and is simply run again on resume. Reopening a database
@@ -40,6 +40,7 @@ struct RunRecord {
   std::string metrics_json;
   std::string run_hash;         ///< 32 hex digits (run_hash.hpp)
   double wall_s = 0.0;          ///< wall time the run took (informative, not hashed)
+  std::string trace_json;       ///< a compact trajectory for the report's plots
   bool operator==(const RunRecord&) const = default;
 };
 

@@ -118,7 +118,7 @@ class ResultsStoreTest : public ::testing::Test {
 
 RunRecord make_run(std::int64_t i) {
   return {i, run_seed(9, static_cast<std::uint64_t>(i)), "{\"start_distance_m\":3.1}", "success",
-          "{\"settling_z_s\":1.5}", std::string(32, 'a'), 0.25};
+          "{\"settling_z_s\":1.5}", std::string(32, 'a'), 0.25, "{\"t\":[0]}"};
 }
 
 TEST_F(ResultsStoreTest, KeepsRunsAcrossReopenAndRefusesOtherCampaigns) {

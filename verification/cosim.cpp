@@ -1,0 +1,507 @@
+#include "verification/cosim.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <queue>
+#include <variant>
+
+#include <nlohmann/json.hpp>
+
+#include "flight_sw/tello/sdk_state.hpp"
+#include "plant/collision.hpp"
+#include "plant/simulated_tello.hpp"
+#include "render/ground_truth.hpp"
+#include "shelfcross/random.hpp"
+#include "verification/link_model.hpp"
+#include "verification/run_hash.hpp"
+
+namespace shelfcross::verification {
+namespace {
+
+using flight_sw::CellIndex;
+
+/// Rates may be non-integer (a scenario's frame rate is a number): event k of a clock of
+/// `mhz` millihertz is at floor(k * 1e12 / mhz) ns, exact in integers for k < 9.2e6.
+std::int64_t millihertz(double hz) { return std::llround(hz * 1000.0); }
+TimeNs event_time(std::int64_t k, std::int64_t mhz) { return k * (kNsPerSecond * 1000) / mhz; }
+
+/// ZYX Euler angles (roll, pitch, yaw) of R_WB, the convention of sdk_messages.hpp.
+Eigen::Vector3d euler_zyx(const Eigen::Matrix3d& R) {
+  return {std::atan2(R(2, 1), R(2, 2)), std::asin(std::clamp(-R(2, 0), -1.0, 1.0)), std::atan2(R(1, 0), R(0, 0))};
+}
+
+double wrap_pi(double a) { return std::remainder(a, 2.0 * M_PI); }
+
+Eigen::Isometry3d body_pose(const plant::RigidBodyState& s) {
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  X.linear() = s.q_WB.toRotationMatrix();
+  X.translation() = s.p_WB_m;
+  return X;
+}
+
+/// The cell of shelf `s` whose opening contains (y_S, z_S), if any (levels and columns from 1).
+std::optional<CellIndex> cell_at(const ShelfSpec& s, double y_S, double z_S) {
+  const int columns = static_cast<int>(s.column_pitch_m.size());
+  const int levels = static_cast<int>(s.row_pitch_m.size());
+  for (int c = 1; c <= columns; ++c) {
+    if (!(y_S <= post_y_S_m(s, c - 1) && y_S > post_y_S_m(s, c))) continue;
+    for (int l = 1; l <= levels; ++l) {
+      if (z_S >= beam_z_S_m(s, l - 1) && z_S < beam_z_S_m(s, l)) return CellIndex{l, c};
+    }
+  }
+  return std::nullopt;
+}
+
+/// A message on its way to the flight software: a frame, a state datagram's text (parsed on
+/// arrival by the driver's parser, as tello_pilot does), or a reply.
+struct StateText {
+  std::string text;
+};
+using ToFlightSoftware = std::variant<CameraFrame, StateText, SdkReply>;
+
+template <class Payload>
+struct Timed {
+  TimeNs t_ns;
+  std::uint64_t seq;  // scheduling order: breaks ties deterministically
+  Payload payload;
+  bool operator>(const Timed& o) const { return t_ns != o.t_ns ? t_ns > o.t_ns : seq > o.seq; }
+};
+template <class Payload>
+using TimedQueue = std::priority_queue<Timed<Payload>, std::vector<Timed<Payload>>, std::greater<>>;
+
+/// The Tello's state record from the plant's truth, before the SDK's quantisation (which
+/// format_state_record applies).
+StateRecord state_from_truth(const plant::RigidBodyState& s, const Eigen::Vector3d& a_W_mps2, double ground_z_m,
+                             double battery_pct, double motor_time_s, TimeNs t_ns) {
+  StateRecord r;
+  r.t_ns = t_ns;
+  const Eigen::Matrix3d R = s.q_WB.toRotationMatrix();
+  const Eigen::Vector3d rpy = euler_zyx(R);
+  r.roll_rad = rpy.x();
+  r.pitch_rad = rpy.y();
+  r.yaw_rad = rpy.z();
+  const Eigen::Vector3d v_H = Eigen::AngleAxisd(rpy.z(), Eigen::Vector3d::UnitZ()).inverse() * s.v_WB_W_mps;
+  r.vx_H_mps = v_H.x();
+  r.vy_H_mps = v_H.y();
+  r.vz_H_mps = v_H.z();
+  // Specific force: f_B = R^T (a_W - g_W), g_W = (0, 0, -g).
+  const Eigen::Vector3d f_B = R.transpose() * (a_W_mps2 + Eigen::Vector3d(0, 0, tello::kStandardGravity_mps2));
+  r.ax_B_mps2 = f_B.x();
+  r.ay_B_mps2 = f_B.y();
+  r.az_B_mps2 = f_B.z();
+  const double above_floor_m = s.p_WB_m.z() - ground_z_m;
+  r.height_m = above_floor_m;
+  // The ToF looks down the body z axis; it reads 0.1 m on the ground and nothing past 8 m
+  // or beyond 60 deg of tilt.
+  const double cos_tilt = R(2, 2);
+  if (cos_tilt > 0.5 && above_floor_m / cos_tilt < 8.0) r.tof_m = std::max(0.1, 0.1 + above_floor_m / cos_tilt);
+  r.baro_m = 100.0 + s.p_WB_m.z();
+  r.battery_pct = static_cast<int>(std::clamp(std::floor(battery_pct), 0.0, 100.0));
+  r.motor_time_s = motor_time_s;
+  r.temp_low_c = 55;
+  r.temp_high_c = 57;
+  return r;
+}
+
+}  // namespace
+
+const char* outcome_name(RunOutcome outcome) {
+  switch (outcome) {
+    case RunOutcome::success: return "success";
+    case RunOutcome::collision: return "collision";
+    case RunOutcome::left_arena: return "left_arena";
+    case RunOutcome::timeout: return "timeout";
+    case RunOutcome::numerical_failure: return "numerical_failure";
+    case RunOutcome::flight_software_exception: return "flight_software_exception";
+    case RunOutcome::mission_aborted: return "mission_aborted";
+    case RunOutcome::no_crossing: return "no_crossing";
+    case RunOutcome::inventory_mismatch: return "inventory_mismatch";
+  }
+  return "unknown";
+}
+
+flight_sw::FlightConfig flight_config_for(const Scenario& sc, const CameraIntrinsics& believed_camera) {
+  const ShelfSpec& shelf = sc.warehouse.shelves.at(0);
+  flight_sw::FlightConfig c;
+  c.shelf.column_pitch_m = shelf.column_pitch_m;
+  c.shelf.row_pitch_m = shelf.row_pitch_m;
+  c.shelf.post_thickness_m = shelf.post_thickness_m;
+  c.shelf.beam_thickness_m = shelf.beam_thickness_m;
+  c.shelf.depth_m = shelf.depth_m;
+  c.shelf.tag_size_m = sc.warehouse.tag_size_m;
+  // Tags are cards on the outer face of the bars (warehouse.hpp).
+  c.shelf.tag_offset_m = 0.5 * std::max(shelf.post_thickness_m, shelf.beam_thickness_m) +
+                         plant::CollisionWorld::kTagThickness_m;
+  c.shelf.aruco_dictionary = sc.warehouse.aruco_dictionary;
+  c.shelf.marker_size_m = sc.warehouse.marker_size_m;
+  c.camera = believed_camera;
+  c.mount = sc.camera_mount;
+  c.mission.vehicle_size_m = sc.vehicle.size_m;
+  // The operator sets the tag hue window around the tags' colour (OpenCV hue: 0..180).
+  const Rgb& tag = sc.warehouse.tag_colour;
+  const double mx = std::max({tag.r, tag.g, tag.b}), mn = std::min({tag.r, tag.g, tag.b});
+  if (mx - mn > 1e-6) {
+    double hue_deg = mx == tag.r ? 60.0 * std::fmod((tag.g - tag.b) / (mx - mn) + 6.0, 6.0)
+                     : mx == tag.g ? 60.0 * ((tag.b - tag.r) / (mx - mn) + 2.0)
+                                   : 60.0 * ((tag.r - tag.g) / (mx - mn) + 4.0);
+    const int h = static_cast<int>(std::lround(hue_deg / 2.0)) % 180;
+    const int half_width = (c.perception.tag_hsv.hue_max - c.perception.tag_hsv.hue_min) / 2;
+    c.perception.tag_hsv.hue_min = (h - half_width + 180) % 180;
+    c.perception.tag_hsv.hue_max = (h + half_width) % 180;
+  }
+  flight_sw::validate_flight_config(c);
+  return c;
+}
+
+std::set<InventoryEntry> true_inventory(const Scenario& sc) {
+  std::set<InventoryEntry> truth;
+  for (const BoxPlacement& b : sc.warehouse.shelves.at(0).boxes) truth.insert({b.marker_id, 0, b.level, b.column});
+  return truth;
+}
+
+RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, const FrameObserver& observer) {
+  const Scenario& sc = *setup.scenario;
+  const CosimSettings& cs = sc.cosim;
+  const ShelfSpec& shelf = sc.warehouse.shelves.at(0);
+  const Eigen::Isometry3d X_SW = shelf_pose_W(shelf).inverse();
+  if (!sc.start.landed) throw std::invalid_argument("the co-simulation starts landed runs only (start.landed: true)");
+
+  RunResult result;
+  RunMetrics& m = result.metrics;
+  RunHasher hash;
+  LinkModel link(cs.link, setup.seed);
+  RandomStream render_noise(setup.seed, StreamId::render_noise);
+  const plant::CollisionWorld world(sc.warehouse, sc.vehicle.size_m, cs.vehicle_margin_m);
+  plant::SimulatedTello tello(sc.vehicle, sc.autopilot, sc.wind, RandomStream(setup.seed, StreamId::wind).next_u64(),
+                              {}, sc.start.p_WB_m.x(), sc.start.p_WB_m.y(), sc.start.yaw_rad);
+  flight_sw::FlightSoftware fsw(flight_config_for(sc, setup.believed_camera));
+  const double ground_z_m = tello.state().p_WB_m.z();
+
+  const auto log_event = [&](TimeNs t, const std::string& text) {
+    char stamp[32];
+    std::snprintf(stamp, sizeof stamp, "%.3f ", ns_to_seconds(t));
+    result.events.push_back(stamp + text);
+    hash.add(t);
+    hash.add(std::string_view(text));
+  };
+
+  // Clocks and queues.
+  const std::int64_t tick_mhz = millihertz(sc.autopilot.rate_hz), frame_mhz = millihertz(sc.frame_rate_hz),
+                     state_mhz = millihertz(cs.state_rate_hz), traj_mhz = millihertz(cs.trajectory_rate_hz);
+  std::int64_t k_tick = 1, k_frame = 0, k_state = 0, k_traj = 0;
+  const TimeNs timeout_ns = seconds_to_ns(cs.timeout_s);
+  TimedQueue<std::string> to_vehicle;
+  TimedQueue<ToFlightSoftware> to_fsw;
+  std::uint64_t seq = 0;
+  const auto send_commands = [&](const std::vector<SdkCommand>& commands) {
+    for (const SdkCommand& c : commands) {
+      const std::optional<TimeNs> arrival = link.command_arrival(c.t_ns);
+      log_event(c.t_ns, "send " + c.text + (arrival ? "" : " (lost)"));
+      if (arrival) to_vehicle.push({*arrival, seq++, c.text});
+    }
+  };
+  const auto reply_to_fsw = [&](TimeNs t_sent, const std::string& text) {
+    to_fsw.push({link.state_arrival(t_sent), seq++, SdkReply{0, text}});
+  };
+
+  // Truth bookkeeping.
+  TimeNs t_now = 0;
+  Eigen::Isometry3d X_prev = body_pose(tello.state());
+  Eigen::Vector3d v_prev = tello.state().v_WB_W_mps;
+  Eigen::Vector3d a_W = Eigen::Vector3d::Zero();
+  Eigen::Isometry3d X_WC_prev_frame = render::camera_pose_W(X_prev, sc.camera_mount);
+  bool sdk_on = false, video_on = false, touching_floor = true;
+  double motor_time_s = 0.0;
+  double prev_x_S = (X_SW * X_prev.translation()).x();
+  std::optional<CellIndex> entry_cell;
+  flight_sw::Phase last_phase = fsw.phase();
+  std::optional<TimeNs> approach_start_ns;
+  std::vector<double> approach_t, err_z, err_yaw, err_y;
+  const double half_length_m = 0.5 * sc.vehicle.size_m.x() + cs.vehicle_margin_m;
+  cv::Mat frame_bgr;
+  std::optional<RunOutcome> outcome;
+
+  send_commands(fsw.start(0));
+  log_event(0, std::string("phase ") + flight_sw::phase_name(fsw.phase()));
+
+  const auto step_fsw = [&](const flight_sw::Input& input, TimeNs t) {
+    std::vector<SdkCommand> commands;
+    try {
+      commands = fsw.step(input);
+    } catch (const std::exception& e) {
+      outcome = RunOutcome::flight_software_exception;
+      result.detail = e.what();
+      log_event(t, std::string("flight software threw: ") + e.what());
+      return;
+    }
+    send_commands(commands);
+    const flight_sw::Telemetry& tm = fsw.telemetry();
+    hash.add(static_cast<int>(tm.phase));
+    hash.add(tm.e_z_m);
+    hash.add(tm.e_psi_rad);
+    if (fsw.phase() != last_phase) {
+      last_phase = fsw.phase();
+      log_event(t, std::string("phase ") + flight_sw::phase_name(last_phase) + (tm.event.empty() ? "" : ": " + tm.event));
+      if (last_phase == flight_sw::Phase::Approach && !approach_start_ns) {
+        approach_start_ns = t;
+        result.approach_start_s = ns_to_seconds(t);
+        m.target = tm.target;
+      }
+      if (last_phase == flight_sw::Phase::Cross && !result.cross_start_s) result.cross_start_s = ns_to_seconds(t);
+    }
+    if (tm.target) m.target = tm.target;
+  };
+
+  while (!outcome) {
+    TimeNs t = std::min({event_time(k_tick, tick_mhz), event_time(k_frame, frame_mhz),
+                         event_time(k_state, state_mhz), event_time(k_traj, traj_mhz)});
+    if (!to_vehicle.empty()) t = std::min(t, to_vehicle.top().t_ns);
+    if (!to_fsw.empty()) t = std::min(t, to_fsw.top().t_ns);
+    if (t > timeout_ns) {
+      outcome = RunOutcome::timeout;
+      result.detail = "not finished after " + std::to_string(cs.timeout_s) + " s";
+      break;
+    }
+
+    // 1. Advance the plant and the autopilot; check the motion for contacts.
+    try {
+      tello.step_to(t);
+    } catch (const std::exception& e) {
+      outcome = RunOutcome::numerical_failure;
+      result.detail = e.what();
+      break;
+    }
+    const plant::RigidBodyState& s = tello.state();
+    if (!s.p_WB_m.allFinite() || !s.v_WB_W_mps.allFinite() || !s.q_WB.coeffs().allFinite()) {
+      outcome = RunOutcome::numerical_failure;
+      result.detail = "non-finite state";
+      break;
+    }
+    const Eigen::Isometry3d X = body_pose(s);
+    if (t > t_now) {
+      const double dt_s = ns_to_seconds(t - t_now);
+      a_W = (s.v_WB_W_mps - v_prev) / dt_s;
+      if (tello.mode() != plant::FlightMode::landed) motor_time_s += dt_s;
+      m.path_length_m += (X.translation() - X_prev.translation()).norm();
+      if (const auto contact = world.sweep(X_prev, t_now, X, t, plant::FloorContacts::ignore)) {
+        m.contact = *contact;
+        const bool shelf_hit = plant::is_shelf_part(contact->element.kind);
+        outcome = shelf_hit ? RunOutcome::collision : RunOutcome::left_arena;
+        result.detail = contact->element.name;
+        log_event(contact->t_ns, "contact with " + contact->element.name);
+        t_now = t;
+        break;
+      }
+      const Eigen::Vector3d& p = s.p_WB_m;
+      if ((p.array() < sc.warehouse.arena_min_W_m.array()).any() ||
+          (p.array() > sc.warehouse.arena_max_W_m.array()).any()) {
+        outcome = RunOutcome::left_arena;
+        result.detail = "outside the arena";
+        break;
+      }
+      const bool on_floor = p.z() - ground_z_m < 1e-4;
+      if (on_floor && !touching_floor) ++m.floor_touches;
+      touching_floor = on_floor;
+      // Crossing shelf 0, judged on the body origin in the shelf frame.
+      const Eigen::Vector3d p_S = X_SW * p;
+      if (prev_x_S < 0.0 && p_S.x() >= 0.0) {
+        entry_cell = cell_at(shelf, p_S.y(), p_S.z());
+        if (entry_cell) {
+          const Eigen::Vector3d c = cell_centre_S_m(shelf, entry_cell->level, entry_cell->column);
+          m.entry_offset_y_m = p_S.y() - c.y();
+          m.entry_offset_z_m = p_S.z() - c.z();
+        }
+        log_event(t, "front face crossed");
+      }
+      if (prev_x_S < shelf.depth_m && p_S.x() >= shelf.depth_m) {
+        const auto exit_cell = cell_at(shelf, p_S.y(), p_S.z());
+        if (entry_cell && exit_cell && *entry_cell == *exit_cell) m.crossed = exit_cell;
+        log_event(t, "back face crossed");
+      }
+      if (p_S.x() > -half_length_m - 0.05 && p_S.x() < shelf.depth_m + half_length_m + 0.05) {
+        const double clearance = world.clearance_to_shelves(X).distance_m;
+        m.min_clearance_m = std::min(m.min_clearance_m.value_or(clearance), clearance);
+      }
+      prev_x_S = p_S.x();
+      // The truth log: every step of the plant.
+      hash.add(t);
+      for (int i = 0; i < 3; ++i) hash.add(s.p_WB_m[i]);
+      for (int i = 0; i < 4; ++i) hash.add(s.q_WB.coeffs()[i]);
+      for (int i = 0; i < 3; ++i) hash.add(s.v_WB_W_mps[i]);
+      for (int i = 0; i < 3; ++i) hash.add(s.w_WB_B_radps[i]);
+      X_prev = X;
+      v_prev = s.v_WB_W_mps;
+      t_now = t;
+    }
+
+    // 2. Events at t, in a fixed order.
+    if (t == event_time(k_tick, tick_mhz)) ++k_tick;
+    for (const SdkReply& r : tello.take_replies()) {
+      log_event(r.t_ns, "reply " + r.text);
+      reply_to_fsw(r.t_ns, r.text);
+    }
+    while (!to_vehicle.empty() && to_vehicle.top().t_ns == t) {
+      const std::string text = to_vehicle.top().payload;
+      to_vehicle.pop();
+      std::optional<std::string> reply;
+      try {
+        reply = tello.submit(t, text);
+      } catch (const std::exception& e) {
+        outcome = RunOutcome::numerical_failure;
+        result.detail = e.what();
+        break;
+      }
+      if (reply) {
+        if (text == "command" && *reply == "ok") sdk_on = true;
+        if (text == "streamon" && *reply == "ok") video_on = true;
+        if (text == "streamoff" && *reply == "ok") video_on = false;
+        log_event(t, "reply " + *reply);
+        reply_to_fsw(t, *reply);
+      }
+    }
+    if (outcome) break;
+    if (t == event_time(k_frame, frame_mhz)) {
+      const std::uint64_t noise_seed = render_noise.next_u64();  // one per capture, dropped or not
+      const Eigen::Isometry3d X_WC = render::camera_pose_W(X, sc.camera_mount);
+      if (video_on) {
+        if (const auto arrival = link.video_arrival(t)) {
+          if (cs.motion_blur_samples > 1) {
+            renderer.render_blurred_into(X_WC_prev_frame, X_WC, noise_seed, frame_bgr);
+          } else {
+            renderer.render_into(X_WC, noise_seed, frame_bgr);
+          }
+          to_fsw.push({*arrival, seq++, CameraFrame{*arrival, k_frame, frame_bgr.clone()}});
+        }
+      }
+      X_WC_prev_frame = X_WC;
+      ++k_frame;
+    }
+    if (t == event_time(k_state, state_mhz)) {
+      if (sdk_on) {
+        const double battery = cs.battery_start_pct - 100.0 * motor_time_s / cs.endurance_s;
+        const StateRecord truth = state_from_truth(s, a_W, ground_z_m, battery, motor_time_s, t);
+        to_fsw.push({link.state_arrival(t), seq++, StateText{tello::format_state_record(truth)}});
+      }
+      ++k_state;
+    }
+    while (!outcome && !to_fsw.empty() && to_fsw.top().t_ns == t) {
+      ToFlightSoftware msg = to_fsw.top().payload;  // cv::Mat copies share the pixels
+      to_fsw.pop();
+      if (auto* frame = std::get_if<CameraFrame>(&msg)) {
+        step_fsw(*frame, t);
+        if (observer && !outcome) observer(*frame, fsw);
+      } else if (auto* state = std::get_if<StateText>(&msg)) {
+        if (auto record = tello::parse_state_record(state->text, t)) step_fsw(*record, t);
+      } else {
+        SdkReply reply = std::get<SdkReply>(msg);
+        reply.t_ns = t;
+        step_fsw(reply, t);
+      }
+    }
+    if (outcome) break;
+    if (t == event_time(k_traj, traj_mhz)) {
+      TrajectorySample sample;
+      sample.t_s = ns_to_seconds(t);
+      sample.p_WB_m = s.p_WB_m;
+      sample.v_WB_W_mps = s.v_WB_W_mps;
+      const Eigen::Vector3d rpy = euler_zyx(X.linear());
+      sample.roll_rad = rpy.x();
+      sample.pitch_rad = rpy.y();
+      sample.yaw_rad = rpy.z();
+      sample.phase = flight_sw::phase_name(fsw.phase());
+      if (fsw.telemetry().pose) sample.p_est_m = fsw.telemetry().pose->p_FB_m();
+      result.trajectory.push_back(sample);
+      // Approach responses against the target cell (truth), until the crossing starts.
+      if (approach_start_ns && m.target && fsw.phase() == flight_sw::Phase::Approach) {
+        const Eigen::Vector3d c = cell_centre_S_m(shelf, m.target->level, m.target->column);
+        const Eigen::Vector3d p_S = X_SW * s.p_WB_m;
+        approach_t.push_back(ns_to_seconds(t - *approach_start_ns));
+        err_z.push_back(p_S.z() - c.z());
+        err_y.push_back(p_S.y() - c.y());
+        err_yaw.push_back(wrap_pi(rpy.z() - shelf.yaw_rad));
+      }
+      ++k_traj;
+    }
+    if (fsw.finished() && tello.mode() == plant::FlightMode::landed) break;
+  }
+
+  // Metrics and the verdict.
+  m.mission_time_s = ns_to_seconds(t_now);
+  m.crossed_target = m.crossed && m.target && *m.crossed == *m.target;
+  const flight_sw::MissionResult fsw_result = fsw.result();
+  m.flight_software_result = std::string(flight_sw::outcome_name(fsw_result.outcome)) +
+                             (fsw_result.reason.empty() ? "" : ": " + fsw_result.reason);
+  std::set<InventoryEntry> reported;
+  for (const flight_sw::BoxEntry& b : fsw.inventory().boxes()) reported.insert({b.id, b.shelf, b.level, b.column});
+  m.inventory = score_inventory(reported, true_inventory(sc));
+  result.inventory_json = fsw.inventory_json();
+  if (!approach_t.empty()) {
+    m.altitude = analyse_step_response(approach_t, err_z, {cs.settling_fraction, cs.settling_floor_z_m});
+    m.heading = analyse_step_response(approach_t, err_yaw, {cs.settling_fraction, cs.settling_floor_yaw_rad});
+    m.lateral = analyse_step_response(approach_t, err_y, {cs.settling_fraction, cs.settling_floor_y_m});
+  }
+  if (!outcome) {
+    if (fsw_result.outcome == flight_sw::Outcome::Aborted) {
+      outcome = RunOutcome::mission_aborted;
+      result.detail = fsw_result.reason;
+    } else if (!m.crossed_target) {
+      outcome = RunOutcome::no_crossing;
+      result.detail = m.flight_software_result;
+    } else if (!m.inventory.exact()) {
+      outcome = RunOutcome::inventory_mismatch;
+      result.detail = std::to_string(m.inventory.correct) + " of " + std::to_string(m.inventory.truth) +
+                      " boxes right, " + std::to_string(m.inventory.reported) + " reported";
+    } else {
+      outcome = RunOutcome::success;
+    }
+  }
+  result.outcome = *outcome;
+  log_event(t_now, std::string("outcome ") + outcome_name(result.outcome) +
+                       (result.detail.empty() ? "" : ": " + result.detail));
+  hash.add(std::string_view(run_metrics_json(m)));
+  result.run_hash = hash.hex();
+  return result;
+}
+
+std::string run_metrics_json(const RunMetrics& m) {
+  using nlohmann::json;
+  const auto opt = [](const std::optional<double>& v) { return v ? json(*v) : json(nullptr); };
+  const auto cell = [](const std::optional<CellIndex>& c) {
+    return c ? json{{"level", c->level}, {"column", c->column}} : json(nullptr);
+  };
+  const auto response = [&](const std::optional<StepResponse>& r) {
+    if (!r) return json(nullptr);
+    return json{{"initial_error", r->initial_error}, {"band", r->band}, {"settling_time_s", opt(r->settling_time_s)},
+                {"overshoot", r->overshoot}, {"peak_abs_error", r->peak_abs_error}};
+  };
+  json j{{"mission_time_s", m.mission_time_s},
+         {"path_length_m", m.path_length_m},
+         {"floor_touches", m.floor_touches},
+         {"target", cell(m.target)},
+         {"crossed", cell(m.crossed)},
+         {"crossed_target", m.crossed_target},
+         {"entry_offset_y_m", opt(m.entry_offset_y_m)},
+         {"entry_offset_z_m", opt(m.entry_offset_z_m)},
+         {"min_clearance_m", opt(m.min_clearance_m)},
+         {"altitude", response(m.altitude)},
+         {"heading", response(m.heading)},
+         {"lateral", response(m.lateral)},
+         {"inventory", {{"precision", m.inventory.precision}, {"recall", m.inventory.recall},
+                        {"correct", m.inventory.correct}, {"reported", m.inventory.reported},
+                        {"truth", m.inventory.truth}}},
+         {"flight_software_result", m.flight_software_result}};
+  if (m.contact) {
+    j["contact"] = {{"t_s", ns_to_seconds(m.contact->t_ns)},
+                    {"element", m.contact->element.name},
+                    {"kind", plant::to_string(m.contact->element.kind)},
+                    {"point_W_m", {m.contact->point_W_m.x(), m.contact->point_W_m.y(), m.contact->point_W_m.z()}},
+                    {"depth_m", m.contact->depth_m}};
+  } else {
+    j["contact"] = nullptr;
+  }
+  // Exact doubles: nlohmann writes the shortest text that reads back to the same double.
+  return j.dump();
+}
+
+}  // namespace shelfcross::verification

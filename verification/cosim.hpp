@@ -1,0 +1,119 @@
+#pragma once
+// One run of the lockstep co-simulation: the unmodified flight software against the simulated
+// Tello (plant + autopilot on CVODE), the Bullet collision world, the EGL camera and the link.
+//
+// The harness owns time (int64 ns; every event time from integers):
+//   autopilot ticks   t = tick(k, autopilot.rate_hz)   plant + autopilot advance, collision
+//                                                     swept from the previous pose, truth hashed
+//   frame captures    t = tick(f, camera.frame_rate)   after `streamon`: a frame is rendered at the
+//                                                     vehicle's pose unless the link drops it,
+//                                                     and reaches the flight software after its
+//                                                     latency
+//   state samples     t = tick(s, cosim.state_rate)    after `command`: the Tello's SDK 2.0 text,
+//                                                     parsed by the driver's parser on arrival
+//   deliveries        link latencies                   replies and state to the flight software;
+//                                                     its commands to the autopilot (after its
+//                                                     compute time and the command latency)
+// Events at the same instant run in that order (ticks, vehicle-side deliveries, captures,
+// samples, flight-software deliveries), ties by their order of scheduling: one run is a pure
+// function of (scenario, seed).
+//
+// A run ends at the first shelf contact, on leaving the arena (a wall, the ceiling, or outside
+// the arena box), at a numerical failure of the plant, at an exception of the flight
+// software, at its timeout, or when the flight software is done and the vehicle has landed.
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <opencv2/core/mat.hpp>
+
+#include "flight_sw/config.hpp"
+#include "flight_sw/flight_software.hpp"
+#include "render/renderer.hpp"
+#include "verification/dispersion.hpp"
+#include "verification/metrics.hpp"
+#include "verification/scenario.hpp"
+
+namespace shelfcross::verification {
+
+enum class RunOutcome {
+  success,                    ///< crossed the target cell face to face, no contact, exact inventory, landed
+  collision,                  ///< touched a shelf part
+  left_arena,                 ///< touched a wall or the ceiling, or left the arena box
+  timeout,
+  numerical_failure,          ///< the plant diverged (CVODE error, NaN)
+  flight_software_exception,  ///< the flight software threw
+  mission_aborted,            ///< the flight software gave up (its reason is the detail)
+  no_crossing,                ///< landed without crossing a cell face to face
+  inventory_mismatch,         ///< crossed cleanly but the box list was wrong
+};
+const char* outcome_name(RunOutcome outcome);
+
+/// Everything a run measured (JSON form: run_metrics_json).
+struct RunMetrics {
+  double mission_time_s = 0.0;     ///< start to the end of the run
+  double path_length_m = 0.0;      ///< of the body origin
+  int floor_touches = 0;           ///< airborne-to-floor contacts (landings included)
+  // First contact (collision or wall)
+  std::optional<plant::Contact> contact;
+  // Crossing, in shelf 0's frame S
+  std::optional<flight_sw::CellIndex> target;   ///< the flight software's chosen cell
+  std::optional<flight_sw::CellIndex> crossed;  ///< the cell entered and left face to face
+  bool crossed_target = false;
+  std::optional<double> entry_offset_y_m;       ///< body origin - cell centre, at the front face
+  std::optional<double> entry_offset_z_m;
+  std::optional<double> min_clearance_m;        ///< to any shelf part while inside the shelf
+  // Approach responses (paper Fig. 26-28): from the start of the approach to the crossing
+  std::optional<StepResponse> altitude;  ///< body z - cell centre z, m
+  std::optional<StepResponse> heading;   ///< yaw - shelf normal, rad
+  std::optional<StepResponse> lateral;   ///< body y_S - cell centre y_S, m
+  // Inventory
+  InventoryScore inventory;
+  std::string flight_software_result;    ///< outcome and reason of the flight software
+};
+
+/// One sample of the run's trajectory (truth and what the flight software was doing).
+struct TrajectorySample {
+  double t_s = 0.0;
+  Eigen::Vector3d p_WB_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d v_WB_W_mps = Eigen::Vector3d::Zero();
+  double roll_rad = 0.0, pitch_rad = 0.0, yaw_rad = 0.0;
+  std::string phase;
+  std::optional<Eigen::Vector3d> p_est_m;  ///< flight software's body position in its frame
+};
+
+struct RunResult {
+  RunOutcome outcome = RunOutcome::timeout;
+  std::string detail;  ///< e.g. the contact's element, the exception's message
+  RunMetrics metrics;
+  std::string run_hash;
+  std::string inventory_json;
+  std::vector<TrajectorySample> trajectory;  ///< at cosim.trajectory_rate_hz
+  std::optional<double> approach_start_s;    ///< the flight software entered Approach
+  std::optional<double> cross_start_s;       ///< ... and Cross
+  std::vector<std::string> events;           ///< "t_s text" lines: phases, commands, contacts
+};
+
+/// Called with each frame the flight software received, after it handled it (for --video).
+using FrameObserver = std::function<void(const CameraFrame&, const flight_sw::FlightSoftware&)>;
+
+/// The flight software's configuration for a scenario: the known geometry of shelf 0, the
+/// camera it believes (calibration error included), the mount; tunables at their defaults.
+flight_sw::FlightConfig flight_config_for(const Scenario& scenario, const CameraIntrinsics& believed_camera);
+
+/// The true box list of shelf 0 as the flight software should report it.
+std::set<InventoryEntry> true_inventory(const Scenario& scenario);
+
+/// Runs one dispersed run. `renderer` must have been made for (or re-targeted at) the run's
+/// warehouse and camera; the harness uses it only from the calling thread.
+RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer,
+                           const FrameObserver& observer = {});
+
+/// The metrics as JSON (stored per run in the results database).
+std::string run_metrics_json(const RunMetrics& m);
+
+}  // namespace shelfcross::verification

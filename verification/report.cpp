@@ -1,0 +1,159 @@
+#include "verification/report.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+
+#include "verification/campaign.hpp"
+#include "verification/plot.hpp"
+#include "verification/results_store.hpp"
+#include "verification/scenario.hpp"
+
+namespace shelfcross::verification {
+namespace {
+
+using nlohmann::json;
+
+const cv::Scalar kGood(60, 160, 60), kBad(40, 40, 220), kShelf(120, 80, 40), kCell(230, 200, 150);
+
+std::vector<double> numbers(const json& a) {
+  std::vector<double> v;
+  for (const json& x : a) v.push_back(x.is_number() ? x.get<double>() : NAN);
+  return v;
+}
+
+std::string fixed(double v, int decimals) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(decimals) << v;
+  return s.str();
+}
+
+}  // namespace
+
+json write_campaign_report(const std::filesystem::path& dir) {
+  ResultsStore store = ResultsStore::open_existing(dir / "results.sqlite");
+  const Scenario scenario = parse_scenario(store.meta().scenario_yaml, (dir / "results.sqlite").string() + " (scenario)");
+  const std::vector<RunRecord> runs = store.runs();
+  const json summary = summarize_campaign(runs, store.meta().runs_requested);
+  std::ofstream(dir / "summary.json") << summary.dump(2) << "\n";
+
+  const ShelfSpec& shelf = scenario.warehouse.shelves.at(0);
+  const Eigen::Isometry3d X_WS = shelf_pose_W(shelf);
+  const double face_x = X_WS.translation().x();
+  const int columns = static_cast<int>(shelf.column_pitch_m.size());
+  const int levels = static_cast<int>(shelf.row_pitch_m.size());
+
+  Chart top("Top view of every run (green: success, red: failure)", "x_W (m)", "y_W (m)");
+  Chart side("Side view of every run", "x_W (m)", "z_W (m)");
+  Chart altitude("Altitude error during the approach (paper Fig. 26)", "time from approach start (s)", "z - z_cell (m)");
+  Chart heading("Heading error during the approach (paper Fig. 27)", "time from approach start (s)", "yaw - yaw_shelf (deg)");
+  Chart lateral("Lateral error during the approach (paper Fig. 28)", "time from approach start (s)", "y_S - y_cell (m)");
+  top.set_equal_aspect(true);
+  side.set_equal_aspect(true);
+  // The shelf (axis-aligned with W when its yaw is 0, as in the shipped scenarios).
+  for (int i = 0; i <= columns; ++i) {
+    const Eigen::Vector3d a = X_WS * Eigen::Vector3d(0, post_y_S_m(shelf, i), 0);
+    top.add_rect(a.x() - 0.01, a.y() - 0.01, a.x() + shelf.depth_m + 0.01, a.y() + 0.01, kShelf, true);
+  }
+  for (int j = 0; j <= levels; ++j) {
+    const double z = beam_z_S_m(shelf, j);
+    side.add_rect(face_x - 0.01, z - 0.01, face_x + shelf.depth_m + 0.01, z + 0.01, kShelf, true);
+  }
+  side.add_rect(face_x - 0.01, 0.0, face_x + 0.01, beam_z_S_m(shelf, levels), kShelf, true);
+  side.add_rect(face_x + shelf.depth_m - 0.01, 0.0, face_x + shelf.depth_m + 0.01, beam_z_S_m(shelf, levels), kShelf, true);
+
+  std::vector<double> settle_z, settle_yaw, offset_y, offset_z;
+  std::ostringstream failed;
+  int failures = 0;
+  for (const RunRecord& r : runs) {
+    const json trace = json::parse(r.trace_json.empty() ? "{}" : r.trace_json);
+    const json m = json::parse(r.metrics_json);
+    const bool ok = r.outcome == "success";
+    const cv::Scalar colour = ok ? kGood : kBad;
+    if (trace.contains("t")) {
+      const auto t = numbers(trace["t"]), x = numbers(trace["x"]), y = numbers(trace["y"]), z = numbers(trace["z"]),
+                 yaw = numbers(trace["yaw"]);
+      top.add_line(x, y, colour);
+      side.add_line(x, z, colour);
+      const json target = m.value("target", json());
+      if (trace["approach_start_s"].is_number() && target.is_object()) {
+        const double t0 = trace["approach_start_s"].get<double>();
+        const double t1 = trace["cross_start_s"].is_number() ? trace["cross_start_s"].get<double>() : t.back();
+        const Eigen::Vector3d c = cell_centre_S_m(shelf, target["level"].get<int>(), target["column"].get<int>());
+        std::vector<double> tt, ez, eyaw, ey;
+        for (size_t i = 0; i < t.size(); ++i) {
+          if (t[i] < t0 || t[i] > t1) continue;
+          const Eigen::Vector3d p_S = X_WS.inverse() * Eigen::Vector3d(x[i], y[i], z[i]);
+          tt.push_back(t[i] - t0);
+          ez.push_back(p_S.z() - c.z());
+          ey.push_back(p_S.y() - c.y());
+          eyaw.push_back(std::remainder(yaw[i] - shelf.yaw_rad, 2 * M_PI) * 180.0 / M_PI);
+        }
+        altitude.add_line(tt, ez, colour);
+        heading.add_line(tt, eyaw, colour);
+        lateral.add_line(tt, ey, colour);
+      }
+    }
+    const auto settling = [&](const char* axis) {
+      const json a = m.value(axis, json());
+      return a.is_object() && a["settling_time_s"].is_number() ? a["settling_time_s"].get<double>() : NAN;
+    };
+    settle_z.push_back(settling("altitude"));
+    settle_yaw.push_back(settling("heading"));
+    if (m["entry_offset_y_m"].is_number()) offset_y.push_back(m["entry_offset_y_m"].get<double>());
+    if (m["entry_offset_z_m"].is_number()) offset_z.push_back(m["entry_offset_z_m"].get<double>());
+    if (!ok) {
+      ++failures;
+      failed << "| " << r.index << " | " << r.outcome << " | " << m.value("detail", std::string()) << " | `shelfcross replay "
+             << dir.string() << " --run " << r.index << "` |\n";
+    }
+  }
+  top.save_png((dir / "top_view.png").string());
+  side.save_png((dir / "side_view.png").string());
+  altitude.add_hline(0.0, cv::Scalar(0, 0, 0));
+  heading.add_hline(0.0, cv::Scalar(0, 0, 0));
+  lateral.add_hline(0.0, cv::Scalar(0, 0, 0));
+  altitude.save_png((dir / "altitude_response.png").string());
+  heading.save_png((dir / "heading_response.png").string());
+  lateral.save_png((dir / "lateral_response.png").string());
+  histogram_chart(settle_z, 20, "Altitude settling time", "s").save_png((dir / "settling_altitude.png").string());
+  histogram_chart(settle_yaw, 20, "Heading settling time", "s").save_png((dir / "settling_heading.png").string());
+  histogram_chart(offset_y, 20, "Entry offset from the cell centre, lateral", "m").save_png((dir / "entry_offset_y.png").string());
+  histogram_chart(offset_z, 20, "Entry offset from the cell centre, vertical", "m").save_png((dir / "entry_offset_z.png").string());
+
+  std::ofstream md(dir / "report.md");
+  md << "# Crossing campaign: " << scenario.name << "\n\n";
+  md << "Campaign seed " << store.meta().campaign_seed << ", " << summary["runs"].get<std::int64_t>() << " of "
+     << store.meta().runs_requested << " runs stored. Campaign hash `" << summary["campaign_hash"].get<std::string>()
+     << "`.\n\n";
+  md << "| | |\n|---|---|\n";
+  md << "| successes | " << summary["successes"].get<std::int64_t>() << " |\n";
+  md << "| success rate | " << fixed(summary["success_rate"].get<double>(), 4) << " |\n";
+  md << "| one-sided 95 % lower bound (Clopper-Pearson) | " << fixed(summary["success_lower_95"].get<double>(), 4) << " |\n\n";
+  md << "## Outcomes\n\n| outcome | runs |\n|---|---|\n";
+  for (const auto& [name, n] : summary["outcomes"].items()) md << "| " << name << " | " << n.get<std::int64_t>() << " |\n";
+  md << "\n## Metrics\n\n| metric | runs | mean | p50 | p95 | p99 | max |\n|---|---|---|---|---|---|---|\n";
+  for (const auto& [name, s] : summary["metrics"].items()) {
+    md << "| " << name << " | " << s["count"].get<std::int64_t>() << " | " << fixed(s["mean"].get<double>(), 3) << " | "
+       << fixed(s["p50"].get<double>(), 3) << " | " << fixed(s["p95"].get<double>(), 3) << " | "
+       << fixed(s["p99"].get<double>(), 3) << " | " << fixed(s["max"].get<double>(), 3) << " |\n";
+  }
+  md << "\nSettling: from the start of the approach until the error stays inside max(" << scenario.cosim.settling_fraction * 100
+     << " % of its initial value, " << scenario.cosim.settling_floor_z_m * 100 << " cm / "
+     << fixed(scenario.cosim.settling_floor_yaw_rad * 180 / M_PI, 2) << " deg) for good.\n\n";
+  md << "## Trajectories\n\n![top view](top_view.png)\n\n![side view](side_view.png)\n\n";
+  md << "## Approach responses\n\n![altitude](altitude_response.png)\n\n![heading](heading_response.png)\n\n"
+        "![lateral](lateral_response.png)\n\n";
+  md << "## Distributions\n\n![altitude settling](settling_altitude.png)\n\n![heading settling](settling_heading.png)\n\n"
+        "![lateral entry offset](entry_offset_y.png)\n\n![vertical entry offset](entry_offset_z.png)\n\n";
+  md << "## Failed runs (" << failures << ")\n\n";
+  if (failures) {
+    md << "| run | outcome | detail | replay |\n|---|---|---|---|\n" << failed.str();
+  } else {
+    md << "None.\n";
+  }
+  return summary;
+}
+
+}  // namespace shelfcross::verification

@@ -1,0 +1,19 @@
+#pragma once
+// The campaign report: DIR/report.md with its PNG plots beside it, from DIR/results.sqlite.
+//   summary table (success rate and its 95 % lower bound, outcome counts, metric statistics),
+//   top and side views of every trajectory with the shelf and the crossed cells (paper Fig. 24),
+//   altitude, heading and lateral errors against the target cell from the start of the
+//   approach (Fig. 26-28), histograms of settling times and entry offsets, and every failed
+//   run with its outcome and the command that replays it.
+
+#include <filesystem>
+
+#include <nlohmann/json.hpp>
+
+namespace shelfcross::verification {
+
+/// Writes DIR/summary.json and DIR/report.md with its plots; returns the summary.
+/// Throws ResultsMismatch when DIR holds no results database.
+nlohmann::json write_campaign_report(const std::filesystem::path& dir);
+
+}  // namespace shelfcross::verification
