@@ -1,0 +1,43 @@
+#pragma once
+// Wind: a steady world-frame velocity plus Ornstein-Uhlenbeck gusts from a seeded stream.
+//
+// The gust process lives on a fixed time grid t_k = k * gust_sample_period_s, independent of how
+// often it is queried, so the wind a run sees depends only on (params, seed):
+//   g_0 ~ N(0, sigma^2),  g_{k+1} = a g_k + sigma sqrt(1 - a^2) n_k,  a = exp(-h / tau)
+// (the exact discretisation of dg = -g/tau dt + sigma sqrt(2/tau) dW), per axis. Normal draws
+// come from std::mt19937_64 words through Box-Muller written here, so they are bit-identical
+// across standard libraries. wind(t) is the sample of the grid interval that holds t.
+
+#include <cstdint>
+#include <random>
+
+#include <Eigen/Core>
+
+#include "plant/params.hpp"
+#include "shelfcross/time.hpp"
+
+namespace shelfcross::plant {
+
+/// A standard normal draw from two 64-bit words (Box-Muller), portable bit for bit.
+double standard_normal(std::mt19937_64& rng);
+
+class WindModel {
+ public:
+  WindModel(const WindParams& params, std::uint64_t seed);
+  /// Wind velocity in W at t_ns >= 0. Queries may go in any order (going back replays the
+  /// stream from the seed).
+  Eigen::Vector3d wind_W_mps(TimeNs t_ns);
+  const WindParams& params() const { return params_; }
+
+ private:
+  void restart();
+  WindParams params_;
+  std::uint64_t seed_;
+  TimeNs period_ns_;
+  double a_ = 0.0, innovation_ = 0.0;
+  std::mt19937_64 rng_;
+  std::int64_t index_ = 0;
+  Eigen::Vector3d gust_ = Eigen::Vector3d::Zero();
+};
+
+}  // namespace shelfcross::plant
