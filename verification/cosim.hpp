@@ -33,6 +33,7 @@
 
 #include "flight_sw/config.hpp"
 #include "flight_sw/flight_software.hpp"
+#include "plant/collision.hpp"
 #include "render/renderer.hpp"
 #include "verification/dispersion.hpp"
 #include "verification/metrics.hpp"

@@ -1,0 +1,63 @@
+#pragma once
+// The camera model shared by the renderer and the ground-truth projector: OpenCV's pinhole
+// with plumb-bob distortion (k1 k2 p1 p2 k3), pixel centres at integer coordinates.
+//
+// A point p_C = (X, Y, Z) in the camera frame C (x right, y down, z forward) with Z > 0 has
+// normalised coordinates x = X/Z, y = Y/Z, r^2 = x^2 + y^2, and distorted coordinates
+//   x_d = x (1 + k1 r^2 + k2 r^4 + k3 r^6) + 2 p1 x y + p2 (r^2 + 2 x^2)
+//   y_d = y (1 + k1 r^2 + k2 r^4 + k3 r^6) + p1 (r^2 + 2 y^2) + 2 p2 x y
+// and pixel u = fx x_d + cx, v = fy y_d + cy (the formula of cv::projectPoints).
+
+#include <Eigen/Core>
+#include <opencv2/core/mat.hpp>
+
+#include "shelfcross/camera.hpp"
+
+namespace shelfcross::render {
+
+/// Plumb-bob distortion of normalised coordinates (x, y) -> (x_d, y_d).
+Eigen::Vector2d distort_normalized(const CameraIntrinsics& K, const Eigen::Vector2d& xy);
+
+/// Inverse of distort_normalized by fixed-point iteration (as cv::undistortPoints, but run to
+/// convergence: |distort(result) - xy_d| < 1e-13 or 200 iterations). Returns false if it did
+/// not converge (a lens model that is not invertible there).
+bool undistort_normalized(const CameraIntrinsics& K, const Eigen::Vector2d& xy_d,
+                          Eigen::Vector2d& xy);
+
+/// Pixel of a camera-frame point (Z must be > 0): distortion then K.
+Eigen::Vector2d project_camera_point(const CameraIntrinsics& K, const Eigen::Vector3d& p_C);
+
+/// The undistorted pinhole camera the renderer rasterises with, and the map from the
+/// distorted output image into it.
+///
+/// The output image (width x height, distorted) covers, after undistortion, a region of the
+/// normalised plane a little different from its own rectangle. The render camera keeps fx, fy
+/// (same sampling density) and gets a principal point and size such that the undistorted
+/// image of every output pixel, plus a margin for bilinear interpolation, lies inside it.
+struct RenderCamera {
+  int width_px = 0, height_px = 0;  ///< size of the undistorted render
+  double fx_px = 0, fy_px = 0, cx_px = 0, cy_px = 0;
+  /// For output pixel (u, v): the render-image position it samples, CV_32FC2, output size.
+  cv::Mat map_xy;
+  /// Largest |distort(undistort(p)) - p| over the output pixels, in pixels (a check).
+  double max_roundtrip_error_px = 0.0;
+};
+
+/// Builds the render camera and distortion map; margin_px is the border kept around the
+/// undistorted footprint of the output image. Throws RenderError if the intrinsics are
+/// invalid or the lens model cannot be inverted over the image.
+RenderCamera make_render_camera(const CameraIntrinsics& K, int margin_px = 3);
+
+/// The OpenGL clip-from-camera matrix (column-major, for glUniformMatrix4fv) of a pinhole
+/// camera (fx, fy, cx, cy, width, height) looking along +z_C, with depth range [near, far].
+///
+/// OpenCV's pixel u has its centre at u; GL's window pixel i has its centre at i + 0.5, so
+///   x_ndc = (2 (u + 0.5)) / W - 1 with u = fx X/Z + cx.
+/// Rows are NOT flipped here: image row v is written to GL row v (y_ndc = 2 (v + 0.5)/H - 1),
+/// so the image is upside down in GL terms and glReadPixels, which returns the bottom GL row
+/// first, hands back rows already in image order (top row first) with no flip pass.
+/// clip w = Z; z_ndc = (f + n)/(f - n) - 2 f n / ((f - n) Z): -1 at Z = n, +1 at Z = f.
+Eigen::Matrix4d gl_clip_from_camera(double fx, double fy, double cx, double cy, int width,
+                                    int height, double near_m, double far_m);
+
+}  // namespace shelfcross::render

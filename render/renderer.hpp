@@ -1,0 +1,97 @@
+#pragma once
+// The camera: renders the warehouse as the Tello's camera sees it from a camera pose X_WC
+// (camera frame C of shelfcross/camera.hpp: x right, y down, z forward), headless, through
+// EGL + OpenGL 3.3 core into a framebuffer object; then applies the lens distortion and the
+// optional sensor noise on the CPU. Output: BGR, CV_8UC3, the intrinsics' width x height.
+//
+// Pipeline of one frame:
+//   1. rasterise the static world (one vertex buffer, one draw call) with an undistorted
+//      pinhole "render camera" (same fx, fy; a little larger than the image so that it
+//      covers the undistorted footprint of every output pixel; see camera_model.hpp), lit
+//      per face (ambient + Lambert directional, baked into the vertex colours since both are
+//      constant per planar face), sRGB-encoded;
+//   2. glReadPixels as BGRA (rows already in image order: the projection writes image row v
+//      to GL row v);
+//   3. [supersample s > 1: exact s x s block average (cv::resize INTER_AREA)]
+//      [motion blur: average of the N sub-pose renders, integer, rounded]
+//   4. cv::remap with fixed-point maps computed once: output pixel (u, v) samples the render
+//      at the undistorted position of (u, v) (bilinear), then BGRA -> BGR;
+//   5. [noise: seeded, see noise.hpp].
+// Deterministic: the same warehouse, intrinsics, options, pose and seed give byte-identical
+// images from one renderer or several (same machine and driver). No MSAA.
+//
+// Threads: each Renderer owns its own EGL context and makes it current on the calling thread
+// at every call, so a renderer may be used from any one thread at a time (one per thread).
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include <Eigen/Geometry>
+#include <opencv2/core/mat.hpp>
+
+#include "render/camera_model.hpp"
+#include "render/egl_context.hpp"
+#include "render/render_error.hpp"
+#include "shelfcross/camera.hpp"
+#include "shelfcross/warehouse.hpp"
+
+namespace shelfcross::render {
+
+struct RenderOptions {
+  double noise_stddev = 0.0;      ///< additive sensor noise, grey levels (0 = none)
+  int motion_blur_samples = 1;    ///< sub-poses averaged by render_blurred (1..64)
+  double light_scale = 1.0;       ///< exposure: multiplies the warehouse's lighting
+  int supersample = 1;            ///< s x s ordered supersampling, 1..4 (deterministic AA)
+  double near_m = 0.02;           ///< clip planes of the camera
+  double far_m = 50.0;
+  /// kFromEnvironment reads SHELFCROSS_EGL=auto|device|surfaceless (unset: auto).
+  EglPlatform egl_platform = EglPlatform::kFromEnvironment;
+};
+
+class Renderer {
+ public:
+  /// Builds the scene (throws RenderError for a warehouse it cannot draw or bad options),
+  /// creates the EGL context, the GL objects and the distortion map (throws RenderError with
+  /// the EGL/GL reason if initialisation fails).
+  Renderer(const Warehouse& warehouse, const CameraIntrinsics& intrinsics,
+           RenderOptions options = {});
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  /// One frame from camera pose X_WC; noise (if enabled) from `noise_seed`, for instance
+  /// frame_seed(stream_seed, frame_index) of noise.hpp.
+  cv::Mat render(const Eigen::Isometry3d& X_WC, std::uint64_t noise_seed = 0);
+  /// Same, into `bgr` (reallocated only if its size or type is wrong: no per-frame
+  /// allocation when the caller keeps the Mat).
+  void render_into(const Eigen::Isometry3d& X_WC, std::uint64_t noise_seed, cv::Mat& bgr);
+
+  /// Motion blur: the average of motion_blur_samples renders at the sub-poses
+  /// s_k = (k + 1) / N, k = 0..N-1, between X_WC_prev (s = 0, excluded) and X_WC (s = 1),
+  /// translation interpolated linearly and rotation by slerp. N = 1 is render(X_WC).
+  cv::Mat render_blurred(const Eigen::Isometry3d& X_WC_prev, const Eigen::Isometry3d& X_WC,
+                         std::uint64_t noise_seed = 0);
+  void render_blurred_into(const Eigen::Isometry3d& X_WC_prev, const Eigen::Isometry3d& X_WC,
+                           std::uint64_t noise_seed, cv::Mat& bgr);
+
+  /// Re-targets the renderer at another warehouse (a run's dispersed boxes or lighting) in
+  /// the same EGL context: the scene is rebuilt; a warehouse equal to the current one costs
+  /// nothing. Throws RenderError like the constructor.
+  void set_warehouse(const Warehouse& warehouse);
+  /// GL_RENDERER, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)".
+  std::string gl_renderer_name() const;
+  /// One line for logs: EGL platform, EGL vendor and version, GL_RENDERER, GL_VERSION.
+  std::string backend_description() const;
+
+  const CameraIntrinsics& intrinsics() const;
+  const RenderOptions& options() const;
+  /// The undistorted camera the world is rasterised with (1x, before supersampling).
+  const RenderCamera& render_camera() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace shelfcross::render
