@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
-# Installs what is missing, builds (release preset), and runs the main job. Until the Monte
-# Carlo campaign lands, the main job is the open-loop plant demo: take off, hover, fly forward,
-# yaw, land; its trajectory goes to out/plant_demo.csv.
+# Installs what is missing, builds (release preset), and runs the main job: a default Monte
+# Carlo crossing campaign on the paper's test shelf (scenarios/paper_test_shelf.yaml), all
+# cores, resumable; its report is out/campaign/report.md (summary.json, results.sqlite beside).
+# RUNS and SEED may be set in the environment.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 bash scripts/install-deps.sh
 cmake --preset release
 cmake --build --preset release
-mkdir -p out
-./build/release/app/shelfcross plant --commands scenarios/plant_demo.commands --seconds 20 --out out/plant_demo.csv
-echo "main job: wrote out/plant_demo.csv"
+./build/release/app/shelfcross campaign --scenario scenarios/paper_test_shelf.yaml \
+  --runs "${RUNS:-20}" --seed "${SEED:-1}" --out out/campaign
+echo "main job: report in out/campaign/report.md"
