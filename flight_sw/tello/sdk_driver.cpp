@@ -160,7 +160,7 @@ void SdkDriver::read_replies(TimeNs now) {
       continue;
     }
     const std::string text = trim_reply(d->bytes);
-    if (text.size() > kMaxReplyBytes || !printable(text)) {
+    if (text.empty() || text.size() > kMaxReplyBytes || !printable(text)) {
       ++counters_.bad_replies;
       event(DriverEvent::Kind::BadReply, outstanding_ ? outstanding_->text : "",
             std::to_string(d->bytes.size()) + " bytes");

@@ -41,8 +41,6 @@
 
 namespace shelfcross::tello {
 
-inline constexpr TimeNs kMs = 1'000'000;
-
 struct DriverConfig {
   std::string drone_ip = "192.168.10.1";
   std::uint16_t drone_command_port = 8889;

@@ -53,12 +53,15 @@ bool starts_with_start_code(const std::string& s) {
          (s.size() >= 4 && s[0] == 0 && s[1] == 0 && s[2] == 0 && s[3] == 1);
 }
 
-// Parameter sets, delimiters and SEI only: no picture expected from such a frame.
-bool only_non_picture_units(const std::string& s) {
-  for (int t : nal_unit_types(s)) {
+// Parameter sets, delimiters and SEI only (the Tello sends SPS and PPS as short datagrams of
+// their own before each key frame): no picture yet, the frame goes on.
+bool only_parameter_sets(const std::string& s) {
+  if (!starts_with_start_code(s)) return false;
+  const std::vector<int> types = nal_unit_types(s);
+  for (int t : types) {
     if (t != 6 && t != 7 && t != 8 && t != 9) return false;
   }
-  return true;
+  return !types.empty();
 }
 
 }  // namespace
@@ -114,7 +117,9 @@ void VideoReceiver::on_datagram(const Datagram& d) {
       frame_bytes_ += d.bytes;
     }
   }
-  if (d.bytes.size() < config_.datagram_size) finish_frame(now);
+  if (d.bytes.size() < config_.datagram_size && (frame_overflow_ || !only_parameter_sets(frame_bytes_))) {
+    finish_frame(now);
+  }
 }
 
 void VideoReceiver::finish_frame(TimeNs t_ns) {
@@ -128,7 +133,7 @@ void VideoReceiver::finish_frame(TimeNs t_ns) {
     if (!starts_with_start_code(frame_bytes_)) damaged = true;
     r = thread_state_->decoder.decode(frame_bytes_);
     if (r.error) damaged = true;
-    if (r.pictures == 0 && !only_non_picture_units(frame_bytes_)) damaged = true;
+    if (r.pictures == 0) damaged = true;  // a frame's worth of bytes and no picture
   }
   frame_bytes_.clear();
   frame_overflow_ = false;

@@ -1,7 +1,7 @@
 #pragma once
 // The Tello's video: raw H.264 Annex-B on UDP port 11111, each frame cut into 1460-byte
 // datagrams with a shorter last one (PROTOCOL.md). A receiver thread reassembles the
-// datagrams of one frame (up to the first short datagram), decodes them at once with the
+// datagrams of one frame (up to the first short datagram that ends more than parameter sets), decodes them at once with the
 // low-delay H264Decoder, converts the picture to BGR and puts it in a single-slot mailbox:
 // a newer frame replaces one not yet taken, so the taker always gets the newest frame and
 // never a backlog.
