@@ -120,9 +120,10 @@ bool SdkDriver::submit(const std::string& text, const CommandOptions& options) {
     guard_until_ns_ = 0;
   }
   if (*kind == CommandKind::Rc) {
+    // The same sticks again only renew the setpoint: the steady repeat sends them.
+    if (rc_setpoint_ != text) rc_new_ = true;
     rc_setpoint_ = text;
     rc_set_ns_ = clock_.now_ns();
-    rc_new_ = true;
     return true;
   }
   if (queue_.size() >= kMaxQueue) {

@@ -35,6 +35,7 @@ int main(int argc, char** argv) {
   install_signal_handlers();
   const SteadyClock clock;
   try {
+    if (!options->print_dir.empty()) return pilot::run_print_sheets(*options);
     if (!options->calibrate_path.empty()) return pilot::run_calibration(*options, clock, g_signals);
     return pilot::run_pilot(*options, clock, g_signals);
   } catch (const pilot::UsageError& e) {

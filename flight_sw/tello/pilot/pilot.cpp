@@ -127,9 +127,18 @@ class Pilot {
   void submit_fsw(const std::vector<SdkCommand>& commands) {
     for (const SdkCommand& c : commands) {
       const bool rc = c.text.rfind("rc ", 0) == 0;
-      if (landing_ || (rc && hover_override_)) {
-        log_.write(clock_.now_ns(), "fsw_command_ignored",
-                   {{"text", c.text}, {"why", landing_ ? "program failsafe landing" : "program failsafe hover"}});
+      const TimeNs now = clock_.now_ns();
+      // No takeoff without a live state stream: the program's failsafes need it in the air
+      // (and the flight software's battery check needs it before). Its own timeout retries.
+      const bool blind_takeoff =
+          c.text == "takeoff" &&
+          (!last_state_ns_ || now - *last_state_ns_ > seconds_to_ns(o_.failsafes.state_timeout_s));
+      if (landing_ || (rc && hover_override_) || blind_takeoff) {
+        log_.write(now, "fsw_command_ignored",
+                   {{"text", c.text},
+                    {"why", landing_         ? "program failsafe landing"
+                            : blind_takeoff ? "no recent state record: takeoff withheld"
+                                            : "program failsafe hover"}});
         continue;
       }
       const auto& t = o_.flight.timeouts;

@@ -30,4 +30,8 @@ int run_pilot(const PilotOptions& options, const Clock& clock, const std::atomic
 /// command is ever sent (the driver runs in dry-run mode).
 int run_calibration(const PilotOptions& options, const Clock& clock, const std::atomic<int>& signals);
 
+/// --print-markers mode: PNG sheets (300 dpi) of the box markers and the colour tag of the
+/// flight configuration, written to options.print_dir. Throws UsageError.
+int run_print_sheets(const PilotOptions& options);
+
 }  // namespace shelfcross::tello::pilot

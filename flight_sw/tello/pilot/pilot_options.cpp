@@ -148,6 +148,9 @@ std::optional<PilotOptions> parse_options(int argc, char** argv) {
   app.add_option("--board", board, "calibration chessboard inner corners, COLSxROWS (default 9x6)");
   app.add_option("--square", o.square_m, "calibration chessboard square side (m, default 0.025)")->check(CLI::PositiveNumber);
   app.add_option("--views", o.calibration_views, "calibration views to collect (default 25)")->check(CLI::Range(5, 200));
+  std::string marker_ids;
+  app.add_option("--print-markers", o.print_dir, "print mode: write marker and tag PNGs (300 dpi) of the flight configuration to this folder, exit");
+  app.add_option("--marker-ids", marker_ids, "markers to print, FIRST-LAST (default 0-15)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp&) {
@@ -203,6 +206,16 @@ std::optional<PilotOptions> parse_options(int argc, char** argv) {
     }
     o.board_columns = c;
     o.board_rows = r;
+  }
+  if (!marker_ids.empty()) {
+    int first = -1, last = -1;
+    char dash = 0;
+    std::istringstream in(marker_ids);
+    if (!(in >> first >> dash >> last) || dash != '-' || first < 0 || last < first || !in.eof()) {
+      throw UsageError("--marker-ids '" + marker_ids + "': expected FIRST-LAST (e.g. 0-15)");
+    }
+    o.marker_first = first;
+    o.marker_last = last;
   }
   // The flight configuration: required to fly, optional to calibrate.
   if (o.flight_config_path.empty() && o.calibrate_path.empty()) {

@@ -39,6 +39,10 @@ struct PilotOptions {
   int board_rows = 6;               ///< inner corners per column
   double square_m = 0.025;
   int calibration_views = 25;
+  // Print mode (--print-markers DIR): marker and tag PNGs for the test shelf, then exit.
+  std::string print_dir;
+  int marker_first = 0;
+  int marker_last = 15;
 };
 
 /// Thrown for a bad command line, pilot file, flight configuration or calibration: the

@@ -393,3 +393,30 @@ TEST(SdkDriver, SurvivesRandomDatagramsOnBothSockets) {
 
 }  // namespace
 }  // namespace shelfcross::tello
+
+namespace shelfcross::tello {
+namespace {
+
+TEST(SdkDriver, RenewingTheSameSticksKeepsTheSteadyRate) {
+  Rig rig;
+  ASSERT_TRUE(rig.driver->submit("rc 10 0 0 0"));
+  rig.service();
+  EXPECT_EQ(rig.drone.expect_command(), "rc 10 0 0 0");
+  for (int ms = 10; ms < 100; ms += 10) {  // renewed every 10 ms: still one rc per 100 ms
+    rig.clock.set(ms * kMs);
+    ASSERT_TRUE(rig.driver->submit("rc 10 0 0 0"));
+    rig.service();
+    EXPECT_TRUE(rig.drone.nothing_sent()) << ms;
+  }
+  rig.clock.set(100 * kMs);
+  rig.service();
+  EXPECT_EQ(rig.drone.expect_command(), "rc 10 0 0 0");
+  rig.clock.set(120 * kMs);  // new sticks go out at once (20 ms after the last rc)
+  ASSERT_TRUE(rig.driver->submit("rc 0 0 0 0"));
+  rig.service();
+  EXPECT_EQ(rig.drone.expect_command(), "rc 0 0 0 0");
+  EXPECT_EQ(rig.driver->counters().rc_sent, 3);
+}
+
+}  // namespace
+}  // namespace shelfcross::tello

@@ -14,6 +14,8 @@
 #include <sstream>
 
 #include <nlohmann/json.hpp>
+#include <opencv2/aruco.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "flight_sw/tello/h264_codec.hpp"
@@ -252,6 +254,32 @@ TEST(TelloPilot, DryRunNeverSendsAMotionCommand) {
   }
   EXPECT_GT(log_lines(log, "filtered"), 1);  // the flight software's rc too, logged, not sent
   EXPECT_GT(log_lines(log, "frame"), 0);
+  if (!HasFailure()) fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace shelfcross::tello
+
+namespace shelfcross::tello {
+namespace {
+
+TEST(TelloPilot, PrintsMarkersTheDetectorReads) {
+  const fs::path dir = temp_dir("print");
+  std::string err;
+  ASSERT_EQ(run_to_exit({"--config", kConfig, "--print-markers", dir.string(), "--marker-ids", "3-5"}, &err), 0) << err;
+  const auto dict = cv::aruco::getPredefinedDictionary(cv::aruco::DICT_4X4_50);  // the config's
+  for (int id = 3; id <= 5; ++id) {
+    const cv::Mat sheet = cv::imread((dir / ("marker_" + std::to_string(id) + ".png")).string());
+    ASSERT_FALSE(sheet.empty()) << id;
+    std::vector<int> ids;
+    std::vector<std::vector<cv::Point2f>> corners;
+    cv::aruco::detectMarkers(sheet, dict, corners, ids);
+    ASSERT_EQ(ids, std::vector<int>{id});
+    // 0.10 m at 300 dpi: 1181 px a side.
+    EXPECT_NEAR(cv::norm(corners[0][0] - corners[0][1]), 1181.0, 3.0);
+  }
+  EXPECT_FALSE(cv::imread((dir / "tag.png").string()).empty());
+  EXPECT_EQ(run_to_exit({"--config", kConfig, "--print-markers", dir.string(), "--marker-ids", "5-2"}, &err), 2);
   if (!HasFailure()) fs::remove_all(dir);
 }
 
