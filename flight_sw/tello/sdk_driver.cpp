@@ -1,5 +1,7 @@
 #include "flight_sw/tello/sdk_driver.hpp"
 
+#include <arpa/inet.h>
+
 #include <algorithm>
 #include <sstream>
 
@@ -64,7 +66,11 @@ SdkDriver::SdkDriver(DriverConfig config, const Clock& clock)
       drone_command_{config_.drone_ip, config_.drone_command_port},
       command_socket_(config_.local_ip, config_.local_command_port),
       state_socket_(config_.local_ip, config_.local_state_port) {
-  parse_ipv4(config_.drone_ip);  // refuse a bad address now, not at the first send
+  // Refuse a bad address now, not at the first send; compare senders in canonical text form.
+  char canonical[INET_ADDRSTRLEN] = {};
+  const in_addr a = parse_ipv4(config_.drone_ip);
+  ::inet_ntop(AF_INET, &a, canonical, sizeof canonical);
+  drone_command_.ip = canonical;
 }
 
 void SdkDriver::event(DriverEvent::Kind kind, const std::string& command, const std::string& reply,
@@ -181,9 +187,8 @@ void SdkDriver::read_replies(TimeNs now) {
 }
 
 void SdkDriver::read_states(TimeNs now) {
-  const in_addr drone_ip = parse_ipv4(config_.drone_ip);
   while (auto d = state_socket_.receive()) {
-    const bool from_drone = parse_ipv4(d->from.ip).s_addr == drone_ip.s_addr &&
+    const bool from_drone = d->from.ip == drone_command_.ip &&
                             (config_.state_source_port == 0 || d->from.port == config_.state_source_port);
     if (!from_drone) {
       ++counters_.foreign_state_datagrams;

@@ -180,9 +180,11 @@ class Pilot {
               << tm.event << std::endl;
   }
 
-  void begin_land(const std::string& reason) {
+  // Starts the program's landing; the program then exits with `code` (once landed).
+  void begin_land(const std::string& reason, int code) {
     if (landing_) return;
     landing_ = true;
+    stop_code_ = code;
     const TimeNs now = clock_.now_ns();
     log_.write(now, "failsafe", {{"event", "land"}, {"reason", reason}, {"airborne", airborne_}});
     std::cout << "tello_pilot: " << reason << (airborne_ ? ": landing" : "") << std::endl;
@@ -220,8 +222,7 @@ class Pilot {
     }
     if (signals > 0) {
       signals_seen_ = signals;
-      stop_code_ = airborne_ ? 0 : 130;
-      begin_land("stopped by a signal");
+      begin_land("stopped by a signal", airborne_ ? 0 : 130);
       return std::nullopt;
     }
     if (!last_state_ns_ && now - start_ns_ > seconds_to_ns(f.state_start_timeout_s)) {
@@ -229,28 +230,25 @@ class Pilot {
                 << f.state_start_timeout_s
                 << " s: is the computer on the Tello's Wi-Fi, UDP port " << driver_->local_state_port()
                 << " open in the firewall and free (no other Tello program running)?" << std::endl;
-      stop_code_ = 1;
-      begin_land("no state record since the start");
+      begin_land("no state record since the start", 1);
       return std::nullopt;
     }
     if (airborne_) {
       if (last_state_ns_ && now - *last_state_ns_ > seconds_to_ns(f.state_timeout_s)) {
-        stop_code_ = 1;
-        begin_land("no state record for " + std::to_string(f.state_timeout_s) + " s");
+        begin_land("no state record for " + std::to_string(f.state_timeout_s) + " s", 1);
         return std::nullopt;
       }
       if (battery_pct_ >= 0 && battery_pct_ <= f.critical_battery_pct) {
-        begin_land("battery critical (" + std::to_string(battery_pct_) + "%)");
+        begin_land("battery critical (" + std::to_string(battery_pct_) + "%)", 1);
         return std::nullopt;
       }
       if (now - airborne_since_ns_ > seconds_to_ns(f.max_flight_s)) {
-        begin_land("maximum flight time reached");
+        begin_land("maximum flight time reached", 1);
         return std::nullopt;
       }
       const TimeNs since_frame = now - std::max(last_frame_ns_.value_or(0), airborne_since_ns_);
       if (since_frame > seconds_to_ns(f.video_land_s)) {
-        stop_code_ = 1;
-        begin_land("no video frame for " + std::to_string(f.video_land_s) + " s");
+        begin_land("no video frame for " + std::to_string(f.video_land_s) + " s", 1);
         return std::nullopt;
       }
       if (since_frame > seconds_to_ns(f.video_hover_s)) {
@@ -264,11 +262,12 @@ class Pilot {
       }
     }
     if (fsw_.finished()) {
+      const int code = fsw_.result().outcome == flight_sw::Outcome::Aborted ? 1 : 0;
       if (airborne_) {
-        begin_land("the flight software ended while airborne");
+        begin_land("the flight software ended while airborne", code);
         return std::nullopt;
       }
-      return 0;
+      return code;
     }
     return std::nullopt;
   }

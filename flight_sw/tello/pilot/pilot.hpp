@@ -21,8 +21,10 @@
 
 namespace shelfcross::tello::pilot {
 
-/// Exit codes: 0 mission ended (or calibration written), 1 runtime failure (no drone, land
-/// unacknowledged, port busy), 2 bad input (main), 130 stopped by a signal on the ground.
+/// Exit codes: 0 the mission ended (crossed, or no empty cell) or a signal stopped it and the
+/// drone landed (or the calibration was written); 1 the mission was aborted or a program
+/// failsafe landed it, or a runtime failure (no drone, land unacknowledged, port busy);
+/// 2 bad input (main); 130 stopped by a signal on the ground.
 int run_pilot(const PilotOptions& options, const Clock& clock, const std::atomic<int>& signals);
 
 /// Calibration mode: `command`, `streamon`, then chessboard views from the stream until
