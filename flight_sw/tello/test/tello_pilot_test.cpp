@@ -10,12 +10,14 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/aruco.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "flight_sw/tello/h264_codec.hpp"
@@ -129,6 +131,11 @@ struct FakeTello {
   bool streaming = false;
   bool send_state = true;
   int frame = 0;
+  std::function<cv::Mat(int)> picture = [](int k) {
+    cv::Mat img(720, 960, CV_8UC3, cv::Scalar(90, 90, 90));
+    cv::circle(img, cv::Point(100 + 5 * (k % 100), 300), 50, cv::Scalar(255, 255, 255), cv::FILLED);
+    return img;
+  };
 
   std::vector<std::string> args(const fs::path& dir) const {
     return {"--config", kConfig, "--drone-ip", "127.0.0.1", "--local-ip", "127.0.0.1",
@@ -149,9 +156,7 @@ struct FakeTello {
     }
     if (send_state) state.send_to({"127.0.0.1", pilot_state_port}, kState);
     if (streaming) {
-      cv::Mat img(720, 960, CV_8UC3, cv::Scalar(90, 90, 90));
-      cv::circle(img, cv::Point(100 + 5 * (frame % 100), 300), 50, cv::Scalar(255, 255, 255), cv::FILLED);
-      for (const auto& d : tello_datagrams(encoder.encode(img))) video.send_to({"127.0.0.1", pilot_video_port}, d);
+      for (const auto& d : tello_datagrams(encoder.encode(picture(frame)))) video.send_to({"127.0.0.1", pilot_video_port}, d);
       ++frame;
     }
   }
@@ -280,6 +285,72 @@ TEST(TelloPilot, PrintsMarkersTheDetectorReads) {
   }
   EXPECT_FALSE(cv::imread((dir / "tag.png").string()).empty());
   EXPECT_EQ(run_to_exit({"--config", kConfig, "--print-markers", dir.string(), "--marker-ids", "5-2"}, &err), 2);
+  if (!HasFailure()) fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace shelfcross::tello
+
+namespace shelfcross::tello {
+namespace {
+
+// A 9 x 6 inner-corner chessboard of 25 mm squares seen by a pinhole camera (fx = fy = 920,
+// cx = 480, cy = 360, no distortion) from pose `p`: the image is the board warped by the
+// plane homography H = K [r1 r2 t] A (A: board-image pixels to board-plane metres, origin at
+// the first inner corner).
+cv::Mat chessboard_view(int p) {
+  static const cv::Mat board = [] {
+    cv::Mat b(900, 1200, CV_8UC3, cv::Scalar(255, 255, 255));  // 4 px/mm, 25 mm white margin
+    for (int j = 0; j < 7; ++j) {
+      for (int i = 0; i < 10; ++i) {
+        if ((i + j) % 2 == 0) b(cv::Rect(100 + 100 * i, 100 + 100 * j, 100, 100)).setTo(cv::Scalar(0, 0, 0));
+      }
+    }
+    return b;
+  }();
+  const cv::Matx33d K(920, 0, 480, 0, 920, 360, 0, 0, 1);
+  const cv::Matx33d A(1 / 4000.0, 0, -0.05, 0, 1 / 4000.0, -0.05, 0, 0, 1);
+  const double rx[] = {0.0, 0.35, -0.3, 0.1, -0.2, 0.3, 0.0, -0.35};
+  const double ry[] = {0.0, 0.1, 0.3, -0.35, -0.2, 0.25, 0.4, -0.1};
+  const double rz[] = {0.0, 0.1, -0.1, 0.2, 0.0, -0.15, 0.05, 0.1};
+  const int k = p % 8;
+  cv::Matx33d R;
+  cv::Rodrigues(cv::Vec3d(rx[k], ry[k], rz[k]), R);
+  const cv::Vec3d centre(0.1, 0.0625, 0.0);  // the board's middle in its plane
+  const cv::Vec3d t = cv::Vec3d(0.04 * (k % 3 - 1), 0.03 * (k % 2), 0.55 + 0.05 * (k % 3)) - R * centre;
+  const cv::Matx33d M(R(0, 0), R(0, 1), t[0], R(1, 0), R(1, 1), t[1], R(2, 0), R(2, 1), t[2]);
+  cv::Mat view;
+  cv::warpPerspective(board, view, cv::Mat(K * M * A), cv::Size(960, 720), cv::INTER_LINEAR,
+                      cv::BORDER_CONSTANT, cv::Scalar(200, 200, 200));
+  return view;
+}
+
+TEST(TelloPilot, CalibrationModeRecoversTheIntrinsicsWithoutMotion) {
+  const fs::path dir = temp_dir("calibrate");
+  FakeTello drone;
+  drone.picture = [](int k) { return chessboard_view(k / 15); };  // a new pose every 15 frames
+  auto args = drone.args(dir);
+  const fs::path out = dir / "camera.yml";
+  args.insert(args.end(), {"--calibrate", out.string(), "--board", "9x6", "--square", "0.025", "--views", "8"});
+  Child pilot(args, dir);
+  for (int i = 0; i < 3000 && !pilot.poll_exit(); ++i) drone.step();
+  ASSERT_EQ(pilot.exit_code, 0) << read_file(pilot.err) << read_file(pilot.out);
+  for (const auto& c : drone.received) {
+    EXPECT_TRUE(c == "command" || c == "streamon" || c == "streamoff") << "sent while calibrating: " << c;
+  }
+  // The written file is what --calibration reads.
+  cv::FileStorage fs(out.string(), cv::FileStorage::READ);
+  cv::Mat K;
+  fs["camera_matrix"] >> K;
+  ASSERT_EQ(K.rows, 3);
+  EXPECT_NEAR(K.at<double>(0, 0), 920.0, 920.0 * 0.02);
+  EXPECT_NEAR(K.at<double>(1, 1), 920.0, 920.0 * 0.02);
+  EXPECT_NEAR(K.at<double>(0, 2), 480.0, 15.0);
+  EXPECT_NEAR(K.at<double>(1, 2), 360.0, 15.0);
+  std::string err;
+  // tello_pilot accepts the file as --calibration (print mode: it exits after loading).
+  EXPECT_EQ(run_to_exit({"--config", kConfig, "--calibration", out.string(), "--print-markers",
+                         (dir / "sheets").string(), "--marker-ids", "0-0"}, &err), 0) << err;
   if (!HasFailure()) fs::remove_all(dir);
 }
 
