@@ -356,3 +356,31 @@ TEST(TelloPilot, CalibrationModeRecoversTheIntrinsicsWithoutMotion) {
 
 }  // namespace
 }  // namespace shelfcross::tello
+
+namespace shelfcross::tello {
+namespace {
+
+TEST(TelloPilot, VideoStallHoversThenLands) {
+  const fs::path dir = temp_dir("stall");
+  FakeTello drone;
+  auto args = drone.args(dir);
+  args.insert(args.end(), {"--video-hover", "0.3", "--video-land", "0.8"});
+  Child pilot(args, dir);
+  ASSERT_TRUE(drone.step_until("takeoff")) << read_file(pilot.err);
+  for (int i = 0; i < 10; ++i) drone.step();
+  drone.streaming = false;  // the video stalls; state goes on
+  ASSERT_TRUE(drone.step_until("land"));
+  for (int i = 0; i < 500 && !pilot.poll_exit(); ++i) drone.step();
+  EXPECT_EQ(pilot.exit_code, 1);
+  const fs::path log = dir / "log.jsonl";
+  EXPECT_EQ(log_lines(log, "failsafe", "event", "video stalled: hovering"), 1);
+  EXPECT_EQ(log_lines(log, "failsafe", "reason", "no video frame for 0.800000 s"), 1);
+  // Between the stall and the land the sticks were zero.
+  const size_t land = drone.index_of("land");
+  ASSERT_GT(land, 0u);
+  EXPECT_EQ(drone.received[land - 1], "rc 0 0 0 0");
+  if (!HasFailure()) fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace shelfcross::tello
