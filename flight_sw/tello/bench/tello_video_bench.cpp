@@ -1,0 +1,99 @@
+// Video receiver latency on loopback: from the arrival of a frame's last datagram (stamped by
+// the receiver thread) to the moment the decoded BGR frame is in the mailbox. The benchmark's
+// time per iteration IS that latency (manual time). A second benchmark times the decoder and
+// the conversion alone on the same frames.
+//
+//   build/release/flight_sw/tello/bench/tello_video_bench
+#include <poll.h>
+
+#include <benchmark/benchmark.h>
+
+#include <opencv2/core.hpp>
+
+#include "flight_sw/tello/clock.hpp"
+#include "flight_sw/tello/h264_codec.hpp"
+#include "flight_sw/tello/video_receiver.hpp"
+#include "shelfcross/random.hpp"
+
+namespace shelfcross::tello {
+namespace {
+
+constexpr int kWidth = 960, kHeight = 720, kFrames = 60, kKeyInterval = 30;
+
+// A Tello-like sequence: textured background, moving bright blocks; key frame every 30.
+std::vector<std::string> encoded_frames() {
+  cv::Mat base(kHeight, kWidth, CV_8UC3);
+  RandomStream rng(11, StreamId::render_noise);
+  for (int y = 0; y < kHeight; ++y) {
+    for (int x = 0; x < kWidth; ++x) {
+      const auto n = static_cast<uchar>(rng.below(32));
+      base.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uchar>(60 + n), static_cast<uchar>(80 + y / 8 + n), static_cast<uchar>(100 + x / 10));
+    }
+  }
+  H264Encoder encoder(kWidth, kHeight, 30, kKeyInterval);
+  std::vector<std::string> out;
+  for (int k = 0; k < kFrames; ++k) {
+    cv::Mat f = base.clone();
+    f(cv::Rect(50 + 10 * k, 100, 200, 200)).setTo(cv::Scalar(250, 250, 250));
+    f(cv::Rect(500, 200 + 5 * k, 150, 100)).setTo(cv::Scalar(30, 200, 40));
+    out.push_back(encoder.encode(f));
+  }
+  return out;
+}
+
+void BM_ReceiverLastDatagramToHandOver(benchmark::State& state) {
+  static const std::vector<std::string> frames = encoded_frames();
+  const SteadyClock clock;
+  UdpSocket sender("127.0.0.1", 0);
+  VideoReceiverConfig config;
+  config.drone_ip = "127.0.0.1";
+  config.local_ip = "127.0.0.1";
+  config.local_port = 0;
+  VideoReceiver receiver(config, clock);
+  const Endpoint to{"127.0.0.1", receiver.local_port()};
+  std::vector<std::vector<std::string>> datagrams;
+  for (const auto& f : frames) datagrams.push_back(tello_datagrams(f));
+  size_t k = 0;
+  double total_s = 0.0, worst_s = 0.0;
+  int64_t n = 0;
+  for (auto _ : state) {
+    for (const auto& d : datagrams[k % datagrams.size()]) sender.send_to(to, d);
+    ++k;
+    std::optional<VideoFrame> f;
+    for (int guard = 0; guard < 2000 && !f; ++guard) {
+      pollfd p{receiver.notify_fd(), POLLIN, 0};
+      ::poll(&p, 1, 5);
+      f = receiver.take_latest();
+    }
+    if (!f) {
+      state.SkipWithError("no frame handed over");
+      break;
+    }
+    const double latency_s = ns_to_seconds(f->handed_ns - f->t_ns);
+    state.SetIterationTime(latency_s);
+    total_s += latency_s;
+    worst_s = std::max(worst_s, latency_s);
+    ++n;
+  }
+  state.counters["mean_ms"] = n ? 1e3 * total_s / static_cast<double>(n) : 0.0;
+  state.counters["max_ms"] = 1e3 * worst_s;
+  state.counters["bytes_per_frame"] = static_cast<double>(receiver.stats().bytes) / static_cast<double>(std::max<int64_t>(1, n));
+}
+BENCHMARK(BM_ReceiverLastDatagramToHandOver)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(600);
+
+void BM_DecodeAndConvert(benchmark::State& state) {
+  static const std::vector<std::string> frames = encoded_frames();
+  H264Decoder decoder;
+  cv::Mat bgr;
+  size_t k = 0;
+  for (auto _ : state) {
+    const DecodeResult r = decoder.decode(frames[k++ % frames.size()]);
+    benchmark::DoNotOptimize(r);
+    decoder.latest_bgr(bgr);
+    benchmark::DoNotOptimize(bgr.data);
+  }
+}
+BENCHMARK(BM_DecodeAndConvert)->Unit(benchmark::kMillisecond)->Iterations(600);
+
+}  // namespace
+}  // namespace shelfcross::tello

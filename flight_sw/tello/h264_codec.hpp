@@ -1,0 +1,75 @@
+#pragma once
+// H.264 through FFmpeg's libavcodec (Debian): the low-delay decoder the video receiver uses,
+// the libx264 encoder that tests, benchmarks and the Tello emulator use to make a Tello-like
+// stream, and the Tello's way of cutting an access unit into datagrams (PROTOCOL.md, Video).
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <opencv2/core/mat.hpp>
+
+namespace shelfcross::tello {
+
+/// What decoding one access unit gave.
+struct DecodeResult {
+  int pictures = 0;       ///< pictures completed by these bytes
+  bool error = false;     ///< the decoder refused the bytes or reported damage in a picture
+  bool key_frame = false; ///< the last picture is an intra (IDR/I) picture
+  bool clean = false;     ///< the last picture was decoded without reported damage
+};
+
+/// av_parser_parse2 with the h264 parser over access units (the receiver hands one
+/// reassembled frame at a time, so the parser runs with PARSER_FLAG_COMPLETE_FRAMES and never
+/// holds a frame back waiting for the next start code), then the h264 decoder with
+/// AV_CODEC_FLAG_LOW_DELAY, AV_CODEC_FLAG2_FAST, one thread (no frame threads: no frame of
+/// delay) and no reordering delay: each access unit's picture comes out as it goes in.
+class H264Decoder {
+ public:
+  H264Decoder();  ///< throws std::runtime_error when libavcodec has no h264 decoder
+  ~H264Decoder();
+  H264Decoder(const H264Decoder&) = delete;
+  H264Decoder& operator=(const H264Decoder&) = delete;
+
+  DecodeResult decode(std::string_view access_unit);
+  /// The last decoded picture as BGR (CV_8UC3) through libswscale; false when none.
+  bool latest_bgr(cv::Mat& bgr);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// libx264 through libavcodec: ultrafast preset, zerolatency tune, one thread (one slice),
+/// no B-frames, Annex-B with SPS/PPS repeated before every key frame (as the Tello sends).
+class H264Encoder {
+ public:
+  /// Throws std::runtime_error when libavcodec has no libx264 encoder.
+  H264Encoder(int width_px, int height_px, int fps = 30, int key_interval = 30, int crf = 23);
+  ~H264Encoder();
+  H264Encoder(const H264Encoder&) = delete;
+  H264Encoder& operator=(const H264Encoder&) = delete;
+
+  /// One BGR frame (CV_8UC3, the encoder's size) in, one access unit out (Annex-B bytes).
+  std::string encode(const cv::Mat& bgr, bool force_key_frame = false);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// The NAL unit types (nal_unit_type, 5 bits) of an Annex-B byte string, in order.
+std::vector<int> nal_unit_types(std::string_view annex_b);
+
+/// The Tello's datagrams for one access unit: leading parameter sets (SPS, PPS, AUD) one per
+/// datagram, then the rest cut into `datagram_size` pieces with a shorter last piece (when
+/// the rest is an exact multiple, its last byte goes alone), so a receiver finds the frame's
+/// end at the first short datagram.
+std::vector<std::string> tello_datagrams(std::string_view access_unit, size_t datagram_size = 1460);
+
+/// Peak signal-to-noise ratio of two 8-bit images of one size and type, dB (inf if equal).
+double psnr_db(const cv::Mat& a, const cv::Mat& b);
+
+}  // namespace shelfcross::tello

@@ -1,0 +1,25 @@
+#include "flight_sw/tello/pilot/flight_log.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "flight_sw/tello/pilot/pilot_options.hpp"
+
+namespace shelfcross::tello::pilot {
+
+FlightLog::FlightLog(const std::string& path) : out_(path, std::ios::trunc) {
+  if (!out_) throw UsageError("cannot write the flight log '" + path + "'");
+}
+
+void FlightLog::write(TimeNs t_ns, const std::string& type, nlohmann::json fields) {
+  nlohmann::ordered_json line = nlohmann::ordered_json::object();  // t_s, t_ns, type first
+  line["t_s"] = std::round(ns_to_seconds(t_ns) * 1e6) / 1e6;
+  line["t_ns"] = t_ns;
+  line["type"] = type;
+  for (auto& [key, value] : fields.items()) line[key] = std::move(value);
+  // Replace invalid UTF-8 (a garbage datagram's text) instead of throwing.
+  out_ << line.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << '\n';
+  out_.flush();
+}
+
+}  // namespace shelfcross::tello::pilot

@@ -1,0 +1,245 @@
+#include "flight_sw/tello/pilot/pilot_options.hpp"
+
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+
+#include <CLI/CLI.hpp>
+#include <opencv2/core.hpp>
+
+#include "config/strict_yaml.hpp"
+
+namespace shelfcross::tello::pilot {
+namespace {
+
+using config::Bounds;
+
+template <class T>
+Bounds<T> within(T lo, T hi) {
+  return {.min = lo, .max = hi, .min_exclusive = false, .max_exclusive = false};
+}
+const Bounds<double> kPositive{.min = 0.0, .max = std::nullopt, .min_exclusive = true, .max_exclusive = false};
+const Bounds<int> kPort = within(0, 65535);
+
+std::uint16_t port(int p) { return static_cast<std::uint16_t>(p); }
+
+// A path in a pilot file is relative to that file.
+std::string relative_to(const std::string& file, const std::string& path) {
+  if (path.empty() || std::filesystem::path(path).is_absolute()) return path;
+  return (std::filesystem::path(file).parent_path() / path).string();
+}
+
+// The pilot file: every key optional, see flight_sw/tello/README.md.
+void read_pilot_file(const std::string& path, PilotOptions& o) {
+  const auto doc = config::Document::from_file(path);
+  const config::Map root = doc.root();
+  if (auto link = root.optional_map("link")) {
+    o.driver.drone_ip = link->optional<std::string>("drone_ip", o.driver.drone_ip);
+    o.driver.drone_command_port = port(link->optional<int>("command_port", o.driver.drone_command_port, kPort));
+    o.driver.local_ip = link->optional<std::string>("local_ip", o.driver.local_ip);
+    o.driver.local_command_port =
+        port(link->optional<int>("local_command_port", o.driver.local_command_port, kPort));
+    o.driver.local_state_port = port(link->optional<int>("state_port", o.driver.local_state_port, kPort));
+    o.driver.state_source_port =
+        port(link->optional<int>("state_source_port", o.driver.state_source_port, kPort));
+    o.video.local_port = port(link->optional<int>("video_port", o.video.local_port, kPort));
+    o.video.source_port = port(link->optional<int>("video_source_port", o.video.source_port, kPort));
+    link->finish();
+  }
+  if (auto f = root.optional_map("failsafes")) {
+    Failsafes& s = o.failsafes;
+    s.state_timeout_s = f->optional<double>("state_timeout_s", s.state_timeout_s, kPositive);
+    s.state_start_timeout_s = f->optional<double>("state_start_timeout_s", s.state_start_timeout_s, kPositive);
+    s.video_hover_s = f->optional<double>("video_hover_s", s.video_hover_s, kPositive);
+    s.video_land_s = f->optional<double>("video_land_s", s.video_land_s, kPositive);
+    s.critical_battery_pct = f->optional<int>("critical_battery_pct", s.critical_battery_pct, within(0, 100));
+    s.max_flight_s = f->optional<double>("max_flight_s", s.max_flight_s, kPositive);
+    s.land_reply_s = f->optional<double>("land_reply_s", s.land_reply_s, kPositive);
+    if (s.video_land_s < s.video_hover_s) f->fail("video_land_s", "must not be shorter than video_hover_s");
+    f->finish();
+  }
+  if (auto out = root.optional_map("output")) {
+    o.log_path = relative_to(path, out->optional<std::string>("log", o.log_path));
+    o.inventory_path = relative_to(path, out->optional<std::string>("inventory", o.inventory_path));
+    out->finish();
+  }
+  o.flight_config_path = relative_to(path, root.optional<std::string>("flight_config", o.flight_config_path));
+  o.calibration_path = relative_to(path, root.optional<std::string>("calibration", o.calibration_path));
+  o.dry_run = root.optional<bool>("dry_run", o.dry_run);
+  root.finish();
+}
+
+}  // namespace
+
+CameraIntrinsics load_calibration(const std::string& path) {
+  cv::FileStorage fs;
+  try {
+    if (!fs.open(path, cv::FileStorage::READ)) throw UsageError(path + ": cannot open the calibration file");
+  } catch (const cv::Exception& e) {
+    throw UsageError(path + ": not an OpenCV calibration file (" + e.msg + ")");
+  }
+  auto fail = [&](const std::string& why) { return UsageError(path + ": " + why); };
+  cv::Mat K, dist;
+  int width = 0, height = 0;
+  try {
+    fs["camera_matrix"] >> K;
+    fs["distortion_coefficients"] >> dist;
+    fs["image_width"] >> width;
+    fs["image_height"] >> height;
+  } catch (const cv::Exception& e) {
+    throw fail("unreadable entry (" + e.msg + ")");
+  }
+  if (K.empty() || K.rows != 3 || K.cols != 3) throw fail("camera_matrix missing or not 3x3");
+  if (dist.empty() || dist.total() < 4) throw fail("distortion_coefficients missing (k1 k2 p1 p2 [k3])");
+  if (width <= 0 || height <= 0) throw fail("image_width and image_height missing");
+  K.convertTo(K, CV_64F);
+  dist.convertTo(dist, CV_64F);
+  const double* d = dist.ptr<double>();
+  CameraIntrinsics c;
+  c.width_px = width;
+  c.height_px = height;
+  c.fx_px = K.at<double>(0, 0);
+  c.fy_px = K.at<double>(1, 1);
+  c.cx_px = K.at<double>(0, 2);
+  c.cy_px = K.at<double>(1, 2);
+  c.k1 = d[0];
+  c.k2 = d[1];
+  c.p1 = d[2];
+  c.p2 = d[3];
+  c.k3 = dist.total() >= 5 ? d[4] : 0.0;
+  if (!(c.fx_px > 0 && c.fy_px > 0 && c.cx_px > 0 && c.cx_px < width && c.cy_px > 0 && c.cy_px < height)) {
+    throw fail("camera_matrix implausible (focal lengths must be > 0, principal point inside the image)");
+  }
+  return c;
+}
+
+std::optional<PilotOptions> parse_options(int argc, char** argv) {
+  PilotOptions o;
+  CLI::App app{"tello_pilot: fly a DJI Tello with the shelfcross flight software (see flight_sw/tello/README.md)"};
+  std::string pilot_file;
+  std::string drone_ip;
+  int command_port = 0, local_command_port = 0, state_port = 0, video_port = 0;
+  int state_source_port = 0, video_source_port = 0;
+  std::string local_ip, log_path, inventory_path, board;
+  Failsafes fs;
+  app.add_option("--pilot", pilot_file, "pilot YAML file (link, failsafes, output, flight_config, calibration, dry_run)")
+      ->check(CLI::ExistingFile);
+  auto* o_config = app.add_option("--config", o.flight_config_path, "flight-software YAML (flight_sw/README.md)");
+  auto* o_calib = app.add_option("--calibration", o.calibration_path,
+                                 "OpenCV camera calibration (camera_matrix, distortion_coefficients); replaces the config's camera");
+  auto* o_ip = app.add_option("--drone-ip", drone_ip, "the Tello's address (default 192.168.10.1)");
+  auto* o_cport = app.add_option("--command-port", command_port, "the drone's command port (default 8889)")->check(CLI::Range(1, 65535));
+  auto* o_lip = app.add_option("--local-ip", local_ip, "local address to bind (default 0.0.0.0)");
+  auto* o_lcport = app.add_option("--local-command-port", local_command_port, "local command port (default 0: any)")->check(CLI::Range(0, 65535));
+  auto* o_sport = app.add_option("--state-port", state_port, "local state port (default 8890)")->check(CLI::Range(0, 65535));
+  auto* o_vport = app.add_option("--video-port", video_port, "local video port (default 11111)")->check(CLI::Range(0, 65535));
+  auto* o_ssport = app.add_option("--state-source-port", state_source_port, "accept state only from this drone port (default 0: any)")->check(CLI::Range(0, 65535));
+  auto* o_vsport = app.add_option("--video-source-port", video_source_port, "accept video only from this drone port (default 0: any)")->check(CLI::Range(0, 65535));
+  auto* o_log = app.add_option("--log", log_path, "flight log, JSON lines (default tello_flight_log.jsonl)");
+  auto* o_inv = app.add_option("--inventory", inventory_path, "inventory JSON output (default tello_inventory.json)");
+  auto* o_dry = app.add_flag("--dry-run", o.dry_run, "connect, stream and run perception; never send a motion command");
+  auto* o_st = app.add_option("--state-timeout", fs.state_timeout_s, "airborne without state this long (s): land")->check(CLI::PositiveNumber);
+  auto* o_sst = app.add_option("--state-start-timeout", fs.state_start_timeout_s, "no state at all this long after start (s): give up")->check(CLI::PositiveNumber);
+  auto* o_vh = app.add_option("--video-hover", fs.video_hover_s, "airborne without frames this long (s): hover")->check(CLI::PositiveNumber);
+  auto* o_vl = app.add_option("--video-land", fs.video_land_s, "airborne without frames this long (s): land")->check(CLI::PositiveNumber);
+  auto* o_bat = app.add_option("--critical-battery", fs.critical_battery_pct, "battery at or below this (%): land")->check(CLI::Range(0, 100));
+  auto* o_max = app.add_option("--max-flight", fs.max_flight_s, "airborne this long (s): land")->check(CLI::PositiveNumber);
+  app.add_option("--calibrate", o.calibrate_path, "calibration mode: record chessboard views from the stream, write intrinsics to this file, exit (no motion)");
+  app.add_option("--board", board, "calibration chessboard inner corners, COLSxROWS (default 9x6)");
+  app.add_option("--square", o.square_m, "calibration chessboard square side (m, default 0.025)")->check(CLI::PositiveNumber);
+  app.add_option("--views", o.calibration_views, "calibration views to collect (default 25)")->check(CLI::Range(5, 200));
+  std::string marker_ids;
+  app.add_option("--print-markers", o.print_dir, "print mode: write marker and tag PNGs (300 dpi) of the flight configuration to this folder, exit");
+  app.add_option("--marker-ids", marker_ids, "markers to print, FIRST-LAST (default 0-15)");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp&) {
+    std::cout << app.help();
+    return std::nullopt;
+  } catch (const CLI::ParseError& e) {
+    throw UsageError(std::string(e.what()) + " (see --help)");
+  }
+  try {
+    if (!pilot_file.empty()) read_pilot_file(pilot_file, o);
+  } catch (const config::ConfigError& e) {
+    throw UsageError(e.what());
+  } catch (const std::exception& e) {
+    throw UsageError(pilot_file + ": " + e.what());
+  }
+  // The command line wins over the pilot file.
+  if (o_ip->count()) o.driver.drone_ip = drone_ip;
+  if (o_cport->count()) o.driver.drone_command_port = port(command_port);
+  if (o_lip->count()) o.driver.local_ip = local_ip;
+  if (o_lcport->count()) o.driver.local_command_port = port(local_command_port);
+  if (o_sport->count()) o.driver.local_state_port = port(state_port);
+  if (o_vport->count()) o.video.local_port = port(video_port);
+  if (o_ssport->count()) o.driver.state_source_port = port(state_source_port);
+  if (o_vsport->count()) o.video.source_port = port(video_source_port);
+  if (o_log->count()) o.log_path = log_path;
+  if (o_inv->count()) o.inventory_path = inventory_path;
+  if (o_st->count()) o.failsafes.state_timeout_s = fs.state_timeout_s;
+  if (o_sst->count()) o.failsafes.state_start_timeout_s = fs.state_start_timeout_s;
+  if (o_vh->count()) o.failsafes.video_hover_s = fs.video_hover_s;
+  if (o_vl->count()) o.failsafes.video_land_s = fs.video_land_s;
+  if (o_bat->count()) o.failsafes.critical_battery_pct = fs.critical_battery_pct;
+  if (o_max->count()) o.failsafes.max_flight_s = fs.max_flight_s;
+  (void)o_config;
+  (void)o_calib;
+  (void)o_dry;
+  if (o.failsafes.video_land_s < o.failsafes.video_hover_s) {
+    throw UsageError("--video-land must not be shorter than --video-hover");
+  }
+  try {
+    parse_ipv4(o.driver.drone_ip);
+    parse_ipv4(o.driver.local_ip);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+  o.video.drone_ip = o.driver.drone_ip;
+  o.video.local_ip = o.driver.local_ip;
+  if (!board.empty()) {
+    int c = 0, r = 0;
+    char x = 0;
+    std::istringstream in(board);
+    if (!(in >> c >> x >> r) || x != 'x' || c < 3 || r < 3 || !in.eof()) {
+      throw UsageError("--board '" + board + "': expected COLSxROWS inner corners, each >= 3 (e.g. 9x6)");
+    }
+    o.board_columns = c;
+    o.board_rows = r;
+  }
+  if (!marker_ids.empty()) {
+    int first = -1, last = -1;
+    char dash = 0;
+    std::istringstream in(marker_ids);
+    if (!(in >> first >> dash >> last) || dash != '-' || first < 0 || last < first || !in.eof()) {
+      throw UsageError("--marker-ids '" + marker_ids + "': expected FIRST-LAST (e.g. 0-15)");
+    }
+    o.marker_first = first;
+    o.marker_last = last;
+  }
+  // The flight configuration: required to fly, optional to calibrate.
+  if (o.flight_config_path.empty() && o.calibrate_path.empty()) {
+    throw UsageError("no flight configuration: give --config FILE (or flight_config: in the --pilot file)");
+  }
+  if (!o.flight_config_path.empty()) {
+    try {
+      o.flight = flight_sw::load_flight_config(o.flight_config_path);
+    } catch (const config::ConfigError& e) {
+      throw UsageError(e.what());
+    } catch (const std::exception& e) {
+      throw UsageError(o.flight_config_path + ": " + e.what());
+    }
+  }
+  if (!o.calibration_path.empty() && o.calibrate_path.empty()) {
+    o.flight.camera = load_calibration(o.calibration_path);
+    try {
+      flight_sw::validate_flight_config(o.flight);
+    } catch (const std::exception& e) {
+      throw UsageError(o.calibration_path + ": " + e.what());
+    }
+  }
+  o.driver.dry_run = o.dry_run || !o.calibrate_path.empty();  // calibrating never flies
+  return o;
+}
+
+}  // namespace shelfcross::tello::pilot

@@ -1,0 +1,305 @@
+#include "flight_sw/tello/sdk_driver.hpp"
+
+#include <arpa/inet.h>
+
+#include <algorithm>
+#include <sstream>
+
+namespace shelfcross::tello {
+namespace {
+
+constexpr const char* kHoverRc = "rc 0 0 0 0";
+constexpr size_t kMaxReplyBytes = 256;
+constexpr size_t kMaxQueue = 16;
+
+// Reply text without the trailing "\r\n" (and blanks, NULs) real drones append.
+std::string trim_reply(const std::string& raw) {
+  size_t b = 0, e = raw.size();
+  auto blank = [](char c) { return c == ' ' || c == '\r' || c == '\n' || c == '\t' || c == '\0'; };
+  while (b < e && blank(raw[b])) ++b;
+  while (e > b && blank(raw[e - 1])) --e;
+  return raw.substr(b, e - b);
+}
+
+bool printable(const std::string& s) {
+  return std::all_of(s.begin(), s.end(), [](char c) { return c >= 0x20 && c <= 0x7e; });
+}
+
+}  // namespace
+
+const char* event_kind_name(DriverEvent::Kind kind) {
+  using K = DriverEvent::Kind;
+  switch (kind) {
+    case K::Sent: return "sent";
+    case K::RcSent: return "rc_sent";
+    case K::KeepAlive: return "keepalive";
+    case K::Reply: return "reply";
+    case K::Retry: return "retry";
+    case K::Failed: return "failed";
+    case K::Abandoned: return "abandoned";
+    case K::StaleReply: return "stale_reply";
+    case K::Foreign: return "foreign";
+    case K::BadReply: return "bad_reply";
+    case K::State: return "state";
+    case K::BadState: return "bad_state";
+    case K::Filtered: return "filtered";
+    case K::Rejected: return "rejected";
+  }
+  return "?";
+}
+
+std::string DriverCounters::text() const {
+  std::ostringstream s;
+  s << "commands_sent=" << commands_sent << " retries=" << retries << " failed=" << failed
+    << " replies=" << replies << " stale_replies=" << stale_replies << " bad_replies=" << bad_replies
+    << " abandoned=" << abandoned << " rc_sent=" << rc_sent << " keepalives=" << keepalives
+    << " filtered=" << filtered << " rejected=" << rejected << " send_errors=" << send_errors
+    << " foreign_command_datagrams=" << foreign_command_datagrams
+    << " foreign_state_datagrams=" << foreign_state_datagrams << " states=" << states
+    << " bad_states=" << bad_states << " stray_ok_states=" << stray_ok_states;
+  return s.str();
+}
+
+SdkDriver::SdkDriver(DriverConfig config, const Clock& clock)
+    : config_(std::move(config)),
+      clock_(clock),
+      drone_command_{config_.drone_ip, config_.drone_command_port},
+      command_socket_(config_.local_ip, config_.local_command_port),
+      state_socket_(config_.local_ip, config_.local_state_port) {
+  // Refuse a bad address now, not at the first send; compare senders in canonical text form.
+  char canonical[INET_ADDRSTRLEN] = {};
+  const in_addr a = parse_ipv4(config_.drone_ip);
+  ::inet_ntop(AF_INET, &a, canonical, sizeof canonical);
+  drone_command_.ip = canonical;
+}
+
+void SdkDriver::event(DriverEvent::Kind kind, const std::string& command, const std::string& reply,
+                      int attempt, int tag) {
+  DriverEvent e;
+  e.t_ns = clock_.now_ns();
+  e.kind = kind;
+  e.command = command;
+  e.reply = reply;
+  e.attempt = attempt;
+  e.tag = tag;
+  events_.push_back(std::move(e));
+}
+
+std::vector<DriverEvent> SdkDriver::take_events() {
+  std::vector<DriverEvent> out;
+  out.swap(events_);
+  return out;
+}
+
+bool SdkDriver::submit(const std::string& text, const CommandOptions& options) {
+  std::string why;
+  const auto kind = classify_command(text, &why);
+  if (!kind) {
+    ++counters_.rejected;
+    event(DriverEvent::Kind::Rejected, text, why, 0, options.tag);
+    return false;
+  }
+  if (config_.dry_run && (*kind == CommandKind::Motion || *kind == CommandKind::Rc)) {
+    ++counters_.filtered;
+    event(DriverEvent::Kind::Filtered, text, "dry run: not sent", 0, options.tag);
+    if (*kind != CommandKind::Rc) {
+      event(DriverEvent::Kind::Reply, text, "ok", 1, options.tag);
+      events_.back().synthetic = true;
+    }
+    return false;
+  }
+  if (options.urgent) {
+    if (outstanding_) {
+      ++counters_.abandoned;
+      event(DriverEvent::Kind::Abandoned, outstanding_->text, "", outstanding_->attempt,
+            outstanding_->options.tag);
+      outstanding_.reset();
+      // Its reply may still come: the guard keeps it from answering the urgent command as
+      // long as the gap allows; what arrives later is drained as stale.
+    }
+    for (const Pending& p : queue_) {
+      ++counters_.abandoned;
+      event(DriverEvent::Kind::Abandoned, p.text, "", 0, p.options.tag);
+    }
+    queue_.clear();
+    rc_setpoint_.reset();
+    guard_until_ns_ = 0;
+  }
+  if (*kind == CommandKind::Rc) {
+    // The same sticks again only renew the setpoint: the steady repeat sends them.
+    if (rc_setpoint_ != text) rc_new_ = true;
+    rc_setpoint_ = text;
+    rc_set_ns_ = clock_.now_ns();
+    return true;
+  }
+  if (queue_.size() >= kMaxQueue) {
+    ++counters_.rejected;
+    event(DriverEvent::Kind::Rejected, text, "command queue full", 0, options.tag);
+    return false;
+  }
+  Pending p;
+  p.text = text;
+  p.options = options;
+  p.timeout_ns = options.timeout_ns.value_or(config_.timeouts.timeout_for(text));
+  p.retries = std::max(0, options.retries.value_or(config_.retries));
+  if (options.urgent) {
+    queue_.push_front(std::move(p));
+  } else {
+    queue_.push_back(std::move(p));
+  }
+  return true;
+}
+
+void SdkDriver::service() {
+  const TimeNs now = clock_.now_ns();
+  read_replies(now);
+  read_states(now);
+  check_timeout(now);
+  send_next(now);
+  send_rc(now);
+}
+
+void SdkDriver::read_replies(TimeNs now) {
+  while (auto d = command_socket_.receive()) {
+    if (!(d->from == drone_command_)) {
+      ++counters_.foreign_command_datagrams;
+      event(DriverEvent::Kind::Foreign, "", "command socket: from " + d->from.text());
+      continue;
+    }
+    const std::string text = trim_reply(d->bytes);
+    if (text.empty() || text.size() > kMaxReplyBytes || !printable(text)) {
+      ++counters_.bad_replies;
+      event(DriverEvent::Kind::BadReply, outstanding_ ? outstanding_->text : "",
+            std::to_string(d->bytes.size()) + " bytes");
+      continue;
+    }
+    if (!outstanding_) {
+      ++counters_.stale_replies;
+      event(DriverEvent::Kind::StaleReply, "", text);
+      continue;
+    }
+    ++counters_.replies;
+    event(DriverEvent::Kind::Reply, outstanding_->text, text, outstanding_->attempt,
+          outstanding_->options.tag);
+    outstanding_.reset();
+  }
+  (void)now;
+}
+
+void SdkDriver::read_states(TimeNs now) {
+  while (auto d = state_socket_.receive()) {
+    const bool from_drone = d->from.ip == drone_command_.ip &&
+                            (config_.state_source_port == 0 || d->from.port == config_.state_source_port);
+    if (!from_drone) {
+      ++counters_.foreign_state_datagrams;
+      event(DriverEvent::Kind::Foreign, "", "state socket: from " + d->from.text());
+      continue;
+    }
+    StateParseReport report;
+    auto record = parse_state_record(d->bytes, now, &report);
+    const std::string raw = trim_reply(d->bytes);
+    if (!record) {
+      ++counters_.bad_states;
+      if (raw == "ok" || raw == "OK") ++counters_.stray_ok_states;
+      std::string shown = raw;
+      if (!printable(raw)) shown = std::to_string(d->bytes.size()).append(" bytes, not text");
+      event(DriverEvent::Kind::BadState, "", shown);
+      continue;
+    }
+    ++counters_.states;
+    last_state_ns_ = now;
+    event(DriverEvent::Kind::State, "", raw);
+    events_.back().state = std::move(record);
+  }
+}
+
+void SdkDriver::check_timeout(TimeNs now) {
+  if (!outstanding_ || now - outstanding_->sent_ns < outstanding_->timeout_ns) return;
+  Pending& p = *outstanding_;
+  if (p.attempt <= p.retries) {
+    ++counters_.retries;
+    ++p.attempt;
+    event(DriverEvent::Kind::Retry, p.text, "", p.attempt, p.options.tag);
+    p.sent_ns = now;
+    if (transmit(now, p.text)) {
+      ++counters_.commands_sent;
+      last_command_ns_ = now;
+      event(DriverEvent::Kind::Sent, p.text, "", p.attempt, p.options.tag);
+    }
+    return;
+  }
+  ++counters_.failed;
+  event(DriverEvent::Kind::Failed, p.text, "", p.attempt, p.options.tag);
+  outstanding_.reset();
+  guard_until_ns_ = now + config_.stale_guard_ns;
+}
+
+void SdkDriver::send_next(TimeNs now) {
+  if (outstanding_ || queue_.empty()) return;
+  if (last_command_ns_ && now - *last_command_ns_ < config_.command_gap_ns) return;
+  if (now < guard_until_ns_) return;
+  // Whatever waits on the command socket now answers nothing we will send: drain it.
+  read_replies(now);
+  Pending p = std::move(queue_.front());
+  queue_.pop_front();
+  p.attempt = 1;
+  p.sent_ns = now;
+  const bool motion = classify_command(p.text) == CommandKind::Motion;
+  if (motion) rc_setpoint_.reset();  // a manoeuvre ends any stick input
+  if (transmit(now, p.text)) {
+    ++counters_.commands_sent;
+    event(DriverEvent::Kind::Sent, p.text, "", p.attempt, p.options.tag);
+  }
+  // Outstanding even if the OS refused the send: the timeout and retries deal with it.
+  last_command_ns_ = now;
+  outstanding_ = std::move(p);
+}
+
+void SdkDriver::send_rc(TimeNs now) {
+  const bool gap_ok = !last_rc_ns_ || now - *last_rc_ns_ >= config_.rc_min_gap_ns;
+  if (rc_setpoint_ && !outstanding_ && gap_ok) {
+    if (now - rc_set_ns_ >= config_.rc_hold_ns && *rc_setpoint_ != kHoverRc) {
+      // Not renewed: the submitter stopped steering. Hover rather than fly on blind.
+      rc_setpoint_ = kHoverRc;
+      rc_set_ns_ = now;
+      rc_new_ = true;
+    }
+    const bool fresh = now - rc_set_ns_ < config_.rc_hold_ns;
+    const bool due = rc_new_ || (fresh && (!last_rc_ns_ || now - *last_rc_ns_ >= config_.rc_period_ns));
+    if (due) {
+      rc_new_ = false;
+      last_rc_ns_ = now;
+      if (transmit(now, *rc_setpoint_)) {
+        ++counters_.rc_sent;
+        event(DriverEvent::Kind::RcSent, *rc_setpoint_);
+      }
+      return;
+    }
+  }
+  if (config_.keepalive_ns > 0 && !config_.dry_run && last_any_ns_ &&
+      now - *last_any_ns_ >= config_.keepalive_ns) {
+    last_rc_ns_ = now;
+    if (transmit(now, kHoverRc)) {
+      ++counters_.keepalives;
+      event(DriverEvent::Kind::KeepAlive, kHoverRc);
+    }
+  }
+}
+
+bool SdkDriver::transmit(TimeNs now, const std::string& text) {
+  // Every datagram passes the SDK's ranges once more, whatever path it took here.
+  std::string why;
+  if (!classify_command(text, &why)) {
+    ++counters_.rejected;
+    event(DriverEvent::Kind::Rejected, text, why);
+    return false;
+  }
+  last_any_ns_ = now;
+  if (!command_socket_.send_to(drone_command_, text)) {
+    ++counters_.send_errors;
+    return false;
+  }
+  return true;
+}
+
+}  // namespace shelfcross::tello

@@ -1,0 +1,183 @@
+#pragma once
+// The Tello text-SDK driver over UDP (shared/tello/PROTOCOL.md): the command socket (commands
+// out, replies in, from one local port) and the state socket (the 10 Hz state records).
+// Single-threaded: the owner calls service() whenever one of fds() is readable or a short
+// poll timeout passes; service() reads every pending datagram, fires timers and sends what is
+// due. All times come from the Clock it is given (tests step a ManualClock).
+//
+// Command rules it enforces:
+//  - every outgoing text is validated (classify_command): an unknown command or an argument
+//    out of the SDK's range is refused locally and never sent;
+//  - one non-rc command outstanding at a time, queued commands wait for its reply or timeout;
+//    at least command_gap_ns between two non-rc commands;
+//  - each non-rc command waits for its reply (ReplyTimeouts: 7 s, 20 s for takeoff) and is
+//    re-sent up to `retries` times when none comes; then it fails;
+//  - replies carry no tag, so a reply that arrives when nothing is outstanding is stale and
+//    dropped; pending replies are drained (dropped as stale) right before each non-rc send,
+//    and after a command timed out the next one waits stale_guard_ns more for its late reply;
+//  - rc gets no reply and is never waited for: the latest rc setpoint is sent at once and
+//    repeated every rc_period_ns while it is fresh (set within rc_hold_ns); an rc not renewed
+//    for rc_hold_ns falls back to "rc 0 0 0 0" (hover), sent once;
+//  - keep-alive: when nothing was sent for keepalive_ns, "rc 0 0 0 0" goes out, so the
+//    drone's 15 s no-command watchdog never lands it by surprise (rc is the one command that
+//    gets no reply, so it never disturbs the outstanding command);
+//  - datagrams from anyone but the drone are dropped and counted: replies must come from
+//    drone_ip:drone_command_port, state records from drone_ip (and state_source_port if set);
+//  - dry run: motion commands (takeoff, land, moves, rc, ...) are never sent; they are
+//    reported as Filtered and non-rc ones get a synthetic "ok" so the flight software runs on
+//    (perception with the drone carried by hand).
+
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "flight_sw/tello/clock.hpp"
+#include "flight_sw/tello/sdk_command.hpp"
+#include "flight_sw/tello/sdk_state.hpp"
+#include "flight_sw/tello/udp_socket.hpp"
+#include "shelfcross/sdk_messages.hpp"
+
+namespace shelfcross::tello {
+
+struct DriverConfig {
+  std::string drone_ip = "192.168.10.1";
+  std::uint16_t drone_command_port = 8889;
+  std::string local_ip = "0.0.0.0";
+  std::uint16_t local_command_port = 0;  ///< 0: ephemeral (the drone replies to the sender)
+  std::uint16_t local_state_port = 8890;
+  std::uint16_t state_source_port = 0;   ///< 0: any port of drone_ip (undocumented on a Tello)
+  ReplyTimeouts timeouts;
+  int retries = 3;                       ///< re-sends after the first attempt
+  TimeNs command_gap_ns = 100 * kMs;
+  TimeNs stale_guard_ns = 300 * kMs;
+  TimeNs rc_period_ns = 100 * kMs;
+  TimeNs rc_min_gap_ns = 20 * kMs;
+  TimeNs rc_hold_ns = 1500 * kMs;
+  TimeNs keepalive_ns = 5 * kNsPerSecond;  ///< 0 disables
+  bool dry_run = false;
+};
+
+/// Per-command overrides of the driver's defaults.
+struct CommandOptions {
+  std::optional<TimeNs> timeout_ns;
+  std::optional<int> retries;
+  int tag = 0;          ///< the submitter's mark, echoed in the command's events
+  bool urgent = false;  ///< abandon the outstanding and queued commands, clear rc, go next
+};
+
+struct DriverEvent {
+  enum class Kind {
+    Sent,        ///< a non-rc command went out (attempt 1..)
+    RcSent,      ///< an rc went out (setpoint, repeat, hover fallback)
+    KeepAlive,   ///< the keep-alive rc went out
+    Reply,       ///< the outstanding command's reply (text in `reply`)
+    Retry,       ///< no reply within the timeout: re-sent (attempt = the new attempt)
+    Failed,      ///< no reply after the last attempt
+    Abandoned,   ///< an urgent command displaced this one
+    StaleReply,  ///< a reply with nothing outstanding: dropped
+    Foreign,     ///< a datagram from another address: dropped (`reply` = "from ip:port")
+    BadReply,    ///< a reply with non-printable bytes or too long: dropped
+    State,       ///< a parsed state record (`state`, raw text in `reply`)
+    BadState,    ///< a state datagram that is no state record: dropped (raw text in `reply`)
+    Filtered,    ///< dry run: a motion command that was not sent
+    Rejected,    ///< an invalid command refused locally (`reply` = why)
+  };
+  TimeNs t_ns = 0;
+  Kind kind = Kind::Sent;
+  std::string command;
+  std::string reply;
+  int attempt = 0;
+  int tag = 0;
+  bool synthetic = false;  ///< a dry-run reply made up by the driver
+  std::optional<StateRecord> state;
+};
+const char* event_kind_name(DriverEvent::Kind kind);
+
+struct DriverCounters {
+  std::int64_t commands_sent = 0;   ///< non-rc datagrams, retries included
+  std::int64_t retries = 0;
+  std::int64_t failed = 0;
+  std::int64_t replies = 0;
+  std::int64_t stale_replies = 0;
+  std::int64_t bad_replies = 0;
+  std::int64_t abandoned = 0;
+  std::int64_t rc_sent = 0;
+  std::int64_t keepalives = 0;
+  std::int64_t filtered = 0;
+  std::int64_t rejected = 0;
+  std::int64_t send_errors = 0;
+  std::int64_t foreign_command_datagrams = 0;
+  std::int64_t foreign_state_datagrams = 0;
+  std::int64_t states = 0;
+  std::int64_t bad_states = 0;       ///< malformed state datagrams (stray "ok" included)
+  std::int64_t stray_ok_states = 0;  ///< of which a stray "ok"
+  std::string text() const;          ///< "name=value ..." on one line
+};
+
+class SdkDriver {
+ public:
+  /// Binds the command and state sockets; throws std::runtime_error (port busy) or
+  /// std::invalid_argument (bad address).
+  SdkDriver(DriverConfig config, const Clock& clock);
+
+  /// Hands a command over. rc: becomes the setpoint (sent by service()). Others: queued.
+  /// Returns false when the text was refused (invalid: Rejected event) or filtered (dry run).
+  bool submit(const std::string& text, const CommandOptions& options = {});
+
+  /// Reads every pending datagram, fires timeouts and retries, sends what is due.
+  void service();
+
+  /// Events since the last call, in the order they happened.
+  std::vector<DriverEvent> take_events();
+
+  bool outstanding() const { return outstanding_.has_value(); }
+  bool idle() const { return !outstanding_ && queue_.empty(); }
+  std::optional<TimeNs> last_state_ns() const { return last_state_ns_; }
+  const DriverCounters& counters() const { return counters_; }
+  const DriverConfig& config() const { return config_; }
+  std::uint16_t local_command_port() const { return command_socket_.local_port(); }
+  std::uint16_t local_state_port() const { return state_socket_.local_port(); }
+  int command_fd() const { return command_socket_.fd(); }
+  int state_fd() const { return state_socket_.fd(); }
+
+ private:
+  struct Pending {
+    std::string text;
+    CommandOptions options;
+    TimeNs timeout_ns = 0;
+    int retries = 0;
+    int attempt = 0;
+    TimeNs sent_ns = 0;
+  };
+  void event(DriverEvent::Kind kind, const std::string& command, const std::string& reply = "",
+             int attempt = 0, int tag = 0);
+  void read_replies(TimeNs now);
+  void read_states(TimeNs now);
+  void check_timeout(TimeNs now);
+  void send_next(TimeNs now);
+  void send_rc(TimeNs now);
+  bool transmit(TimeNs now, const std::string& text);
+
+  DriverConfig config_;
+  const Clock& clock_;
+  Endpoint drone_command_;
+  UdpSocket command_socket_;
+  UdpSocket state_socket_;
+  std::deque<Pending> queue_;
+  std::optional<Pending> outstanding_;
+  std::optional<TimeNs> last_command_ns_;  ///< last non-rc send
+  std::optional<TimeNs> last_any_ns_;      ///< last datagram of any kind sent
+  TimeNs guard_until_ns_ = 0;
+  // rc setpoint
+  std::optional<std::string> rc_setpoint_;
+  TimeNs rc_set_ns_ = 0;
+  bool rc_new_ = false;
+  std::optional<TimeNs> last_rc_ns_;
+  std::optional<TimeNs> last_state_ns_;
+  DriverCounters counters_;
+  std::vector<DriverEvent> events_;
+};
+
+}  // namespace shelfcross::tello

@@ -1,0 +1,194 @@
+#include "flight_sw/tello/video_receiver.hpp"
+
+#include <poll.h>
+#include <sys/eventfd.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <sstream>
+#include <stdexcept>
+
+#include "flight_sw/tello/h264_codec.hpp"
+
+namespace shelfcross::tello {
+
+std::string VideoStats::text() const {
+  std::ostringstream s;
+  s << "datagrams=" << datagrams << " bytes=" << bytes << " foreign_datagrams=" << foreign_datagrams
+    << " frames_received=" << frames_received << " oversize_frames=" << oversize_frames
+    << " pictures=" << pictures << " damaged=" << damaged << " discarded=" << discarded
+    << " handed=" << handed << " replaced=" << replaced << " taken=" << taken;
+  return s.str();
+}
+
+struct VideoReceiver::ThreadState {
+  UdpSocket socket;
+  H264Decoder decoder;
+  in_addr drone_ip;
+  ThreadState(const VideoReceiverConfig& c)
+      : socket(c.local_ip, c.local_port, c.receive_buffer_bytes), drone_ip(parse_ipv4(c.drone_ip)) {}
+};
+
+namespace {
+
+int make_eventfd() {
+  const int fd = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+  if (fd < 0) throw std::runtime_error(std::string("eventfd: ") + std::strerror(errno));
+  return fd;
+}
+
+void signal_fd(int fd) {
+  const std::uint64_t one = 1;
+  [[maybe_unused]] const ssize_t n = ::write(fd, &one, sizeof one);
+}
+
+void clear_fd(int fd) {
+  std::uint64_t v = 0;
+  [[maybe_unused]] const ssize_t n = ::read(fd, &v, sizeof v);
+}
+
+bool starts_with_start_code(const std::string& s) {
+  return (s.size() >= 3 && s[0] == 0 && s[1] == 0 && s[2] == 1) ||
+         (s.size() >= 4 && s[0] == 0 && s[1] == 0 && s[2] == 0 && s[3] == 1);
+}
+
+// Parameter sets, delimiters and SEI only (the Tello sends SPS and PPS as short datagrams of
+// their own before each key frame): no picture yet, the frame goes on.
+bool only_parameter_sets(const std::string& s) {
+  if (!starts_with_start_code(s)) return false;
+  const std::vector<int> types = nal_unit_types(s);
+  for (int t : types) {
+    if (t != 6 && t != 7 && t != 8 && t != 9) return false;
+  }
+  return !types.empty();
+}
+
+}  // namespace
+
+VideoReceiver::VideoReceiver(VideoReceiverConfig config, const Clock& clock)
+    : config_(std::move(config)), clock_(clock), started_ns_(clock.now_ns()) {
+  thread_state_ = std::make_unique<ThreadState>(config_);
+  local_port_ = thread_state_->socket.local_port();
+  notify_fd_ = make_eventfd();
+  stop_fd_ = make_eventfd();
+  thread_ = std::thread([this] { run(); });
+}
+
+VideoReceiver::~VideoReceiver() {
+  stop_ = true;
+  signal_fd(stop_fd_);
+  if (thread_.joinable()) thread_.join();
+  ::close(notify_fd_);
+  ::close(stop_fd_);
+}
+
+void VideoReceiver::run() {
+  UdpSocket& socket = thread_state_->socket;
+  while (!stop_) {
+    pollfd fds[2] = {{socket.fd(), POLLIN, 0}, {stop_fd_, POLLIN, 0}};
+    if (::poll(fds, 2, 200) <= 0) continue;
+    while (!stop_) {
+      auto d = socket.receive();
+      if (!d) break;
+      on_datagram(*d);
+    }
+  }
+}
+
+void VideoReceiver::on_datagram(const Datagram& d) {
+  const TimeNs now = clock_.now_ns();
+  const bool from_drone = parse_ipv4(d.from.ip).s_addr == thread_state_->drone_ip.s_addr &&
+                          (config_.source_port == 0 || d.from.port == config_.source_port);
+  {
+    std::lock_guard lock(mutex_);
+    if (!from_drone) {
+      ++stats_.foreign_datagrams;
+      return;
+    }
+    ++stats_.datagrams;
+    stats_.bytes += static_cast<std::int64_t>(d.bytes.size());
+  }
+  if (!frame_overflow_) {
+    if (frame_bytes_.size() + d.bytes.size() > config_.max_frame_bytes) {
+      frame_overflow_ = true;
+      frame_bytes_.clear();
+    } else {
+      frame_bytes_ += d.bytes;
+    }
+  }
+  if (d.bytes.size() < config_.datagram_size && (frame_overflow_ || !only_parameter_sets(frame_bytes_))) {
+    finish_frame(now);
+  }
+}
+
+void VideoReceiver::finish_frame(TimeNs t_ns) {
+  bool damaged = false;
+  bool oversize = false;
+  DecodeResult r;
+  if (frame_overflow_) {
+    oversize = damaged = true;
+  } else {
+    // A frame not starting with a start code lost its first datagram.
+    if (!starts_with_start_code(frame_bytes_)) damaged = true;
+    r = thread_state_->decoder.decode(frame_bytes_);
+    if (r.error) damaged = true;
+    if (r.pictures == 0) damaged = true;  // a frame's worth of bytes and no picture
+  }
+  frame_bytes_.clear();
+  frame_overflow_ = false;
+
+  if (damaged) synced_ = false;
+  if (!damaged && r.pictures > 0 && r.clean && r.key_frame) synced_ = true;
+  const bool hand_over = !damaged && r.pictures > 0 && r.clean && synced_;
+
+  VideoFrame frame;
+  if (hand_over) {
+    if (!thread_state_->decoder.latest_bgr(frame.bgr)) damaged = true;
+  }
+  std::lock_guard lock(mutex_);
+  ++stats_.frames_received;
+  if (oversize) ++stats_.oversize_frames;
+  if (damaged) ++stats_.damaged;
+  stats_.pictures += r.pictures;
+  if (!hand_over || frame.bgr.empty()) {
+    stats_.discarded += r.pictures;
+    return;
+  }
+  frame.t_ns = t_ns;
+  frame.index = next_index_++;
+  frame.handed_ns = clock_.now_ns();
+  if (mailbox_) ++stats_.replaced;
+  mailbox_ = std::move(frame);
+  last_frame_ns_ = mailbox_->handed_ns;
+  ++stats_.handed;
+  signal_fd(notify_fd_);
+}
+
+std::optional<VideoFrame> VideoReceiver::take_latest() {
+  std::lock_guard lock(mutex_);
+  clear_fd(notify_fd_);
+  if (!mailbox_) return std::nullopt;
+  std::optional<VideoFrame> out = std::move(mailbox_);
+  mailbox_.reset();
+  ++stats_.taken;
+  return out;
+}
+
+VideoStats VideoReceiver::stats() const {
+  std::lock_guard lock(mutex_);
+  return stats_;
+}
+
+std::optional<TimeNs> VideoReceiver::last_frame_ns() const {
+  std::lock_guard lock(mutex_);
+  return last_frame_ns_;
+}
+
+bool VideoReceiver::stalled(TimeNs threshold_ns) const {
+  const TimeNs now = clock_.now_ns();
+  std::lock_guard lock(mutex_);
+  return now - last_frame_ns_.value_or(started_ns_) > threshold_ns;
+}
+
+}  // namespace shelfcross::tello

@@ -1,0 +1,114 @@
+#pragma once
+// The Tello's video: raw H.264 Annex-B on UDP port 11111, each frame cut into 1460-byte
+// datagrams with a shorter last one (PROTOCOL.md). A receiver thread reassembles the
+// datagrams of one frame (up to the first short datagram that ends more than parameter sets), decodes them at once with the
+// low-delay H264Decoder, converts the picture to BGR and puts it in a single-slot mailbox:
+// a newer frame replaces one not yet taken, so the taker always gets the newest frame and
+// never a backlog.
+//
+// Damage: a lost datagram corrupts pictures until the next key frame. The receiver hands
+// over nothing from the first sign of damage (a decoder error or damaged-picture flag, a
+// frame that does not begin with a start code, a frame of bytes that decodes to no picture,
+// an over-long frame) until a key frame decodes cleanly; nor before the first key frame.
+//
+// Datagrams from anyone but drone_ip (and source_port when set) are dropped and counted.
+// Times come from the Clock (its now_ns() is called from the receiver thread).
+
+#include <atomic>
+#include <cstdint>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include <opencv2/core/mat.hpp>
+
+#include "flight_sw/tello/clock.hpp"
+#include "flight_sw/tello/udp_socket.hpp"
+
+namespace shelfcross::tello {
+
+struct VideoReceiverConfig {
+  std::string drone_ip = "192.168.10.1";
+  std::uint16_t source_port = 0;  ///< 0: any port of drone_ip
+  std::string local_ip = "0.0.0.0";
+  std::uint16_t local_port = 11111;  ///< 0: ephemeral (tests)
+  size_t datagram_size = 1460;       ///< a datagram shorter than this ends a frame
+  size_t max_frame_bytes = 1 << 20;  ///< a frame growing past this is dropped (lost frame end)
+  int receive_buffer_bytes = 4 << 20;
+};
+
+/// One decoded frame as handed over.
+struct VideoFrame {
+  TimeNs t_ns = 0;          ///< arrival of the frame's last datagram
+  TimeNs handed_ns = 0;     ///< when it was put in the mailbox (decoded and converted)
+  std::int64_t index = 0;   ///< 0, 1, 2, ... over handed-over frames; a gap = frames replaced
+  cv::Mat bgr;              ///< CV_8UC3
+};
+
+struct VideoStats {
+  std::int64_t datagrams = 0;
+  std::int64_t bytes = 0;
+  std::int64_t foreign_datagrams = 0;
+  std::int64_t frames_received = 0;   ///< reassembled frames (access units) decoded
+  std::int64_t oversize_frames = 0;
+  std::int64_t pictures = 0;          ///< pictures the decoder produced
+  std::int64_t damaged = 0;           ///< frames with a sign of damage (see header comment)
+  std::int64_t discarded = 0;         ///< pictures not handed over (damaged or awaiting a key frame)
+  std::int64_t handed = 0;            ///< frames put in the mailbox
+  std::int64_t replaced = 0;          ///< frames replaced in the mailbox before being taken
+  std::int64_t taken = 0;
+  std::string text() const;           ///< "name=value ..." on one line
+};
+
+class VideoReceiver {
+ public:
+  /// Binds the video port and starts the receiver thread. Throws std::runtime_error (port
+  /// busy, no H.264 decoder) or std::invalid_argument (bad address).
+  VideoReceiver(VideoReceiverConfig config, const Clock& clock);
+  ~VideoReceiver();  ///< stops and joins the thread
+  VideoReceiver(const VideoReceiver&) = delete;
+  VideoReceiver& operator=(const VideoReceiver&) = delete;
+
+  /// The newest frame not yet taken (the mailbox empties), or nothing.
+  std::optional<VideoFrame> take_latest();
+  /// An eventfd that is readable while a frame waits in the mailbox (for poll()).
+  int notify_fd() const { return notify_fd_; }
+  VideoStats stats() const;
+  /// When the newest frame was handed over; nothing before the first.
+  std::optional<TimeNs> last_frame_ns() const;
+  /// True when no frame was handed over for longer than `threshold_ns` (counted from the
+  /// receiver's start before the first frame).
+  bool stalled(TimeNs threshold_ns) const;
+  std::uint16_t local_port() const { return local_port_; }
+
+ private:
+  void run();
+  void on_datagram(const Datagram& d);
+  void finish_frame(TimeNs t_ns);
+
+  VideoReceiverConfig config_;
+  const Clock& clock_;
+  TimeNs started_ns_;
+  std::uint16_t local_port_ = 0;
+  int notify_fd_ = -1;
+  int stop_fd_ = -1;
+  std::atomic<bool> stop_{false};
+
+  // Receiver thread only.
+  std::string frame_bytes_;
+  bool frame_overflow_ = false;
+  bool synced_ = false;
+  struct ThreadState;
+  std::unique_ptr<ThreadState> thread_state_;
+
+  mutable std::mutex mutex_;  // guards the mailbox, stats and last_frame_ns_
+  std::optional<VideoFrame> mailbox_;
+  VideoStats stats_;
+  std::optional<TimeNs> last_frame_ns_;
+  std::int64_t next_index_ = 0;
+
+  std::thread thread_;
+};
+
+}  // namespace shelfcross::tello
