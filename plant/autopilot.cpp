@@ -370,7 +370,8 @@ Eigen::Vector4d Autopilot::control(double dt, const RigidBodyState& s, bool on_g
   Eigen::Vector3d f = m * (a_cmd + Eigen::Vector3d(0.0, 0.0, g));
   f.z() = std::clamp(f.z(), 0.2 * m * g, 1.8 * m * g);
   const double f_h = std::hypot(f.x(), f.y());
-  const double f_h_max = f.z() * std::tan(tilt_limit_rad());
+  // Aim 2 % inside the limit so that attitude-tracking transients stay within it.
+  const double f_h_max = f.z() * std::tan(0.98 * tilt_limit_rad());
   const bool tilt_saturated = f_h > f_h_max;
   if (tilt_saturated) {
     f.x() *= f_h_max / f_h;

@@ -83,8 +83,15 @@ bool is_manoeuvre(Verb verb) {
 
 std::string to_text(const Command& c) {
   std::string s(verb_text(c.verb));
-  if (c.verb == Verb::flip) return s + " " + std::string(1, c.flip_direction);
-  for (int i = 0; i < c.arg_count; ++i) s += " " + std::to_string(c.args[i]);
+  if (c.verb == Verb::flip) {
+    s += ' ';
+    s += c.flip_direction;
+    return s;
+  }
+  for (int i = 0; i < c.arg_count; ++i) {
+    s += ' ';
+    s += std::to_string(c.args[i]);
+  }
   return s;
 }
 
