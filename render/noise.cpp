@@ -1,27 +1,44 @@
 #include "render/noise.hpp"
 
+#include <algorithm>
 #include <cassert>
 #include <cmath>
 
+#include "shelfcross/random.hpp"
+
 namespace shelfcross::render {
 
-void add_sensor_noise(cv::Mat& image, double stddev, std::uint64_t seed) {
-  assert(image.depth() == CV_8U);
-  if (!(stddev > 0.0)) return;
-  // sqrt(4 (2^32 - 1) / 12), correctly rounded by IEEE sqrt.
+SensorNoise::SensorNoise(int rows, int cols, int channels, double stddev, std::uint64_t table_seed)
+    : rows_(rows), cols_(cols), channels_(channels), field_cols_(cols + kMargin) {
+  // sqrt(4 (2^32 - 1) / 12): the standard deviation of the sum of four uniform 16-bit fields.
   const double scale = stddev / std::sqrt(4.0 * (4294967296.0 - 1.0) / 12.0);
-  const std::uint64_t key = mix64(seed ^ 0x6a09e667f3bcc909ULL);
-  const int row_bytes = image.cols * image.channels();
-  std::uint64_t k = 0;
-  for (int r = 0; r < image.rows; ++r) {
-    std::uint8_t* p = image.ptr<std::uint8_t>(r);
-    for (int c = 0; c < row_bytes; ++c, ++k) {
+  const size_t bytes = static_cast<size_t>(rows + kMargin) * static_cast<size_t>(field_cols_) * static_cast<size_t>(channels);
+  for (int f = 0; f < kFields; ++f) {
+    const std::uint64_t key = mix64(table_seed ^ mix64(0x6a09e667f3bcc909ULL + static_cast<std::uint64_t>(f)));
+    std::vector<std::int8_t> field(bytes);
+    for (size_t k = 0; k < bytes; ++k) {
       const std::uint64_t h = mix64(key + k * 0x9e3779b97f4a7c15ULL);
-      const std::int64_t sum = static_cast<std::int64_t>((h & 0xffff) + ((h >> 16) & 0xffff) +
-                                                         ((h >> 32) & 0xffff) + (h >> 48));
-      const double value = p[c] + scale * static_cast<double>(sum - 131070);
-      const double rounded = std::floor(value + 0.5);
-      p[c] = static_cast<std::uint8_t>(rounded < 0.0 ? 0.0 : (rounded > 255.0 ? 255.0 : rounded));
+      const std::int64_t sum =
+          static_cast<std::int64_t>((h & 0xffff) + ((h >> 16) & 0xffff) + ((h >> 32) & 0xffff) + (h >> 48));
+      const double v = std::nearbyint(scale * static_cast<double>(sum - 131070));
+      field[k] = static_cast<std::int8_t>(std::clamp(v, -127.0, 127.0));
+    }
+    fields_.push_back(std::move(field));
+  }
+}
+
+void SensorNoise::apply(cv::Mat& image, std::uint64_t frame_seed) const {
+  assert(image.depth() == CV_8U && image.rows == rows_ && image.cols == cols_ && image.channels() == channels_);
+  const std::uint64_t h = mix64(frame_seed ^ 0xbb67ae8584caa73bULL);
+  const std::vector<std::int8_t>& field = fields_[h % kFields];
+  const int dx = static_cast<int>((h >> 8) % kMargin), dy = static_cast<int>((h >> 24) % kMargin);
+  const int row_bytes = cols_ * channels_;
+  for (int r = 0; r < rows_; ++r) {
+    std::uint8_t* p = image.ptr<std::uint8_t>(r);
+    const std::int8_t* n = field.data() + (static_cast<size_t>(r + dy) * field_cols_ + dx) * channels_;
+    for (int c = 0; c < row_bytes; ++c) {
+      const int v = p[c] + n[c];
+      p[c] = static_cast<std::uint8_t>(v < 0 ? 0 : (v > 255 ? 255 : v));
     }
   }
 }

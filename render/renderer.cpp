@@ -186,6 +186,7 @@ struct Renderer::Impl {
   GLsizei vertex_count = 0;
 
   cv::Mat map1, map2;        // fixed-point remap maps (CV_16SC2 + CV_16UC1)
+  std::unique_ptr<SensorNoise> noise;  // when options.noise_stddev > 0
   cv::Mat bgra_hi, bgra, acc, distorted_bgra;  // per-frame buffers, allocated once
 
   Impl(const Warehouse& w, const CameraIntrinsics& k, const RenderOptions& o)
@@ -392,7 +393,7 @@ void Renderer::Impl::finish(std::uint64_t noise_seed, cv::Mat& bgr) {
             cv::Scalar(0, 0, 0, 255));
   bgr.create(K.height_px, K.width_px, CV_8UC3);
   cv::cvtColor(distorted_bgra, bgr, cv::COLOR_BGRA2BGR);
-  if (options.noise_stddev > 0.0) add_sensor_noise(bgr, options.noise_stddev, noise_seed);
+  if (noise) noise->apply(bgr, noise_seed);
 }
 
 Renderer::Renderer(const Warehouse& warehouse, const CameraIntrinsics& intrinsics,
@@ -419,6 +420,9 @@ Renderer::Renderer(const Warehouse& warehouse, const CameraIntrinsics& intrinsic
   }
   impl_ = std::make_unique<Impl>(warehouse, intrinsics, options);
   impl_->camera = std::move(camera);
+  if (options.noise_stddev > 0.0) {
+    impl_->noise = std::make_unique<SensorNoise>(intrinsics.height_px, intrinsics.width_px, 3, options.noise_stddev);
+  }
   impl_->build(layout);
 }
 

@@ -16,7 +16,7 @@
 //      [motion blur: average of the N sub-pose renders, integer, rounded]
 //   4. cv::remap with fixed-point maps computed once: output pixel (u, v) samples the render
 //      at the undistorted position of (u, v) (bilinear), then BGRA -> BGR;
-//   5. [noise: seeded, see noise.hpp].
+//   5. [noise: seeded, see noise.hpp (a field drawn once, a seeded window of it per frame)].
 // Deterministic: the same warehouse, intrinsics, options, pose and seed give byte-identical
 // images from one renderer or several (same machine and driver). No MSAA.
 //
@@ -61,7 +61,7 @@ class Renderer {
   Renderer& operator=(const Renderer&) = delete;
 
   /// One frame from camera pose X_WC; noise (if enabled) from `noise_seed`, for instance
-  /// frame_seed(stream_seed, frame_index) of noise.hpp.
+  /// a draw of the run's render-noise stream per frame.
   cv::Mat render(const Eigen::Isometry3d& X_WC, std::uint64_t noise_seed = 0);
   /// Same, into `bgr` (reallocated only if its size or type is wrong: no per-frame
   /// allocation when the caller keeps the Mat).
