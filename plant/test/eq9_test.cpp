@@ -206,8 +206,8 @@ TEST(PlantEq9, FreeFall) {
 
 TEST(PlantEq9, GyroscopicTermSign) {
   // Rotors 1 and 3 spin counter-clockwise seen from above: angular momentum h = Jr Om e3 along
-  // +z_B. Rolling at p > 0 turns h toward... the body must supply dh/dt = w x h, so the
-  // rotors push back with -w x h = (0, Jr Om p, 0): a positive pitch acceleration.
+  // +z_B. Rolling at p > 0 turns h with the body; the body must supply dh/dt = w x h, so the
+  // rotors push back on it with -w x h = (0, Jr Om p, 0): a positive pitch acceleration.
   VehicleParams v = all_switches_off();
   v.switches.gyroscopic = true;
   v.thrust_coeff_N_per_radps2 = 0.0;  // isolate the gyroscopic torque
