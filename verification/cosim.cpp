@@ -228,6 +228,9 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
   const auto step_fsw = [&](const flight_sw::Input& input, TimeNs t) {
     std::vector<SdkCommand> commands;
     try {
+      if (cs.inject_flight_software_exception_s >= 0.0 && t >= seconds_to_ns(cs.inject_flight_software_exception_s)) {
+        throw std::runtime_error("injected fault (cosim.inject_flight_software_exception_s)");
+      }
       commands = fsw.step(input);
     } catch (const std::exception& e) {
       outcome = RunOutcome::flight_software_exception;

@@ -24,6 +24,9 @@ struct CosimSettings {
   double settling_floor_yaw_rad = 0.5 * std::numbers::pi / 180.0;  ///< ... or 0.5 deg
   double settling_floor_y_m = 0.01;   ///< lateral response band floor
   LinkSettings link;
+  /// Fault injection, for verifying the harness and campaigns: from this simulated time on
+  /// the flight software's next step raises an exception (as a bug in it would). < 0: off.
+  double inject_flight_software_exception_s = -1.0;
   bool operator==(const CosimSettings&) const = default;
 };
 

@@ -599,6 +599,7 @@ void visit_cosim(V& v, CosimSettings& c) {
   v.field("settling_floor_yaw_rad", c.settling_floor_yaw_rad, kNonNegative);
   v.field("settling_floor_y_m", c.settling_floor_y_m, kNonNegative);
   v.section("link", [&](auto& l) { visit_link(l, c.link); });
+  v.field("inject_flight_software_exception_s", c.inject_flight_software_exception_s, between(-1.0, 3600.0));
 }
 
 bool valid_id(const std::string& name) {
