@@ -12,7 +12,7 @@
 namespace shelfcross::verification {
 namespace {
 
-constexpr int kLeft = 90, kRight = 30, kTop = 50, kBottom = 70;
+constexpr int kLeft = 100, kRight = 30, kTop = 50, kBottom = 70;
 const cv::Scalar kInk(30, 30, 30), kGrid(225, 225, 225), kWhite(255, 255, 255);
 
 std::string tick_text(double v, double step) {
@@ -111,7 +111,10 @@ cv::Mat Chart::draw() const {
   for (double t : yticks) {
     const cv::Point p = px(x_lo, t);
     cv::line(img, {kLeft, p.y}, {kLeft + plot_w, p.y}, kGrid);
-    cv::putText(img, tick_text(t, ystep), {8, p.y + 5}, cv::FONT_HERSHEY_SIMPLEX, 0.45, kInk);
+    // Right-aligned against the plot, clear of the y label strip at the far left.
+    const std::string text = tick_text(t, ystep);
+    const int width = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, 0.45, 1, nullptr).width;
+    cv::putText(img, text, {kLeft - 6 - width, p.y + 5}, cv::FONT_HERSHEY_SIMPLEX, 0.45, kInk);
   }
   const cv::Rect plot_area(kLeft, kTop, plot_w, plot_h);
   cv::Mat plot = img(plot_area);
@@ -165,7 +168,7 @@ cv::Mat Chart::draw() const {
   cv::putText(strip, y_label_, {plot_h / 2 - 60, 17}, cv::FONT_HERSHEY_SIMPLEX, 0.55, kInk, 1, cv::LINE_AA);
   cv::Mat turned;
   cv::rotate(strip, turned, cv::ROTATE_90_COUNTERCLOCKWISE);
-  turned.copyTo(img(cv::Rect(kLeft - 80, kTop, 24, plot_h)));
+  turned.copyTo(img(cv::Rect(4, kTop, 24, plot_h)));
   // Legend of labelled items, top right.
   int row = 0;
   for (const Item& it : items_) {

@@ -25,10 +25,10 @@ TEST(Plot, DrawsSeriesWhereTheDataIs) {
   chart.add_rect(4, 4, 6, 6, cv::Scalar(0, 0, 255), true);
   const cv::Mat img = chart.draw();
   ASSERT_EQ(img.size(), cv::Size(400, 300));
-  // The plot area is 400-90-30 = 280 wide, 300-50-70 = 180 high: data (5, 5) sits at its centre.
-  const cv::Vec3b centre = img.at<cv::Vec3b>(50 + 90, 90 + 140);
+  // The plot area is 400-100-30 = 270 wide, 300-50-70 = 180 high: data (5, 5) sits at its centre.
+  const cv::Vec3b centre = img.at<cv::Vec3b>(50 + 90, 100 + 135);
   EXPECT_EQ(centre, cv::Vec3b(0, 0, 255));
-  const cv::Vec3b outside = img.at<cv::Vec3b>(50 + 20, 90 + 20);
+  const cv::Vec3b outside = img.at<cv::Vec3b>(50 + 20, 100 + 20);
   EXPECT_NE(outside, cv::Vec3b(0, 0, 255));
 }
 
