@@ -55,7 +55,7 @@ class GroundTruthProjector {
  public:
   /// Throws RenderError for a warehouse the renderer could not draw either.
   GroundTruthProjector(const Warehouse& warehouse, const CameraIntrinsics& intrinsics,
-                       double near_m = 0.02);
+                       double near_m = 0.05);
 
   /// Pixel of a world point, or nullopt if it is not in front of the camera (Z <= near) or
   /// outside the region where the distortion model is valid (the undistorted footprint of the

@@ -21,7 +21,7 @@ namespace shelfcross::render {
 namespace {
 
 // One vertex of the static world: position in W, final sRGB colour of its face (lighting
-// baked in), texture coordinate in the marker atlas (untextured faces sample a white texel).
+// baked in), texture coordinate in the marker atlas (unused by untextured faces).
 struct Vertex {
   float p_W[3];
   float rgb[3];
@@ -56,7 +56,18 @@ void main() {
 }
 )";
 
-const char* kFragmentShader = R"(#version 330 core
+// Untextured faces: the colour alone. (On llvmpipe a texture fetch per pixel costs more than
+// the rest of the pipeline, so only marker faces pay for it.)
+const char* kFlatFragmentShader = R"(#version 330 core
+flat in vec3 v_rgb;
+in vec2 v_uv;
+layout(location = 0) out vec4 colour;
+void main() {
+  colour = vec4(v_rgb, 1.0);
+}
+)";
+
+const char* kTexturedFragmentShader = R"(#version 330 core
 flat in vec3 v_rgb;
 in vec2 v_uv;
 uniform sampler2D atlas;
@@ -79,6 +90,26 @@ GLuint compile_shader(GLenum type, const char* source) {
     throw RenderError(std::string("OpenGL: shader compilation failed: ") + log);
   }
   return s;
+}
+
+GLuint link_program(const char* vertex_source, const char* fragment_source) {
+  const GLuint vs = compile_shader(GL_VERTEX_SHADER, vertex_source);
+  const GLuint fs = compile_shader(GL_FRAGMENT_SHADER, fragment_source);
+  const GLuint program = glCreateProgram();
+  glAttachShader(program, vs);
+  glAttachShader(program, fs);
+  glLinkProgram(program);
+  glDeleteShader(vs);
+  glDeleteShader(fs);
+  GLint ok = 0;
+  glGetProgramiv(program, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    char log[2048] = {0};
+    glGetProgramInfoLog(program, sizeof log, nullptr, log);
+    glDeleteProgram(program);
+    throw RenderError(std::string("OpenGL: program link failed: ") + log);
+  }
+  return program;
 }
 
 void check_gl(const char* where) {
@@ -110,8 +141,8 @@ class MeshBuilder {
   }
 
   // Quad c0 c1 c2 c3 (in order around its edge) as triangles (0 1 2) (0 2 3).
-  void quad(const std::array<Eigen::Vector3d, 4>& c, const Eigen::Vector3f& rgb,
-            const std::array<Eigen::Vector2f, 4>& uv) {
+  static void quad(const std::array<Eigen::Vector3d, 4>& c, const Eigen::Vector3f& rgb,
+                   const std::array<Eigen::Vector2f, 4>& uv, std::vector<Vertex>& out) {
     for (int k : {0, 1, 2, 0, 2, 3}) {
       Vertex v;
       for (int a = 0; a < 3; ++a) {
@@ -120,11 +151,16 @@ class MeshBuilder {
       }
       v.uv[0] = uv[static_cast<size_t>(k)].x();
       v.uv[1] = uv[static_cast<size_t>(k)].y();
-      vertices_.push_back(v);
+      out.push_back(v);
     }
   }
   void flat_quad(const std::array<Eigen::Vector3d, 4>& c, const Eigen::Vector3f& rgb) {
-    quad(c, rgb, {white_uv_, white_uv_, white_uv_, white_uv_});
+    const Eigen::Vector2f uv0 = Eigen::Vector2f::Zero();
+    quad(c, rgb, {uv0, uv0, uv0, uv0}, flat_);
+  }
+  void textured_quad(const std::array<Eigen::Vector3d, 4>& c, const Eigen::Vector3f& rgb,
+                     const std::array<Eigen::Vector2f, 4>& uv) {
+    quad(c, rgb, uv, textured_);
   }
 
   // An axis-aligned box [lo, hi] in a frame X_WF: six faces, lit by their outward normals.
@@ -149,15 +185,15 @@ class MeshBuilder {
     }
   }
 
-  void set_white_uv(const Eigen::Vector2f& uv) { white_uv_ = uv; }
-  const std::vector<Vertex>& vertices() const { return vertices_; }
+  /// Untextured faces (drawn first, with the flat-colour program), then marker faces.
+  const std::vector<Vertex>& flat() const { return flat_; }
+  const std::vector<Vertex>& textured() const { return textured_; }
 
  private:
   Lighting lighting_;
   double light_scale_;
   Eigen::Vector3d light_to_W_;
-  Eigen::Vector2f white_uv_ = Eigen::Vector2f::Zero();
-  std::vector<Vertex> vertices_;
+  std::vector<Vertex> flat_, textured_;
 };
 
 Eigen::Isometry3d interpolate_pose(const Eigen::Isometry3d& X0, const Eigen::Isometry3d& X1,
@@ -181,20 +217,20 @@ struct Renderer::Impl {
   EglContext egl;
   std::string gl_renderer, gl_version;
 
-  GLuint program = 0, vao = 0, vbo = 0, fbo = 0, colour_rb = 0, depth_rb = 0, atlas = 0;
-  GLint clip_from_world_loc = -1;
-  GLsizei vertex_count = 0;
+  GLuint flat_program = 0, textured_program = 0, vao = 0, vbo = 0, fbo = 0, colour_rb = 0, depth_rb = 0, atlas = 0;
+  GLint flat_clip_loc = -1, textured_clip_loc = -1;
+  GLsizei flat_count = 0, textured_count = 0;
 
   cv::Mat map1, map2;        // fixed-point remap maps (CV_16SC2 + CV_16UC1)
   std::unique_ptr<SensorNoise> noise;  // when options.noise_stddev > 0
-  cv::Mat bgra_hi, bgra, acc, distorted_bgra;  // per-frame buffers, allocated once
+  cv::Mat rgba_hi, rgba, acc, distorted_rgba;  // per-frame RGBA buffers, allocated once
 
   Impl(const Warehouse& w, const CameraIntrinsics& k, const RenderOptions& o)
       : warehouse(w), K(k), options(o), egl(o.egl_platform) {}
 
   void build(const SceneLayout& layout);
   void release_gl();  // deletes the GL objects build() made (context current)
-  void draw_and_read(const Eigen::Isometry3d& X_WC);  // -> bgra (1x render size)
+  void draw_and_read(const Eigen::Isometry3d& X_WC);  // -> rgba (1x render size)
   void finish(std::uint64_t noise_seed, cv::Mat& bgr);
 };
 
@@ -230,8 +266,22 @@ void Renderer::Impl::build(const SceneLayout& layout) {
 
   // ---- static world ----
   MeshBuilder mesh(warehouse.lighting, options.light_scale);
-  mesh.set_white_uv({0.5f / static_cast<float>(atlas_w), 0.5f / static_cast<float>(tile)});
-  // Room: floor, ceiling, four walls, as the inside of the arena box (normals inward).
+  for (const Cuboid& c : layout.cuboids) {
+    const Rgb& albedo = c.kind == Cuboid::Kind::kBox ? warehouse.box_colour : warehouse.bar_colour;
+    mesh.cuboid(layout.X_WS[static_cast<size_t>(c.shelf)], c.min_S_m, c.max_S_m, albedo);
+  }
+  for (const TagQuad& t : layout.tags) {
+    mesh.flat_quad(t.corners_W_m,
+                   mesh.colour(warehouse.tag_colour, kTagFlat + (1.0 - kTagFlat) * mesh.shade(t.normal_W)));
+    // Tags are coloured on their outer side only: half-way between the tag and the bar, a
+    // backing square in the bar colour is what shows from inside the shelf (a tag of the
+    // back face seen through the cells from the front is not a tag blob).
+    std::array<Eigen::Vector3d, 4> back = t.corners_W_m;
+    for (auto& c : back) c -= 0.5 * kSurfaceOffset_m * t.normal_W;
+    mesh.flat_quad(back, mesh.colour(warehouse.bar_colour, mesh.shade(-t.normal_W)));
+  }
+  // Room: floor, ceiling, four walls, as the inside of the arena box (normals inward); after
+  // the shelves, so that the early depth test skips most of their hidden pixels.
   {
     const Eigen::Vector3d lo = warehouse.arena_min_W_m, hi = warehouse.arena_max_W_m;
     const Eigen::Isometry3d I = Eigen::Isometry3d::Identity();
@@ -256,24 +306,19 @@ void Renderer::Impl::build(const SceneLayout& layout) {
     for (int axis : {0, 1})
       for (bool high : {false, true}) room_face(axis, high, warehouse.wall_colour);
   }
-  for (const Cuboid& c : layout.cuboids) {
-    const Rgb& albedo = c.kind == Cuboid::Kind::kBox ? warehouse.box_colour : warehouse.bar_colour;
-    mesh.cuboid(layout.X_WS[static_cast<size_t>(c.shelf)], c.min_S_m, c.max_S_m, albedo);
-  }
-  for (const TagQuad& t : layout.tags) {
-    mesh.flat_quad(t.corners_W_m,
-                   mesh.colour(warehouse.tag_colour, kTagFlat + (1.0 - kTagFlat) * mesh.shade(t.normal_W)));
-  }
   for (const MarkerQuad& m : layout.markers) {
     const float u0 = static_cast<float>(tile_of_id.at(m.marker_id) * tile) / atlas_w;
     const float u1 = static_cast<float>((tile_of_id.at(m.marker_id) + 1) * tile) / atlas_w;
     // Corners TL TR BR BL <- image rows top (v = 0) to bottom (v = 1).
-    mesh.quad(m.quiet_corners_W_m,
+    mesh.textured_quad(m.quiet_corners_W_m,
               mesh.colour({kPaperAlbedo, kPaperAlbedo, kPaperAlbedo}, mesh.shade(m.normal_W)),
               {Eigen::Vector2f(u0, 0.f), Eigen::Vector2f(u1, 0.f), Eigen::Vector2f(u1, 1.f),
                Eigen::Vector2f(u0, 1.f)});
   }
-  vertex_count = static_cast<GLsizei>(mesh.vertices().size());
+  flat_count = static_cast<GLsizei>(mesh.flat().size());
+  textured_count = static_cast<GLsizei>(mesh.textured().size());
+  std::vector<Vertex> vertices = mesh.flat();
+  vertices.insert(vertices.end(), mesh.textured().begin(), mesh.textured().end());
 
   // ---- GL objects ----
   egl.make_current();
@@ -282,31 +327,19 @@ void Renderer::Impl::build(const SceneLayout& layout) {
   gl_renderer = r ? r : "?";
   gl_version = v ? v : "?";
 
-  const GLuint vs = compile_shader(GL_VERTEX_SHADER, kVertexShader);
-  const GLuint fs = compile_shader(GL_FRAGMENT_SHADER, kFragmentShader);
-  program = glCreateProgram();
-  glAttachShader(program, vs);
-  glAttachShader(program, fs);
-  glLinkProgram(program);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
-  GLint ok = 0;
-  glGetProgramiv(program, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    char log[2048] = {0};
-    glGetProgramInfoLog(program, sizeof log, nullptr, log);
-    throw RenderError(std::string("OpenGL: program link failed: ") + log);
-  }
-  clip_from_world_loc = glGetUniformLocation(program, "clip_from_world");
-  glUseProgram(program);
-  glUniform1i(glGetUniformLocation(program, "atlas"), 0);
+  flat_program = link_program(kVertexShader, kFlatFragmentShader);
+  flat_clip_loc = glGetUniformLocation(flat_program, "clip_from_world");
+  textured_program = link_program(kVertexShader, kTexturedFragmentShader);
+  textured_clip_loc = glGetUniformLocation(textured_program, "clip_from_world");
+  glUseProgram(textured_program);
+  glUniform1i(glGetUniformLocation(textured_program, "atlas"), 0);
 
   glGenVertexArrays(1, &vao);
   glBindVertexArray(vao);
   glGenBuffers(1, &vbo);
   glBindBuffer(GL_ARRAY_BUFFER, vbo);
-  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(mesh.vertices().size() * sizeof(Vertex)),
-               mesh.vertices().data(), GL_STATIC_DRAW);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(Vertex)),
+               vertices.data(), GL_STATIC_DRAW);
   glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex),
                         reinterpret_cast<const void*>(offsetof(Vertex, p_W)));
   glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex),
@@ -362,9 +395,9 @@ void Renderer::Impl::build(const SceneLayout& layout) {
   check_gl("renderer initialisation");
 
   // ---- per-frame buffers and the fixed-point distortion map, once ----
-  bgra_hi.create(hi_height, hi_width, CV_8UC4);
-  bgra.create(camera.height_px, camera.width_px, CV_8UC4);
-  distorted_bgra.create(K.height_px, K.width_px, CV_8UC4);
+  rgba_hi.create(hi_height, hi_width, CV_8UC4);
+  rgba.create(camera.height_px, camera.width_px, CV_8UC4);
+  distorted_rgba.create(K.height_px, K.width_px, CV_8UC4);
   cv::convertMaps(camera.map_xy, cv::noArray(), map1, map2, CV_16SC2);
 }
 
@@ -373,26 +406,34 @@ void Renderer::Impl::draw_and_read(const Eigen::Isometry3d& X_WC) {
   const Eigen::Matrix4f clip_from_world =
       (clip_from_camera * X_WC.inverse(Eigen::Isometry).matrix()).cast<float>();
   glBindFramebuffer(GL_FRAMEBUFFER, fbo);
-  glUseProgram(program);
   glBindVertexArray(vao);
-  glUniformMatrix4fv(clip_from_world_loc, 1, GL_FALSE, clip_from_world.data());
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-  glDrawArrays(GL_TRIANGLES, 0, vertex_count);
+  // Two draw calls for the whole static world: flat faces, then marker faces.
+  glUseProgram(flat_program);
+  glUniformMatrix4fv(flat_clip_loc, 1, GL_FALSE, clip_from_world.data());
+  glDrawArrays(GL_TRIANGLES, 0, flat_count);
+  if (textured_count > 0) {
+    glUseProgram(textured_program);
+    glUniformMatrix4fv(textured_clip_loc, 1, GL_FALSE, clip_from_world.data());
+    glDrawArrays(GL_TRIANGLES, flat_count, textured_count);
+  }
   // Rows come back bottom GL row first = image row 0 first (see gl_clip_from_camera).
-  glReadPixels(0, 0, hi_width, hi_height, GL_BGRA, GL_UNSIGNED_BYTE, bgra_hi.data);
+  // RGBA, the renderbuffer's own layout on Mesa: a plain copy (BGRA costs a swizzle pass,
+  // ~6x slower on llvmpipe); the channel order is fixed in the final cvtColor.
+  glReadPixels(0, 0, hi_width, hi_height, GL_RGBA, GL_UNSIGNED_BYTE, rgba_hi.data);
   check_gl("draw and readback");
   if (options.supersample > 1) {
     // Exact s x s block means for an integer factor.
-    cv::resize(bgra_hi, bgra, bgra.size(), 0, 0, cv::INTER_AREA);
+    cv::resize(rgba_hi, rgba, rgba.size(), 0, 0, cv::INTER_AREA);
   }
 }
 
 void Renderer::Impl::finish(std::uint64_t noise_seed, cv::Mat& bgr) {
-  const cv::Mat& undistorted = options.supersample > 1 ? bgra : bgra_hi;
-  cv::remap(undistorted, distorted_bgra, map1, map2, cv::INTER_LINEAR, cv::BORDER_CONSTANT,
+  const cv::Mat& undistorted = options.supersample > 1 ? rgba : rgba_hi;
+  cv::remap(undistorted, distorted_rgba, map1, map2, cv::INTER_LINEAR, cv::BORDER_CONSTANT,
             cv::Scalar(0, 0, 0, 255));
   bgr.create(K.height_px, K.width_px, CV_8UC3);
-  cv::cvtColor(distorted_bgra, bgr, cv::COLOR_BGRA2BGR);
+  cv::cvtColor(distorted_rgba, bgr, cv::COLOR_RGBA2BGR);
   if (noise) noise->apply(bgr, noise_seed);
 }
 
@@ -433,8 +474,9 @@ void Renderer::Impl::release_gl() {
   glDeleteTextures(1, &atlas);
   glDeleteBuffers(1, &vbo);
   glDeleteVertexArrays(1, &vao);
-  glDeleteProgram(program);
-  fbo = colour_rb = depth_rb = atlas = vbo = vao = program = 0;
+  glDeleteProgram(flat_program);
+  glDeleteProgram(textured_program);
+  fbo = colour_rb = depth_rb = atlas = vbo = vao = flat_program = textured_program = 0;
 }
 
 void Renderer::set_warehouse(const Warehouse& warehouse) {
@@ -484,7 +526,7 @@ void Renderer::render_blurred_into(const Eigen::Isometry3d& X_WC_prev,
     return;
   }
   Impl& m = *impl_;
-  cv::Mat& undistorted = m.options.supersample > 1 ? m.bgra : m.bgra_hi;
+  cv::Mat& undistorted = m.options.supersample > 1 ? m.rgba : m.rgba_hi;
   m.acc.create(undistorted.size(), CV_16UC4);
   m.acc.setTo(cv::Scalar::all(0));
   for (int k = 0; k < n; ++k) {

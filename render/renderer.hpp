@@ -10,12 +10,12 @@
 //      covers the undistorted footprint of every output pixel; see camera_model.hpp), lit
 //      per face (ambient + Lambert directional, baked into the vertex colours since both are
 //      constant per planar face), sRGB-encoded;
-//   2. glReadPixels as BGRA (rows already in image order: the projection writes image row v
+//   2. glReadPixels as RGBA (rows already in image order: the projection writes image row v
 //      to GL row v);
 //   3. [supersample s > 1: exact s x s block average (cv::resize INTER_AREA)]
 //      [motion blur: average of the N sub-pose renders, integer, rounded]
 //   4. cv::remap with fixed-point maps computed once: output pixel (u, v) samples the render
-//      at the undistorted position of (u, v) (bilinear), then BGRA -> BGR;
+//      at the undistorted position of (u, v) (bilinear), then RGBA -> BGR;
 //   5. [noise: seeded, see noise.hpp (a field drawn once, a seeded window of it per frame)].
 // Deterministic: the same warehouse, intrinsics, options, pose and seed give byte-identical
 // images from one renderer or several (same machine and driver). No MSAA.
@@ -43,7 +43,7 @@ struct RenderOptions {
   int motion_blur_samples = 1;    ///< sub-poses averaged by render_blurred (1..64)
   double light_scale = 1.0;       ///< exposure: multiplies the warehouse's lighting
   int supersample = 1;            ///< s x s ordered supersampling, 1..4 (deterministic AA)
-  double near_m = 0.02;           ///< clip planes of the camera
+  double near_m = 0.05;           ///< clip planes of the camera
   double far_m = 50.0;
   /// kFromEnvironment reads SHELFCROSS_EGL=auto|device|surfaceless (unset: auto).
   EglPlatform egl_platform = EglPlatform::kFromEnvironment;
