@@ -133,6 +133,8 @@ void read_control(const Map& m, ControlGains& c) {
   opt(m, "back_off_speed_mps", c.back_off_speed_mps, kPositive);
   opt(m, "crossing_speed_mps", c.crossing_speed_mps, kPositive);
   opt(m, "max_control_dt_s", c.max_control_dt_s, kPositive);
+  opt(m, "approach_cone_rad", c.approach_cone_rad, kPositive);
+  opt(m, "commit_range_m", c.commit_range_m, kNonNegative);
   m.finish();
 }
 
@@ -183,6 +185,11 @@ void read_mission(const Map& m, MissionParams& p) {
   opt(m, "cross_range_max_m", p.cross_range_max_m, kPositive);
   opt(m, "beyond_distance_m", p.beyond_distance_m, kNonNegative);
   opt(m, "edge_margin_px", p.edge_margin_px, kNonNegative);
+  opt(m, "settle_s", p.settle_s, kNonNegative);
+  opt(m, "settle_z_m", p.settle_z_m, kPositive);
+  opt(m, "settle_psi_rad", p.settle_psi_rad, kPositive);
+  opt(m, "settle_hold_s", p.settle_hold_s, kNonNegative);
+  opt(m, "pose_fresh_s", p.pose_fresh_s, kPositive);
   m.finish();
 }
 

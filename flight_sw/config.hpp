@@ -20,6 +20,7 @@
 //               psi_integral_limit_rad_s yaw_rate_max_radps lateral_speed_mps
 //               psi_lateral_threshold_rad viewpoint_kp viewpoint_speed_max_mps viewpoint_yaw_kp
 //               search_yaw_rate_radps back_off_speed_mps crossing_speed_mps max_control_dt_s
+//               approach_cone_rad commit_range_m
 //   rc:         rc_per_mps_horizontal rc_per_mps_vertical rc_per_radps_yaw rc_period_s
 //               keepalive_s
 //   timeouts:   command_reply_s takeoff_reply_s land_reply_s command_retries command_gap_s
@@ -29,7 +30,8 @@
 //               viewpoint_position_tolerance_m viewpoint_yaw_tolerance_rad
 //               viewpoint_settle_frames viewpoint_lost_s vehicle_size_m [x, y, z]
 //               crossing_margin_m crossing_yaw_tolerance_rad crossing_attempts cross_range_max_m
-//               beyond_distance_m edge_margin_px
+//               beyond_distance_m edge_margin_px settle_s settle_z_m settle_psi_rad
+//               settle_hold_s pose_fresh_s
 
 #include <string>
 #include <vector>
@@ -95,14 +97,23 @@ struct ControlGains {
   double ki_psi = 0.2;
   double psi_integral_limit_rad_s = 0.5;
   double yaw_rate_max_radps = 0.8;
-  double lateral_speed_mps = 0.10;          ///< V_y of the bang-off-bang law
-  double psi_lateral_threshold_rad = 0.03;  ///< psi_L of the bang-off-bang law
+  double lateral_speed_mps = 0.08;          ///< V_y of the bang-off-bang law
+  double psi_lateral_threshold_rad = 0.04;  ///< psi_L of the bang-off-bang law
   double viewpoint_kp = 0.8;                ///< (m/s) per m toward the optimal viewpoint
   double viewpoint_speed_max_mps = 0.4;
   double viewpoint_yaw_kp = 1.0;            ///< (rad/s) per rad toward facing the shelf
   double search_yaw_rate_radps = 0.3;       ///< yaw sweep while no tag is in view
   double back_off_speed_mps = 0.2;          ///< backing away to see a grid fragment whole
   double crossing_speed_mps = 0.3;          ///< open-loop forward speed through the cell
+  /// Approach path perpendicular to the face (METHOD.md section 3): the forward speed xdot_0
+  /// is flown only while the line of sight to the cell is within this angle of its normal;
+  /// outside it the vehicle holds its range while the lateral law brings it onto the normal.
+  double approach_cone_rad = 0.12;
+  /// Settle before committing: inside this range the vehicle flies forward only while it is
+  /// settled (see MissionParams::settle_s), so that the crossing starts from a still, centred
+  /// state whatever the video latency. Must exceed the range at which the corner tags leave
+  /// the view (about 0.55 m for 34 cm cells) plus the stopping distance.
+  double commit_range_m = 0.95;
   double max_control_dt_s = 0.2;            ///< integrator step cap across frame gaps
 };
 
@@ -148,6 +159,14 @@ struct MissionParams {
   double cross_range_max_m = 0.9;  ///< tags leaving the view farther than this: lost, not close
   double beyond_distance_m = 0.5;  ///< flown past the back face before landing
   double edge_margin_px = 4.0;     ///< a tag this close to the border is leaving the view
+  /// Settled: the lateral law has commanded 0 for this long (more than the video latency plus
+  /// the autopilot's velocity time constant, so the last pose is not a moving one) ...
+  double settle_s = 1.2;
+  double settle_z_m = 0.03;        ///< ... and |e_z| is within this ...
+  double settle_psi_rad = 0.04;    ///< ... and |e_psi| within this.
+  double settle_hold_s = 10.0;     ///< holding short longer than this: go on anyway
+  /// The crossing is judged on a pose from a frame received at most this long ago.
+  double pose_fresh_s = 0.25;
 };
 
 struct FlightConfig {

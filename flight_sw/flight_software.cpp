@@ -427,6 +427,8 @@ void FlightSoftware::take_inventory(const cv::Mat& bgr) {
     return;
   }
   enter(Phase::Approach, "inventory taken; approaching cell " + cell_text(*target_));
+  lateral_active_ns_ = now_ns_;  // not yet seen still
+  hold_since_ns_.reset();
 }
 
 bool FlightSoftware::select_target(const cv::Mat& bgr) {
@@ -559,24 +561,41 @@ bool FlightSoftware::reacquire(const cv::Mat& bgr) {
   return true;
 }
 
+// The crossing line (open loop, METHOD.md section 3): straight, at constant speed, from the
+// last visual position through the cell's centre at mid-depth, so that a residual lateral or
+// vertical offset y0 at range r leaves only y0 (depth/2) / (r + depth/2) at either face
+// instead of growing along a heading that looks at the front face's centre.
+Eigen::Vector3d FlightSoftware::crossing_direction_K(const PoseEstimate& pose) const {
+  const Eigen::Vector3d aim(0.5 * config_.shelf.depth_m, 0.0, 0.0);
+  return (aim - pose.p_FB_m()).normalized();
+}
+
 bool FlightSoftware::crossing_allowed(const PoseEstimate& pose, std::string& why) const {
   const MissionParams& m = config_.mission;
   const Eigen::Vector2d opening = cell_opening_m(config_.shelf, *target_);
   const double psi = std::abs(pose.yaw_rad);
-  // Footprint across the opening of a vehicle turned by psi; the crossing is flown straight
-  // along the heading, so the lateral position drifts by tan(psi) per metre forward.
+  // Footprint across the opening of a vehicle turned by psi (its heading is held).
   const double footprint = m.vehicle_size_m.y() * std::cos(psi) + m.vehicle_size_m.x() * std::sin(psi);
   const double tol_y = 0.5 * (opening.x() - footprint) - m.crossing_margin_m;
   const double tol_z = 0.5 * (opening.y() - m.vehicle_size_m.z()) - m.crossing_margin_m;
   const Eigen::Vector3d p = pose.p_FB_m();
-  const double to_front = std::max(0.0, -p.x()), to_back = to_front + config_.shelf.depth_m;
-  const double y_front = p.y() + to_front * std::tan(pose.yaw_rad);
-  const double y_back = p.y() + to_back * std::tan(pose.yaw_rad);
-  if (psi > m.crossing_yaw_tolerance_rad) {
+  const Eigen::Vector3d d = crossing_direction_K(pose);
+  // Where the crossing line meets the front and back faces.
+  const auto at = [&](double x) -> Eigen::Vector3d { return p + d * ((x - p.x()) / d.x()); };
+  const Eigen::Vector3d front = at(0.0), back = at(config_.shelf.depth_m);
+  // The pose is honest only if it is recent (frames may drop) and the vehicle was not moving
+  // sideways when it was taken: the video latency hides up to V_y (latency + tau) of motion.
+  const bool fresh = ns_to_seconds(now_ns_ - pose_t_ns_) <= m.pose_fresh_s;
+  const bool still = ns_to_seconds(pose_t_ns_ - lateral_active_ns_) >= m.settle_s;
+  if (!fresh) {
+    why = "last pose too old";
+  } else if (!still) {
+    why = "still moving sideways";
+  } else if (psi > m.crossing_yaw_tolerance_rad) {
     why = "heading off the cell normal";
-  } else if (std::abs(y_front) > tol_y || std::abs(y_back) > tol_y) {
+  } else if (d.x() <= 0.0 || std::abs(front.y()) > tol_y || std::abs(back.y()) > tol_y) {
     why = "off-centre laterally";
-  } else if (std::abs(p.z()) > tol_z) {
+  } else if (std::abs(front.z()) > tol_z || std::abs(back.z()) > tol_z) {
     why = "off-centre vertically";
   } else {
     return true;
@@ -601,23 +620,48 @@ void FlightSoftware::approach(const cv::Mat& bgr) {
     const double iou = overlap.area() / (predicted.area() + box_px_.area() - overlap.area());
     if (!telemetry_.tracker_ok || iou < 0.7) start_tracker(bgr, box_px_);
     const PoseEstimate& pose = *pose_K_;
+    pose_t_ns_ = now_ns_;
     telemetry_.pose = pose;
     telemetry_.pose_in_cell_frame = true;
     const cv::Point2d c = centre_of(box_px_);
     const double range_m = std::max(0.05, -pose.X_FC.translation().x());
     const double e_z = (k.cy_px - c.y) * range_m / k.fy_px;   // eq. 11
     const double e_psi = std::atan((k.cx_px - c.x) / k.fx_px);  // eq. 13, 14
-    const double psi = pose.yaw_rad;
+    // Heading relative to the cell for the lateral law: the heading at which the cell is
+    // centred (the vehicle's heading plus the cell's remaining bearing in the image), i.e. the
+    // heading the yaw loop converges to. Using it rather than the vehicle's momentary heading
+    // keeps the yaw loop's lag (a second or more with the video latency) out of the lateral
+    // loop; with that lag the law pushed sideways the wrong way while the yaw caught up.
+    const double psi = pose.yaw_rad + e_psi;
     VelocityCommand v;
-    v.vx_B_mps = g.forward_speed_mps;                                              // eq. 10
     v.vz_mps = pi_z_.update(e_z, dt);                                              // eq. 12
     v.yaw_rate_radps = pi_psi_.update(e_psi, dt);                                  // eq. 15
     v.vy_B_mps = bang_off_bang(psi, g.psi_lateral_threshold_rad, g.lateral_speed_mps);  // Fig. 19
+    if (v.vy_B_mps != 0.0) lateral_active_ns_ = now_ns_;
+    // Forward at the constant xdot_0 (eq. 10) along the cell normal: held at 0 while the
+    // line of sight is outside the approach cone, and, inside commit_range_m, until settled
+    // (laterally still, centred vertically and in heading) so that the crossing starts from a
+    // state the last pose describes, whatever the latency. Settling is given up after
+    // settle_hold_s; the crossing gate then decides.
+    const MissionParams& m = config_.mission;
+    const bool settled = ns_to_seconds(now_ns_ - lateral_active_ns_) >= m.settle_s &&
+                         std::abs(e_z) <= m.settle_z_m && std::abs(e_psi) <= m.settle_psi_rad;
+    const bool in_cone = std::abs(psi) <= g.approach_cone_rad;
+    const bool settling = -pose.p_FB_m().x() <= g.commit_range_m && !settled;
+    if (!settling) hold_since_ns_.reset();
+    if (settling && !hold_since_ns_) hold_since_ns_ = now_ns_;
+    const bool settle_given_up =
+        hold_since_ns_ && ns_to_seconds(now_ns_ - *hold_since_ns_) > m.settle_hold_s;
+    const bool hold = !in_cone || (settling && !settle_given_up);
+    v.vx_B_mps = hold ? 0.0 : g.forward_speed_mps;                                 // eq. 10
     set_velocity(v);
     telemetry_.e_z_m = e_z;
     telemetry_.e_psi_rad = e_psi;
     telemetry_.psi_cell_rad = psi;
+    telemetry_.yaw_cell_rad = pose.yaw_rad;
     telemetry_.lateral_mps = v.vy_B_mps;
+    telemetry_.settled = settled;
+    telemetry_.holding_short = hold;
     return;
   }
   // The corner tags are gone. Close and at the border: they left the view; cross if centred.
@@ -627,9 +671,14 @@ void FlightSoftware::approach(const cv::Mat& bgr) {
       const double distance = -pose_K_->p_FB_m().x() + config_.shelf.depth_m +
                               0.5 * config_.mission.vehicle_size_m.x() +
                               config_.mission.beyond_distance_m;
-      cross_duration_ns_ = seconds_to_ns(distance / g.crossing_speed_mps);
+      // Along the crossing line at crossing_speed_mps, heading held (yaw rate 0); the line in
+      // K turned into the body frame by the heading: v_B = R_z(-yaw) v_K.
+      const Eigen::Vector3d d = crossing_direction_K(*pose_K_);
+      cross_duration_ns_ = seconds_to_ns(distance / (d.x() * g.crossing_speed_mps));
       enter(Phase::Cross, "corner tags left the view: crossing " + cell_text(*target_));
-      set_velocity({g.crossing_speed_mps, 0.0, 0.0, 0.0});
+      const double cy = std::cos(pose_K_->yaw_rad), sy = std::sin(pose_K_->yaw_rad);
+      set_velocity({g.crossing_speed_mps * (cy * d.x() + sy * d.y()),
+                    g.crossing_speed_mps * (-sy * d.x() + cy * d.y()), g.crossing_speed_mps * d.z(), 0.0});
       return;
     }
     if (!back_off_since_ns_) {

@@ -125,6 +125,9 @@ struct Telemetry {
   double e_psi_rad = 0.0;
   double psi_cell_rad = 0.0;   ///< heading relative to the cell normal (lateral law input)
   double lateral_mps = 0.0;    ///< bang-off-bang output
+  double yaw_cell_rad = 0.0;   ///< the vehicle's own heading relative to the cell normal
+  bool settled = false;        ///< still and centred long enough to commit to the crossing
+  bool holding_short = false;  ///< forward speed held at 0 (off the normal, or settling)
   Eigen::Vector3d e1_G_m = Eigen::Vector3d::Zero();  ///< to the optimal viewpoint
   VelocityCommand velocity;    ///< last commanded
   RcSticks rc;                 ///< last sent
@@ -172,6 +175,7 @@ class FlightSoftware {
   bool reacquire(const cv::Mat& bgr);
   void start_tracker(const cv::Mat& bgr, const cv::Rect2d& box);
   bool crossing_allowed(const PoseEstimate& pose_K, std::string& why) const;
+  Eigen::Vector3d crossing_direction_K(const PoseEstimate& pose_K) const;
   // Actions
   void enter(Phase phase, const std::string& event);
   void command_takeoff();
@@ -220,6 +224,9 @@ class FlightSoftware {
   cv::Rect2d box_px_;                   ///< tracked box: corner tag centres +- half a tag
   std::array<cv::Point2d, 4> corner_px_;  ///< last measured corner tag centres
   std::optional<PoseEstimate> pose_K_;  ///< last pose in the cell frame
+  TimeNs pose_t_ns_ = 0;                ///< when the frame of pose_K_ was received
+  TimeNs lateral_active_ns_ = 0;        ///< last time the lateral law commanded a speed
+  std::optional<TimeNs> hold_since_ns_;  ///< holding short of the shelf to settle
   bool near_edge_ = false;              ///< a corner tag was about to leave the view
   std::optional<TimeNs> lost_since_ns_;
   std::optional<TimeNs> back_off_since_ns_;
