@@ -1,4 +1,5 @@
 #include "render/scene.hpp"
+#include "shelfcross/aruco_dictionaries.hpp"
 
 #include <algorithm>
 #include <sstream>
@@ -11,29 +12,6 @@
 namespace shelfcross::render {
 namespace {
 
-const std::pair<const char*, int> kDictionaries[] = {
-    {"DICT_4X4_50", cv::aruco::DICT_4X4_50},
-    {"DICT_4X4_100", cv::aruco::DICT_4X4_100},
-    {"DICT_4X4_250", cv::aruco::DICT_4X4_250},
-    {"DICT_4X4_1000", cv::aruco::DICT_4X4_1000},
-    {"DICT_5X5_50", cv::aruco::DICT_5X5_50},
-    {"DICT_5X5_100", cv::aruco::DICT_5X5_100},
-    {"DICT_5X5_250", cv::aruco::DICT_5X5_250},
-    {"DICT_5X5_1000", cv::aruco::DICT_5X5_1000},
-    {"DICT_6X6_50", cv::aruco::DICT_6X6_50},
-    {"DICT_6X6_100", cv::aruco::DICT_6X6_100},
-    {"DICT_6X6_250", cv::aruco::DICT_6X6_250},
-    {"DICT_6X6_1000", cv::aruco::DICT_6X6_1000},
-    {"DICT_7X7_50", cv::aruco::DICT_7X7_50},
-    {"DICT_7X7_100", cv::aruco::DICT_7X7_100},
-    {"DICT_7X7_250", cv::aruco::DICT_7X7_250},
-    {"DICT_7X7_1000", cv::aruco::DICT_7X7_1000},
-    {"DICT_ARUCO_ORIGINAL", cv::aruco::DICT_ARUCO_ORIGINAL},
-    {"DICT_APRILTAG_16h5", cv::aruco::DICT_APRILTAG_16h5},
-    {"DICT_APRILTAG_25h9", cv::aruco::DICT_APRILTAG_25h9},
-    {"DICT_APRILTAG_36h10", cv::aruco::DICT_APRILTAG_36h10},
-    {"DICT_APRILTAG_36h11", cv::aruco::DICT_APRILTAG_36h11},
-};
 
 [[noreturn]] void fail(const ShelfSpec& s, int index, const std::string& what) {
   std::ostringstream os;
@@ -44,11 +22,9 @@ const std::pair<const char*, int> kDictionaries[] = {
 }  // namespace
 
 int aruco_dictionary_id(const std::string& name) {
-  for (const auto& [n, id] : kDictionaries) {
-    if (name == n) return id;
-  }
+  if (const ArucoDictionaryEntry* e = find_aruco_dictionary(name)) return e->id;
   std::string known;
-  for (const auto& [n, id] : kDictionaries) known += std::string(known.empty() ? "" : ", ") + n;
+  for (const ArucoDictionaryEntry& e : kArucoDictionaries) known += std::string(known.empty() ? "" : ", ") + e.name;
   throw RenderError("warehouse: unknown ArUco dictionary '" + name + "' (known: " + known + ")");
 }
 

@@ -1,5 +1,6 @@
 #include "verification/scenario.hpp"
 #include "verification/dispersion.hpp"
+#include "shelfcross/aruco_dictionaries.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -262,24 +263,6 @@ class Writer {
   bool flow_;
   std::vector<std::string> parts_;
 };
-
-// ---- ArUco dictionaries (OpenCV's predefined names and sizes) ----
-
-const std::map<std::string, int>& aruco_dictionaries() {
-  static const std::map<std::string, int> sizes = [] {
-    std::map<std::string, int> m;
-    for (const char* bits : {"4X4", "5X5", "6X6", "7X7"}) {
-      for (int n : {50, 100, 250, 1000}) m[std::string("DICT_") + bits + "_" + std::to_string(n)] = n;
-    }
-    m["DICT_ARUCO_ORIGINAL"] = 1024;
-    m["DICT_APRILTAG_16h5"] = 30;
-    m["DICT_APRILTAG_25h9"] = 35;
-    m["DICT_APRILTAG_36h10"] = 2320;
-    m["DICT_APRILTAG_36h11"] = 587;
-    return m;
-  }();
-  return sizes;
-}
 
 // ---- The sections ----
 
@@ -673,10 +656,9 @@ std::vector<BoxPlacement> place_random_boxes(const Warehouse& w, const ShelfSpec
 }
 
 std::optional<int> aruco_dictionary_size(const std::string& name) {
-  const auto& m = aruco_dictionaries();
-  const auto it = m.find(name);
-  if (it == m.end()) return std::nullopt;
-  return it->second;
+  const ArucoDictionaryEntry* e = find_aruco_dictionary(name);
+  if (!e) return std::nullopt;
+  return e->size;
 }
 
 Scenario load_scenario(const std::string& path) { return read(config::Document::from_file(path)); }
