@@ -16,7 +16,8 @@
 //   TakeOff --ok (or reply lost while the height says airborne)--> FindShelf
 //   FindShelf --whole grid in view--> GoToViewpoint --at the optimal viewpoint, settled-->
 //   TakeInventory --inventory_frames full views read--> Approach (target = empty cell nearest
-//   the image centre) --corner tags leave the view, centred within tolerance--> Cross
+//   the image centre; forward only near the normal and, close in, once settled)
+//   --corner tags leave the view, centred within tolerance on a fresh still pose--> Cross
 //   --distance past the back face flown (timed)--> Land --ok--> Done
 // Failsafes: no frame for video_hover_s: hover (rc 0 0 0 0); for video_land_s: land (not while
 // crossing: the crossing is open loop and stopping inside the shelf is worse). Target lost:
@@ -31,7 +32,19 @@
 // (y_K > 0; y left) must then be turned right to see it: psi = atan2(-y_K, -x_K) < 0. So
 // psi < -psi_L means "left of the normal": move right, vy_B = -V_y; psi > psi_L means right of
 // it: move left, vy_B = +V_y. Hence vy_B = bang_off_bang(psi, psi_L, V_y), which drives y_K
-// and with it psi to zero: the path straightens onto the cell normal.
+// and with it psi to zero: the path straightens onto the cell normal. The psi fed to the law
+// is the heading at which the cell is centred (vision's heading plus the cell's remaining
+// bearing e_psi), the value the yaw loop converges to, so that the yaw loop's lag does not
+// enter the lateral loop (with 0.12-0.35 s of video latency it made the law push the wrong way
+// a quarter of the time and kept the vehicle 5-15 cm off the normal at the crossing).
+// Approach speed (eq. 10): xdot_0 forward while the line of sight is within approach_cone_rad
+// of the normal (the paper's short path perpendicular to the face) and, inside
+// commit_range_m, while settled (lateral law quiet for settle_s, e_z and e_psi small); 0
+// otherwise, the other loops running (hover and settle; given up after settle_hold_s).
+// Crossing: gated on a pose at most pose_fresh_s old taken settle_s after the last lateral
+// command (so the latency hides no sideways motion), on the heading, and on where the crossing
+// line meets the front and back faces; flown open loop along the straight line from the last
+// pose through the cell centre at mid-depth, heading held, at crossing_speed_mps.
 // Vertical: dy_im = cy - v_box (pixels, > 0 when the target is above the principal point);
 // e_z = dy_im * range / fy (metres, eq. 11 with k_e = fy / range); vz = PI(e_z) climbs toward
 // it. Heading: dx_im = u_box - cx; e_psi = atan(-dx_im / fx) (eq. 13-14 with k_dpsi = 1,
