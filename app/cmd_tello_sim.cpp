@@ -65,6 +65,8 @@ const CommandRegistration kTelloSim{
       sub.add_option("--loss-replies", f.replies.loss, "probability that a reply is lost")->check(probability);
       sub.add_option("--loss-state", f.state.loss, "probability that a state datagram is lost")->check(probability);
       sub.add_option("--loss-video", f.video.loss, "probability that a video datagram is lost")->check(probability);
+      sub.add_option("--loss-video-frames", f.video_frame_loss, "probability that a whole video frame is lost")
+          ->check(probability);
       sub.add_option("--delay-commands", f.commands.delay_ms, "ms added to every command")->check(delay);
       sub.add_option("--delay-replies", f.replies.delay_ms, "ms added to every reply")->check(delay);
       sub.add_option("--delay-state", f.state.delay_ms, "ms added to every state datagram")->check(delay);
@@ -77,6 +79,9 @@ const CommandRegistration kTelloSim{
       sub.add_option("--no-valid-imu", f.no_valid_imu, "probability of 'error No valid imu' for a manoeuvre (1: always)")
           ->check(probability);
       sub.add_option("--video-stall", o->video_stall, "T,D: no frames from T s after the start for D s");
+      sub.add_option("--key-interval", c.key_interval_frames,
+                     "frames between key frames (0: one per second, as the Tello)")
+          ->capture_default_str()->check(CLI::Range(0, 600));
       sub.add_option("--linger", c.linger_s, "after landing, end when no datagram came this long (s)")
           ->capture_default_str()->check(CLI::Range(0.0, 3600.0));
       sub.add_option("--max-seconds", o->max_seconds, "end after this long (s; 0: no limit)")

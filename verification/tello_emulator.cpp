@@ -75,6 +75,7 @@ void validate_emulator_config(const EmulatorConfig& c) {
   check_delay(f.video.delay_ms, "delay on video");
   check_delay(f.late_reply_ms, "late reply delay");
   check_probability(f.late_replies, "late replies");
+  check_probability(f.video_frame_loss, "loss of video frames");
   check_probability(f.duplicate_replies, "duplicate replies");
   check_probability(f.not_joystick, "not-joystick");
   check_probability(f.no_valid_imu, "no-valid-imu");
@@ -84,15 +85,17 @@ void validate_emulator_config(const EmulatorConfig& c) {
   }
   if (!(c.linger_s >= 0.0 && std::isfinite(c.linger_s))) throw std::invalid_argument("linger must be >= 0 s");
   if (c.client_state_port == 0 || c.client_video_port == 0) throw std::invalid_argument("client ports must be 1..65535");
+  if (c.key_interval_frames < 0 || c.key_interval_frames > 600) throw std::invalid_argument("key interval must be 0..600 frames");
   if (c.max_datagram_bytes < 16) throw std::invalid_argument("max datagram size must be >= 16 bytes");
   tello::parse_ipv4(c.bind_ip);  // throws std::invalid_argument naming the text
 }
 
 struct TelloEmulator::VideoWorker {
-  VideoWorker(const Scenario& sc)
+  VideoWorker(const Scenario& sc, int key_interval_frames)
       : renderer(sc.warehouse, sc.camera, render_options_for(sc)),
         encoder(sc.camera.width_px, sc.camera.height_px, std::max(1, static_cast<int>(std::lround(sc.frame_rate_hz))),
-                std::max(1, static_cast<int>(std::lround(sc.frame_rate_hz)))),
+                key_interval_frames > 0 ? key_interval_frames
+                                        : std::max(1, static_cast<int>(std::lround(sc.frame_rate_hz)))),
         motion_blur(sc.cosim.motion_blur_samples > 1) {}
   render::Renderer renderer;
   tello::H264Encoder encoder;
@@ -117,6 +120,7 @@ TelloEmulator::TelloEmulator(const Scenario& scenario, EmulatorConfig config)
       state_faults_(mix64(config_.seed ^ 3), StreamId::link_faults),
       video_faults_(mix64(config_.seed ^ 4), StreamId::link_faults),
       error_faults_(mix64(config_.seed ^ 5), StreamId::link_faults),
+      frame_faults_(mix64(config_.seed ^ 6), StreamId::link_faults),
       render_noise_(config_.seed, StreamId::render_noise),
       tick_mhz_(millihertz(scenario_->autopilot.rate_hz)),
       frame_mhz_(millihertz(scenario_->frame_rate_hz)),
@@ -282,8 +286,11 @@ void TelloEmulator::tick(TimeNs t, TimeNs now_ns) {
                            t < seconds_to_ns(*f.video_stall_start_s + f.video_stall_duration_s);
       std::lock_guard lock(mutex_);
       ++counters_.frames_captured;
+      const bool lost = frame_faults_.bernoulli(config_.faults.video_frame_loss);  // one draw per capture
       if (stalled) {
         ++counters_.frames_stalled;
+      } else if (lost) {
+        ++counters_.frames_lost;
       } else if (now_ns - t > frame_period_ns) {
         ++counters_.frames_dropped_late;
       } else if (worker_busy_ || job_) {
@@ -387,7 +394,7 @@ void TelloEmulator::video_loop() {
     std::unique_ptr<VideoWorker> worker;
     std::string error;
     try {
-      worker = std::make_unique<VideoWorker>(*scenario_);
+      worker = std::make_unique<VideoWorker>(*scenario_, config_.key_interval_frames);
       renderer_description_ = worker->renderer.backend_description();
     } catch (const std::exception& e) {
       error = e.what();
@@ -490,7 +497,7 @@ std::string emulator_report_json(const EmulatorReport& r) {
            {"replies_duplicated", c.replies_duplicated}, {"state_sent", c.state_sent},
            {"state_dropped", c.state_dropped}, {"frames_captured", c.frames_captured},
            {"frames_sent", c.frames_sent}, {"frames_dropped_busy", c.frames_dropped_busy},
-           {"frames_dropped_late", c.frames_dropped_late}, {"frames_stalled", c.frames_stalled},
+           {"frames_dropped_late", c.frames_dropped_late}, {"frames_stalled", c.frames_stalled}, {"frames_lost", c.frames_lost},
            {"key_frames", c.key_frames}, {"video_datagrams_sent", c.video_datagrams_sent},
            {"video_datagrams_dropped", c.video_datagrams_dropped}, {"video_bytes_sent", c.video_bytes_sent},
            {"send_errors", c.send_errors}}}};
@@ -529,7 +536,7 @@ std::string emulator_report_text(const EmulatorReport& r) {
     << "; state sent " << c.state_sent << " dropped " << c.state_dropped << "\n";
   o << "video frames captured " << c.frames_captured << " sent " << c.frames_sent << " (key " << c.key_frames
     << ") dropped busy " << c.frames_dropped_busy << " late " << c.frames_dropped_late << " stalled "
-    << c.frames_stalled << "; datagrams sent " << c.video_datagrams_sent << " dropped " << c.video_datagrams_dropped
+    << c.frames_stalled << " lost " << c.frames_lost << "; datagrams sent " << c.video_datagrams_sent << " dropped " << c.video_datagrams_dropped
     << ", " << c.video_bytes_sent << " bytes; send errors " << c.send_errors << "\n";
   return o.str();
 }

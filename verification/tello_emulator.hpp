@@ -32,6 +32,7 @@
 // Faults (all draws from seeded streams: RandomStream(mix64(seed ^ channel), link_faults), one
 // stream per channel, so a setting on one channel never shifts the draws of another):
 //   loss / delay on each channel (commands in, replies out, state out, video datagrams out);
+//   whole video frames lost (all datagrams of a frame: what a receiver sees of a frame drop);
 //   late replies (held back late_reply_ms more: a client takes it for the next command's
 //   answer), duplicated replies (sent twice), "error Not joystick" / "error No valid imu"
 //   instead of executing a manoeuvre (takeoff, moves, turns, go, curve, flip; never land or
@@ -76,6 +77,7 @@ struct ChannelFaults {
 
 struct EmulatorFaults {
   ChannelFaults commands, replies, state, video;
+  double video_frame_loss = 0.0;   ///< probability that a whole frame (all its datagrams) is lost
   double late_replies = 0.0;       ///< probability that a reply is held back late_reply_ms more
   double late_reply_ms = 7500.0;   ///< past a client's 7 s reply timeout
   double duplicate_replies = 0.0;  ///< probability that a reply is sent twice
@@ -94,6 +96,11 @@ struct EmulatorConfig {
   std::uint16_t video_source_port = 0;      ///< the emulator's video socket; 0: ephemeral
   std::uint64_t seed = 1;                   ///< wind, render noise and fault draws
   EmulatorFaults faults;
+  /// Frames between key frames; 0: one key frame per second (the Tello's stream). A receiver
+  /// that discards pictures from a lost datagram to the next key frame (tello_pilot's) gets
+  /// almost nothing through a few percent of datagram loss with 1 s between key frames
+  /// (a 1 s group is ~100 datagrams); shorter intervals trade bandwidth for recovery.
+  int key_interval_frames = 0;
   double linger_s = 8.0;                    ///< after landing: end when no datagram came this long
   std::size_t max_datagram_bytes = 256;     ///< longer command datagrams are malformed
 };
@@ -122,6 +129,7 @@ struct EmulatorCounters {
   std::int64_t frames_dropped_busy = 0;   ///< the worker was still busy with the previous frame
   std::int64_t frames_dropped_late = 0;   ///< the main loop reached the capture too late
   std::int64_t frames_stalled = 0;        ///< inside the injected video stall
+  std::int64_t frames_lost = 0;           ///< whole frames lost by fault injection (not rendered)
   std::int64_t key_frames = 0;
   std::int64_t video_datagrams_sent = 0;
   std::int64_t video_datagrams_dropped = 0;
@@ -223,7 +231,7 @@ class TelloEmulator {
   plant::CollisionWorld world_;
   plant::SimulatedTello tello_;
   double ground_z_m_;
-  RandomStream command_faults_, reply_faults_, state_faults_, video_faults_, error_faults_;
+  RandomStream command_faults_, reply_faults_, state_faults_, video_faults_, error_faults_, frame_faults_;
   RandomStream render_noise_;
 
   // Main-loop state (the thread that calls advance()).
