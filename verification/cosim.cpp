@@ -15,6 +15,7 @@
 #include "shelfcross/random.hpp"
 #include "verification/link_model.hpp"
 #include "verification/run_hash.hpp"
+#include "verification/vehicle_truth.hpp"
 
 namespace shelfcross::verification {
 namespace {
@@ -26,32 +27,7 @@ using flight_sw::CellIndex;
 std::int64_t millihertz(double hz) { return std::llround(hz * 1000.0); }
 TimeNs event_time(std::int64_t k, std::int64_t mhz) { return k * (kNsPerSecond * 1000) / mhz; }
 
-/// ZYX Euler angles (roll, pitch, yaw) of R_WB, the convention of sdk_messages.hpp.
-Eigen::Vector3d euler_zyx(const Eigen::Matrix3d& R) {
-  return {std::atan2(R(2, 1), R(2, 2)), std::asin(std::clamp(-R(2, 0), -1.0, 1.0)), std::atan2(R(1, 0), R(0, 0))};
-}
-
 double wrap_pi(double a) { return std::remainder(a, 2.0 * M_PI); }
-
-Eigen::Isometry3d body_pose(const plant::RigidBodyState& s) {
-  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-  X.linear() = s.q_WB.toRotationMatrix();
-  X.translation() = s.p_WB_m;
-  return X;
-}
-
-/// The cell of shelf `s` whose opening contains (y_S, z_S), if any (levels and columns from 1).
-std::optional<CellIndex> cell_at(const ShelfSpec& s, double y_S, double z_S) {
-  const int columns = static_cast<int>(s.column_pitch_m.size());
-  const int levels = static_cast<int>(s.row_pitch_m.size());
-  for (int c = 1; c <= columns; ++c) {
-    if (!(y_S <= post_y_S_m(s, c - 1) && y_S > post_y_S_m(s, c))) continue;
-    for (int l = 1; l <= levels; ++l) {
-      if (z_S >= beam_z_S_m(s, l - 1) && z_S < beam_z_S_m(s, l)) return CellIndex{l, c};
-    }
-  }
-  return std::nullopt;
-}
 
 /// A message on its way to the flight software: a frame, a state datagram's text (parsed on
 /// arrival by the driver's parser, as tello_pilot does), or a reply.
@@ -69,40 +45,6 @@ struct Timed {
 };
 template <class Payload>
 using TimedQueue = std::priority_queue<Timed<Payload>, std::vector<Timed<Payload>>, std::greater<>>;
-
-/// The Tello's state record from the plant's truth, before the SDK's quantisation (which
-/// format_state_record applies).
-StateRecord state_from_truth(const plant::RigidBodyState& s, const Eigen::Vector3d& a_W_mps2, double ground_z_m,
-                             double battery_pct, double motor_time_s, TimeNs t_ns) {
-  StateRecord r;
-  r.t_ns = t_ns;
-  const Eigen::Matrix3d R = s.q_WB.toRotationMatrix();
-  const Eigen::Vector3d rpy = euler_zyx(R);
-  r.roll_rad = rpy.x();
-  r.pitch_rad = rpy.y();
-  r.yaw_rad = rpy.z();
-  const Eigen::Vector3d v_H = Eigen::AngleAxisd(rpy.z(), Eigen::Vector3d::UnitZ()).inverse() * s.v_WB_W_mps;
-  r.vx_H_mps = v_H.x();
-  r.vy_H_mps = v_H.y();
-  r.vz_H_mps = v_H.z();
-  // Specific force: f_B = R^T (a_W - g_W), g_W = (0, 0, -g).
-  const Eigen::Vector3d f_B = R.transpose() * (a_W_mps2 + Eigen::Vector3d(0, 0, tello::kStandardGravity_mps2));
-  r.ax_B_mps2 = f_B.x();
-  r.ay_B_mps2 = f_B.y();
-  r.az_B_mps2 = f_B.z();
-  const double above_floor_m = s.p_WB_m.z() - ground_z_m;
-  r.height_m = above_floor_m;
-  // The ToF looks down the body z axis; it reads 0.1 m on the ground and nothing past 8 m
-  // or beyond 60 deg of tilt.
-  const double cos_tilt = R(2, 2);
-  if (cos_tilt > 0.5 && above_floor_m / cos_tilt < 8.0) r.tof_m = std::max(0.1, 0.1 + above_floor_m / cos_tilt);
-  r.baro_m = 100.0 + s.p_WB_m.z();
-  r.battery_pct = static_cast<int>(std::clamp(std::floor(battery_pct), 0.0, 100.0));
-  r.motor_time_s = motor_time_s;
-  r.temp_low_c = 55;
-  r.temp_high_c = 57;
-  return r;
-}
 
 }  // namespace
 
@@ -213,8 +155,7 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
   Eigen::Isometry3d X_WC_prev_frame = render::camera_pose_W(X_prev, sc.camera_mount);
   bool sdk_on = false, video_on = false, touching_floor = true;
   double motor_time_s = 0.0;
-  double prev_x_S = (X_SW * X_prev.translation()).x();
-  std::optional<CellIndex> entry_cell;
+  ShelfCrossingMonitor crossing(shelf, X_prev.translation());
   flight_sw::Phase last_phase = fsw.phase();
   std::optional<TimeNs> approach_start_ns;
   std::vector<double> approach_t, err_z, err_yaw, err_y;
@@ -307,26 +248,17 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
       if (on_floor && !touching_floor) ++m.floor_touches;
       touching_floor = on_floor;
       // Crossing shelf 0, judged on the body origin in the shelf frame.
-      const Eigen::Vector3d p_S = X_SW * p;
-      if (prev_x_S < 0.0 && p_S.x() >= 0.0) {
-        entry_cell = cell_at(shelf, p_S.y(), p_S.z());
-        if (entry_cell) {
-          const Eigen::Vector3d c = cell_centre_S_m(shelf, entry_cell->level, entry_cell->column);
-          m.entry_offset_y_m = p_S.y() - c.y();
-          m.entry_offset_z_m = p_S.z() - c.z();
-        }
-        log_event(t, "front face crossed");
-      }
-      if (prev_x_S < shelf.depth_m && p_S.x() >= shelf.depth_m) {
-        const auto exit_cell = cell_at(shelf, p_S.y(), p_S.z());
-        if (entry_cell && exit_cell && *entry_cell == *exit_cell) m.crossed = exit_cell;
-        log_event(t, "back face crossed");
-      }
+      const ShelfCrossingMonitor::Faces faces = crossing.update(p);
+      m.entry_offset_y_m = crossing.entry_offset_y_m();
+      m.entry_offset_z_m = crossing.entry_offset_z_m();
+      m.crossed = crossing.crossed();
+      if (faces.front) log_event(t, "front face crossed");
+      if (faces.back) log_event(t, "back face crossed");
+      const Eigen::Vector3d& p_S = crossing.p_S_m();
       if (p_S.x() > -half_length_m - 0.05 && p_S.x() < shelf.depth_m + half_length_m + 0.05) {
         const double clearance = world.clearance_to_shelves(X).distance_m;
         m.min_clearance_m = std::min(m.min_clearance_m.value_or(clearance), clearance);
       }
-      prev_x_S = p_S.x();
       // The truth log: every step of the plant.
       hash.add(t);
       for (int i = 0; i < 3; ++i) hash.add(s.p_WB_m[i]);

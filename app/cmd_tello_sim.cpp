@@ -1,0 +1,123 @@
+// shelfcross tello-sim --scenario FILE [...]: the Tello SDK emulator (verification/tello_emulator.hpp)
+// on UDP, paced by the wall clock, until the simulated drone has landed after flying, a
+// signal (SIGINT, SIGTERM), or --max-seconds. Prints what happened; --report FILE as JSON.
+#include <csignal>
+#include <fstream>
+#include <iostream>
+
+#include "command_registry.hpp"
+#include "verification/scenario.hpp"
+#include "verification/tello_emulator.hpp"
+
+namespace shelfcross::app {
+namespace {
+
+std::atomic<bool> g_stop{false};
+extern "C" void on_stop_signal(int) { g_stop.store(true); }
+
+struct TelloSimOptions {
+  std::string scenario = verification::kDefaultScenarioFile;
+  verification::EmulatorConfig config;
+  std::string video_stall;
+  double max_seconds = 0.0;
+  std::string report;
+};
+
+/// "T,D" in seconds.
+void parse_stall(const std::string& text, verification::EmulatorFaults& f) {
+  const auto comma = text.find(',');
+  try {
+    if (comma == std::string::npos) throw std::invalid_argument("");
+    std::size_t used_t = 0, used_d = 0;
+    const std::string t = text.substr(0, comma), d = text.substr(comma + 1);
+    const double start = std::stod(t, &used_t), duration = std::stod(d, &used_d);
+    if (used_t != t.size() || used_d != d.size()) throw std::invalid_argument("");
+    f.video_stall_start_s = start;
+    f.video_stall_duration_s = duration;
+  } catch (const std::exception&) {
+    throw UsageError("--video-stall: expected T,D (seconds since the start, duration), got '" + text + "'");
+  }
+}
+
+const CommandRegistration kTelloSim{
+    "tello-sim",
+    "Emulate a Tello on UDP (SDK 1.3/2.0): the simulated drone, world and camera of a scenario, in real time",
+    [](CLI::App& sub) {
+      auto o = std::make_shared<TelloSimOptions>();
+      verification::EmulatorConfig& c = o->config;
+      verification::EmulatorFaults& f = c.faults;
+      const auto probability = CLI::Range(0.0, 1.0);
+      const auto delay = CLI::Range(0.0, 600000.0);
+      sub.add_option("--scenario", o->scenario, "scenario file (the world, camera, vehicle)")->capture_default_str();
+      sub.add_option("--seed", c.seed, "seed of wind, render noise and fault draws")->capture_default_str();
+      sub.add_option("--bind-ip", c.bind_ip, "address of the emulated drone's sockets")->capture_default_str();
+      sub.add_option("--command-port", c.command_port, "the drone's command port (0: any free port, printed)")
+          ->capture_default_str()->check(CLI::Range(0, 65535));
+      sub.add_option("--client-state-port", c.client_state_port, "state goes to this port of the `command` sender")
+          ->capture_default_str()->check(CLI::Range(1, 65535));
+      sub.add_option("--client-video-port", c.client_video_port, "video goes to this port of the `command` sender")
+          ->capture_default_str()->check(CLI::Range(1, 65535));
+      sub.add_option("--state-source-port", c.state_source_port, "the drone's state source port (0: any free port)")
+          ->capture_default_str()->check(CLI::Range(0, 65535));
+      sub.add_option("--video-source-port", c.video_source_port, "the drone's video source port (0: any free port)")
+          ->capture_default_str()->check(CLI::Range(0, 65535));
+      sub.add_option("--loss-commands", f.commands.loss, "probability that a command datagram is lost")->check(probability);
+      sub.add_option("--loss-replies", f.replies.loss, "probability that a reply is lost")->check(probability);
+      sub.add_option("--loss-state", f.state.loss, "probability that a state datagram is lost")->check(probability);
+      sub.add_option("--loss-video", f.video.loss, "probability that a video datagram is lost")->check(probability);
+      sub.add_option("--loss-video-frames", f.video_frame_loss, "probability that a whole video frame is lost")
+          ->check(probability);
+      sub.add_option("--delay-commands", f.commands.delay_ms, "ms added to every command")->check(delay);
+      sub.add_option("--delay-replies", f.replies.delay_ms, "ms added to every reply")->check(delay);
+      sub.add_option("--delay-state", f.state.delay_ms, "ms added to every state datagram")->check(delay);
+      sub.add_option("--delay-video", f.video.delay_ms, "frames leave no earlier than capture + this (ms)")->check(delay);
+      sub.add_option("--late-replies", f.late_replies, "probability that a reply comes --late-reply-ms late")->check(probability);
+      sub.add_option("--late-reply-ms", f.late_reply_ms, "how late a late reply is (ms)")->capture_default_str()->check(delay);
+      sub.add_option("--duplicate-replies", f.duplicate_replies, "probability that a reply is sent twice")->check(probability);
+      sub.add_option("--not-joystick", f.not_joystick, "probability of 'error Not joystick' for a manoeuvre (1: always)")
+          ->check(probability);
+      sub.add_option("--no-valid-imu", f.no_valid_imu, "probability of 'error No valid imu' for a manoeuvre (1: always)")
+          ->check(probability);
+      sub.add_option("--video-stall", o->video_stall, "T,D: no frames from T s after the start for D s");
+      sub.add_option("--key-interval", c.key_interval_frames,
+                     "frames between key frames (0: one per second, as the Tello)")
+          ->capture_default_str()->check(CLI::Range(0, 600));
+      sub.add_option("--linger", c.linger_s, "after landing, end when no datagram came this long (s)")
+          ->capture_default_str()->check(CLI::Range(0.0, 3600.0));
+      sub.add_option("--max-seconds", o->max_seconds, "end after this long (s; 0: no limit)")
+          ->capture_default_str()->check(CLI::Range(0.0, 1e6));
+      sub.add_option("--report", o->report, "write the report as JSON to this file");
+      return [o]() -> int {
+        if (!o->video_stall.empty()) parse_stall(o->video_stall, o->config.faults);
+        try {
+          verification::validate_emulator_config(o->config);
+        } catch (const std::invalid_argument& e) {
+          throw UsageError(e.what());
+        }
+        const verification::Scenario scenario = verification::load_scenario(o->scenario);
+        verification::TelloEmulator emulator(scenario, o->config);
+        std::signal(SIGINT, on_stop_signal);
+        std::signal(SIGTERM, on_stop_signal);
+        std::cout << "tello-sim " << scenario.name << " seed " << o->config.seed << ": commands on "
+                  << o->config.bind_ip << ":" << emulator.command_port() << ", state from port "
+                  << emulator.state_source_port() << " to port " << o->config.client_state_port
+                  << ", video from port " << emulator.video_source_port() << " to port "
+                  << o->config.client_video_port << "\n"
+                  << "renderer: " << emulator.renderer_description() << std::endl;
+        verification::run_tello_emulator(emulator, g_stop, o->max_seconds);
+        const verification::EmulatorReport report = emulator.report();
+        std::cout << verification::emulator_report_text(report) << std::flush;
+        if (!o->report.empty()) {
+          std::ofstream out(o->report);
+          out << verification::emulator_report_json(report) << "\n";
+          if (!out) {
+            std::cerr << "tello-sim: cannot write " << o->report << "\n";
+            return 1;
+          }
+        }
+        return report.end_reason == "numerical_failure" || report.end_reason == "video_error" ? 1 : 0;
+      };
+    }};
+
+}  // namespace
+}  // namespace shelfcross::app
