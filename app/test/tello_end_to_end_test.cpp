@@ -215,7 +215,7 @@ TEST(TelloSimCommandLine, BadOptionsExit2WithAMessage) {
 
 TEST(TelloSimCommandLine, MaxSecondsEndsAndReportsAsJson) {
   const fs::path report = fs::temp_directory_path() / ("shelfcross_tello_sim_report_" + std::to_string(::getpid()) + ".json");
-  const Result r = run_program("--command-port 0 --max-seconds 0.5 --seed 3 --report " + report.string());
+  const Result r = run_program("--scenario " + std::string(SHELFCROSS_SOURCE_DIR) + "/scenarios/paper_test_shelf.yaml --command-port 0 --max-seconds 0.5 --seed 3 --report " + report.string());
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("max_seconds"), std::string::npos) << r.output;
   const json j = json::parse(read_file(report));
