@@ -33,7 +33,8 @@ class CmdPlant : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::temp_directory_path() /
-           ("shelfcross_cmd_plant_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+           ("shelfcross_cmd_plant_" + std::to_string(::getpid()) + "_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::create_directories(dir_);
   }
   void TearDown() override { fs::remove_all(dir_); }
