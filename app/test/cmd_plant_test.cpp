@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "run_shelfcross.hpp"
+
 #include <sys/wait.h>
 
 #include <cstdio>
@@ -14,20 +16,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int exit_code;
-  std::string output;  // stdout and stderr
-};
+using Result = shelfcross::app::test::ProgramResult;
 
-Result run(const std::string& args) {
-  const std::string cmd = std::string(SHELFCROSS_PROGRAM) + " plant " + args + " 2>&1";
-  FILE* pipe = popen(cmd.c_str(), "r");
-  std::string out;
-  char buf[4096];
-  while (std::size_t n = std::fread(buf, 1, sizeof buf, pipe)) out.append(buf, n);
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
+Result run(const std::string& args) { return shelfcross::app::test::run_shelfcross("plant", args); }
 
 class CmdPlant : public ::testing::Test {
  protected:

@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include "run_shelfcross.hpp"
+
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <signal.h>
@@ -182,20 +184,9 @@ TEST_F(TelloEndToEnd, SameWithFivePercentLossOnEveryChannel) {
 
 #endif  // SHELFCROSS_TELLO_PILOT
 
-struct Result {
-  int exit_code;
-  std::string output;
-};
+using Result = shelfcross::app::test::ProgramResult;
 
-Result run_program(const std::string& args) {
-  const std::string cmd = std::string(SHELFCROSS_PROGRAM) + " tello-sim " + args + " 2>&1";
-  FILE* pipe = popen(cmd.c_str(), "r");
-  std::string out;
-  char buf[4096];
-  while (std::size_t n = std::fread(buf, 1, sizeof buf, pipe)) out.append(buf, n);
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
+Result run_program(const std::string& args) { return shelfcross::app::test::run_shelfcross("tello-sim", args); }
 
 TEST(TelloSimCommandLine, BadOptionsExit2WithAMessage) {
   const auto expect_bad = [](const std::string& args, const std::string& part) {
