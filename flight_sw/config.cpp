@@ -190,6 +190,9 @@ void read_mission(const Map& m, MissionParams& p) {
   opt(m, "settle_psi_rad", p.settle_psi_rad, kPositive);
   opt(m, "settle_hold_s", p.settle_hold_s, kNonNegative);
   opt(m, "pose_fresh_s", p.pose_fresh_s, kPositive);
+  opt(m, "pose_jump_m", p.pose_jump_m, kPositive);
+  opt(m, "pose_jump_rad", p.pose_jump_rad, kPositive);
+  opt(m, "pose_jump_window_s", p.pose_jump_window_s, kNonNegative);
   m.finish();
 }
 

@@ -31,7 +31,7 @@
 //               viewpoint_settle_frames viewpoint_lost_s vehicle_size_m [x, y, z]
 //               crossing_margin_m crossing_yaw_tolerance_rad crossing_attempts cross_range_max_m
 //               beyond_distance_m edge_margin_px settle_s settle_z_m settle_psi_rad
-//               settle_hold_s pose_fresh_s
+//               settle_hold_s pose_fresh_s pose_jump_m pose_jump_rad pose_jump_window_s
 
 #include <string>
 #include <vector>
@@ -167,6 +167,11 @@ struct MissionParams {
   double settle_hold_s = 10.0;     ///< holding short longer than this: go on anyway
   /// The crossing is judged on a pose from a frame received at most this long ago.
   double pose_fresh_s = 0.25;
+  /// A target pose farther than pose_jump_m (+ 1 m/s) or turned more than pose_jump_rad
+  /// (+ 1 rad/s) from the last one, taken within pose_jump_window_s, is a wrong tag match.
+  double pose_jump_m = 0.06;
+  double pose_jump_rad = 0.12;
+  double pose_jump_window_s = 0.5;
 };
 
 struct FlightConfig {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 namespace shelfcross::flight_sw {
 
@@ -514,12 +515,29 @@ bool FlightSoftware::measure_target(const cv::Mat& bgr, const cv::Rect2d& predic
   for (size_t k = 0; k < 4; ++k) {
     const TagBlob& t = roi_tags_[static_cast<size_t>(pick[k])];
     img.push_back(t.centre_px);
-    corner_px_[k] = t.centre_px;
     side += 0.25 * std::sqrt(t.area_px);
   }
   const auto pose = estimate_pose(obj_v, img, config_.camera, config_.mount);
   if (!pose) return false;
+  // Plausibility: between frames the vehicle moves centimetres, so a pose that jumps further
+  // than pose_jump_m (+ 1 m/s of the time since the last one) or turns more than pose_jump_rad
+  // (+ 1 rad/s) comes from a wrong corner tag (a neighbour's, as a true corner leaves the view
+  // close to the shelf): not a measurement. Once the last pose is older than
+  // pose_jump_window_s there is nothing to compare with.
+  const MissionParams& mp = config_.mission;
+  if (pose_K_) {
+    const double dt = ns_to_seconds(now_ns_ - pose_t_ns_);
+    const double jump_m = (pose->p_FB_m() - pose_K_->p_FB_m()).norm();
+    const double turn = std::abs(std::remainder(pose->yaw_rad - pose_K_->yaw_rad, 2.0 * std::numbers::pi));
+    if (dt <= mp.pose_jump_window_s && (jump_m > mp.pose_jump_m + 1.0 * dt ||
+                                        turn > mp.pose_jump_rad + 1.0 * dt)) {
+      ++telemetry_.rejected_poses;
+      return false;
+    }
+  }
+  for (size_t k = 0; k < 4; ++k) corner_px_[k] = img[k];
   pose_K_ = pose;
+  pose_t_ns_ = now_ns_;
   const cv::Rect2d centres = cv::boundingRect(std::vector<cv::Point2f>(img.begin(), img.end()));
   box_px_ = cv::Rect2d(centres.x - 0.5 * side, centres.y - 0.5 * side, centres.width + side,
                        centres.height + side);
@@ -620,7 +638,6 @@ void FlightSoftware::approach(const cv::Mat& bgr) {
     const double iou = overlap.area() / (predicted.area() + box_px_.area() - overlap.area());
     if (!telemetry_.tracker_ok || iou < 0.7) start_tracker(bgr, box_px_);
     const PoseEstimate& pose = *pose_K_;
-    pose_t_ns_ = now_ns_;
     telemetry_.pose = pose;
     telemetry_.pose_in_cell_frame = true;
     const cv::Point2d c = centre_of(box_px_);

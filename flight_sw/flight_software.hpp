@@ -141,6 +141,7 @@ struct Telemetry {
   double yaw_cell_rad = 0.0;   ///< the vehicle's own heading relative to the cell normal
   bool settled = false;        ///< still and centred long enough to commit to the crossing
   bool holding_short = false;  ///< forward speed held at 0 (off the normal, or settling)
+  int rejected_poses = 0;      ///< implausible jumps of the target's pose, ignored
   Eigen::Vector3d e1_G_m = Eigen::Vector3d::Zero();  ///< to the optimal viewpoint
   VelocityCommand velocity;    ///< last commanded
   RcSticks rc;                 ///< last sent
