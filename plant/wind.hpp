@@ -5,21 +5,18 @@
 // often it is queried, so the wind a run sees depends only on (params, seed):
 //   g_0 ~ N(0, sigma^2),  g_{k+1} = a g_k + sigma sqrt(1 - a^2) n_k,  a = exp(-h / tau)
 // (the exact discretisation of dg = -g/tau dt + sigma sqrt(2/tau) dW), per axis. Normal draws
-// come from std::mt19937_64 words through Box-Muller written here, so they are bit-identical
+// come from the project's seeded stream (shelfcross/random.hpp, StreamId::wind), bit-identical
 // across standard libraries. wind(t) is the sample of the grid interval that holds t.
 
 #include <cstdint>
-#include <random>
 
 #include <Eigen/Core>
 
 #include "plant/params.hpp"
+#include "shelfcross/random.hpp"
 #include "shelfcross/time.hpp"
 
 namespace shelfcross::plant {
-
-/// A standard normal draw from two 64-bit words (Box-Muller), portable bit for bit.
-double standard_normal(std::mt19937_64& rng);
 
 class WindModel {
  public:
@@ -35,7 +32,7 @@ class WindModel {
   std::uint64_t seed_;
   TimeNs period_ns_;
   double a_ = 0.0, innovation_ = 0.0;
-  std::mt19937_64 rng_;
+  RandomStream rng_;
   std::int64_t index_ = 0;
   Eigen::Vector3d gust_ = Eigen::Vector3d::Zero();
 };
