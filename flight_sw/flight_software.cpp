@@ -92,7 +92,8 @@ std::vector<SdkCommand> FlightSoftware::step(const Input& input) {
         using T = std::decay_t<decltype(m)>;
         if constexpr (std::is_same_v<T, SdkReply>) on_reply(m);
         else if constexpr (std::is_same_v<T, StateRecord>) on_state(m);
-        else on_frame(m);
+        else if constexpr (std::is_same_v<T, CameraFrame>) on_frame(m);
+        // ClockTick: only the timers below.
       },
       input);
   if (auto c = link_.check_timeout(now_ns_)) on_completion(*c);

@@ -72,7 +72,15 @@
 
 namespace shelfcross::flight_sw {
 
-using Input = std::variant<CameraFrame, StateRecord, SdkReply>;
+/// The host's periodic timer. Timeouts, retries and failsafes advance on every input; this
+/// one carries nothing else, so that they still fire when no message arrives at all (the
+/// first "command" lost: no reply, no state record, no video until it is resent).
+/// tello_pilot feeds one per loop turn, the co-simulation one every 1 / cosim.fsw_tick_hz.
+struct ClockTick {
+  TimeNs t_ns = 0;
+};
+
+using Input = std::variant<CameraFrame, StateRecord, SdkReply, ClockTick>;
 
 enum class Phase {
   Idle,

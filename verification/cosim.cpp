@@ -130,8 +130,9 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
 
   // Clocks and queues.
   const std::int64_t tick_mhz = millihertz(sc.autopilot.rate_hz), frame_mhz = millihertz(sc.frame_rate_hz),
-                     state_mhz = millihertz(cs.state_rate_hz), traj_mhz = millihertz(cs.trajectory_rate_hz);
-  std::int64_t k_tick = 1, k_frame = 0, k_state = 0, k_traj = 0;
+                     state_mhz = millihertz(cs.state_rate_hz), traj_mhz = millihertz(cs.trajectory_rate_hz),
+                     fsw_tick_mhz = millihertz(cs.fsw_tick_hz);
+  std::int64_t k_tick = 1, k_frame = 0, k_state = 0, k_traj = 0, k_fsw_tick = 1;
   const TimeNs timeout_ns = seconds_to_ns(cs.timeout_s);
   TimedQueue<std::string> to_vehicle;
   TimedQueue<ToFlightSoftware> to_fsw;
@@ -199,7 +200,8 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
 
   while (!outcome) {
     TimeNs t = std::min({event_time(k_tick, tick_mhz), event_time(k_frame, frame_mhz),
-                         event_time(k_state, state_mhz), event_time(k_traj, traj_mhz)});
+                         event_time(k_state, state_mhz), event_time(k_traj, traj_mhz),
+                         event_time(k_fsw_tick, fsw_tick_mhz)});
     if (!to_vehicle.empty()) t = std::min(t, to_vehicle.top().t_ns);
     if (!to_fsw.empty()) t = std::min(t, to_fsw.top().t_ns);
     if (t > timeout_ns) {
@@ -335,6 +337,11 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
       }
     }
     if (outcome) break;
+    if (t == event_time(k_fsw_tick, fsw_tick_mhz)) {  // the flight computer's own timer
+      step_fsw(flight_sw::ClockTick{t}, t);
+      ++k_fsw_tick;
+      if (outcome) break;
+    }
     if (t == event_time(k_traj, traj_mhz)) {
       TrajectorySample sample;
       sample.t_s = ns_to_seconds(t);

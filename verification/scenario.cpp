@@ -570,6 +570,7 @@ void visit_link(V& v, LinkSettings& l) {
 template <class V>
 void visit_cosim(V& v, CosimSettings& c) {
   v.field("state_rate_hz", c.state_rate_hz, between(1.0, 100.0));
+  v.field("fsw_tick_hz", c.fsw_tick_hz, between(1.0, 1000.0));
   v.field("timeout_s", c.timeout_s, between(1.0, 3600.0));
   v.field("trajectory_rate_hz", c.trajectory_rate_hz, between(1.0, 1000.0));
   v.field("vehicle_margin_m", c.vehicle_margin_m, between(0.0, 0.5));

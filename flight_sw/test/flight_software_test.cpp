@@ -220,6 +220,24 @@ TEST(FlightSoftware, OpeningSequenceWaitsForEachOkAndTheFirstFrame) {
   EXPECT_EQ(fsw.phase(), Phase::FindShelf);
 }
 
+TEST(FlightSoftware, ClockTicksAloneResendALostCommand) {
+  // The first "command" is lost: the drone stays silent (no reply, no state, no video), so
+  // only the host's timer can make the flight software try again.
+  FlightSoftware fsw{FlightConfig{}};
+  ASSERT_EQ(fsw.start(0), (std::vector<SdkCommand>{{0, "command"}}));
+  const TimeNs reply_timeout_ns = seconds_to_ns(FlightConfig{}.timeouts.command_reply_s);
+  std::vector<SdkCommand> resent;
+  for (TimeNs t = 50 * kMs; t <= reply_timeout_ns + 100 * kMs && resent.empty(); t += 50 * kMs) {
+    resent = fsw.step(ClockTick{t});
+  }
+  ASSERT_EQ(resent.size(), 1u);
+  EXPECT_EQ(resent[0].text, "command");
+  EXPECT_GE(resent[0].t_ns, reply_timeout_ns);
+  EXPECT_EQ(fsw.phase(), Phase::EnterSdk);
+  EXPECT_TRUE(fsw.step(SdkReply{resent[0].t_ns + 10 * kMs, "ok"}).empty());
+  EXPECT_EQ(fsw.phase(), Phase::StartVideo);
+}
+
 TEST(FlightSoftware, TakeoffRefusedIsRetriedThenGivenUpOnTheGround) {
   Options o;
   o.takeoff_replies = {"error No valid imu"};

@@ -110,6 +110,15 @@ class Pilot {
       }
       inputs.emplace_back(CameraFrame{f->handed_ns, f->index, std::move(f->bgr)});
     }
+    // The flight computer's timer: with nothing else to hand over, a tick every 50 ms lets
+    // the flight software's timeouts and retries fire (a lost first "command" is resent).
+    if (inputs.empty()) {
+      const TimeNs now = clock_.now_ns();
+      if (now - last_tick_ns_ >= kTickPeriodNs) {
+        last_tick_ns_ = now;
+        inputs.emplace_back(flight_sw::ClockTick{now});
+      }
+    }
     auto stamp = [](const flight_sw::Input& in) { return std::visit([](const auto& m) { return m.t_ns; }, in); };
     std::stable_sort(inputs.begin(), inputs.end(),
                      [&](const auto& a, const auto& b) { return stamp(a) < stamp(b); });
@@ -303,6 +312,8 @@ class Pilot {
 
   TimeNs start_ns_ = 0;
   TimeNs last_fed_ns_ = 0;
+  TimeNs last_tick_ns_ = 0;
+  static constexpr TimeNs kTickPeriodNs = kNsPerSecond / 20;
   std::optional<TimeNs> last_state_ns_;
   std::optional<TimeNs> last_frame_ns_;
   int battery_pct_ = -1;
