@@ -140,7 +140,7 @@ TEST_F(CmdPlant, HelpDocumentsRotorNumbering) {
 }
 
 TEST(CmdPlantDemo, ShippedDemoRuns) {
-  const std::string out = (fs::temp_directory_path() / "shelfcross_plant_demo.csv").string();
+  const std::string out = (fs::temp_directory_path() / ("shelfcross_plant_demo_" + std::to_string(::getpid()) + ".csv")).string();
   const Result r = run(std::string("--commands ") + SHELFCROSS_SOURCE_DIR + "/scenarios/plant_demo.commands --seconds 20 --out " + out);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(lines_of(out).size(), 1u + 2000 + 1);

@@ -1,5 +1,6 @@
 // The lockstep co-simulation and campaigns: determinism, worker-count independence, failures
 // recorded as outcomes, the flight software's perception on rendered frames, and crossings.
+#include <unistd.h>
 #include <filesystem>
 
 #include <gtest/gtest.h>
@@ -23,7 +24,7 @@ std::shared_ptr<Scenario> default_with(const std::function<void(Scenario&)>& cha
 }
 
 std::filesystem::path fresh_dir(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / ("shelfcross_cosim_" + name);
+  const auto dir = std::filesystem::temp_directory_path() / ("shelfcross_cosim_" + std::to_string(::getpid()) + "_" + name);
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;

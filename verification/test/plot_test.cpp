@@ -1,5 +1,6 @@
 #include "verification/plot.hpp"
 
+#include <unistd.h>
 #include <cmath>
 #include <filesystem>
 
@@ -36,7 +37,7 @@ TEST(Plot, HistogramAndPngOutput) {
   std::vector<double> v;
   for (int i = 0; i < 100; ++i) v.push_back(std::sin(i));
   const Chart h = histogram_chart(v, 10, "h", "value");
-  const auto path = std::filesystem::temp_directory_path() / "shelfcross_plot_test.png";
+  const auto path = std::filesystem::temp_directory_path() / ("shelfcross_plot_test_" + std::to_string(::getpid()) + ".png");
   h.save_png(path.string());
   const cv::Mat back = cv::imread(path.string());
   EXPECT_EQ(back.cols, 960);
