@@ -92,6 +92,7 @@ nlohmann::json summarize_campaign(const std::vector<RunRecord>& runs, std::int64
       if (!a.is_object()) continue;
       collect(std::string(axis) + "_settling_time_s", a.value("settling_time_s", json()));
       collect(std::string(axis) + "_overshoot", a.value("overshoot", json()));
+      collect(std::string(axis) + "_overshoot_abs", a.value("overshoot_abs", json()));
     }
     if (m.contains("inventory")) {
       collect("inventory_precision", m["inventory"].value("precision", json()));

@@ -415,7 +415,8 @@ std::string run_metrics_json(const RunMetrics& m) {
   const auto response = [&](const std::optional<StepResponse>& r) {
     if (!r) return json(nullptr);
     return json{{"initial_error", r->initial_error}, {"band", r->band}, {"settling_time_s", opt(r->settling_time_s)},
-                {"overshoot", r->overshoot}, {"peak_abs_error", r->peak_abs_error}};
+                {"overshoot", opt(r->overshoot)}, {"overshoot_abs", r->overshoot_abs},
+                {"peak_abs_error", r->peak_abs_error}};
   };
   json j{{"mission_time_s", m.mission_time_s},
          {"path_length_m", m.path_length_m},

@@ -26,7 +26,8 @@ StepResponse analyse_step_response(const std::vector<double>& t_s, const std::ve
     r.peak_abs_error = std::max(r.peak_abs_error, std::abs(e));
     past_zero = std::max(past_zero, -sign * e);
   }
-  r.overshoot = std::abs(r.initial_error) > 0.0 ? past_zero / std::abs(r.initial_error) : 0.0;
+  r.overshoot_abs = past_zero;
+  if (std::abs(r.initial_error) > r.band) r.overshoot = past_zero / std::abs(r.initial_error);
   return r;
 }
 

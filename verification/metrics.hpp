@@ -23,8 +23,12 @@ struct StepResponse {
   double initial_error = 0.0;
   double band = 0.0;                     ///< the absolute band used
   std::optional<double> settling_time_s; ///< from t0 until |e| stays inside the band for good
-  double overshoot = 0.0;                ///< largest excursion past zero against e(t0)'s sign,
-                                         ///< as a fraction of |e(t0)| (0 when none)
+  /// Largest excursion past zero against e(t0)'s sign, in the error's unit (0 when none).
+  double overshoot_abs = 0.0;
+  /// The same as a fraction of |e(t0)|; only when |e(t0)| exceeds the band, i.e. when there
+  /// was a step to respond to (a response that starts inside its band and is then disturbed,
+  /// as the heading is when the vehicle turns toward its target cell, has no meaningful ratio).
+  std::optional<double> overshoot;
   double peak_abs_error = 0.0;           ///< max |e| after t0
 };
 

@@ -20,6 +20,7 @@ TEST(Metrics, SettlingTimeOfAFirstOrderResponseIsFourTimeConstants) {
   EXPECT_NEAR(*r.settling_time_s, tau * std::log(50.0), 2 * dt);
   EXPECT_DOUBLE_EQ(r.band, 0.02 * e0);
   EXPECT_EQ(r.overshoot, 0.0);
+  EXPECT_EQ(r.overshoot_abs, 0.0);
 }
 
 TEST(Metrics, FloorOfTheBandAndOvershootOfAnUnderdampedResponse) {
@@ -33,10 +34,27 @@ TEST(Metrics, FloorOfTheBandAndOvershootOfAnUnderdampedResponse) {
   }
   const StepResponse r = analyse_step_response(t, e, {.fraction = 0.02, .floor = 0.01});
   EXPECT_DOUBLE_EQ(r.band, 0.01);  // 2 % of 0.2 m is 4 mm: the 1 cm floor applies
-  EXPECT_NEAR(r.overshoot, std::exp(-M_PI * z / std::sqrt(1 - z * z)), 1e-3);
+  ASSERT_TRUE(r.overshoot.has_value());
+  EXPECT_NEAR(*r.overshoot, std::exp(-M_PI * z / std::sqrt(1 - z * z)), 1e-3);
+  EXPECT_NEAR(r.overshoot_abs, *r.overshoot * std::abs(r.initial_error), 1e-12);
   ASSERT_TRUE(r.settling_time_s);
   // Inside 1 cm for good once the envelope e0 exp(-z w t) / sqrt(1 - z^2) is below it (bound).
   EXPECT_LT(*r.settling_time_s, std::log(0.2 / 0.01 / std::sqrt(1 - z * z)) / (z * w) + 1e-3);
+}
+
+TEST(Metrics, NoOvershootRatioWithoutAStepOnlyTheExcursion) {
+  // Heading during an approach: starts on the normal (inside the band), swings to -5 deg while
+  // the vehicle turns toward its cell, comes back. No step, so no ratio; the excursion is kept.
+  const double band_rad = 0.5 * M_PI / 180.0;
+  std::vector<double> t, e;
+  for (int i = 0; i <= 100; ++i) {
+    t.push_back(0.1 * i);
+    e.push_back(0.001 - 0.0873 * std::sin(M_PI * i / 100.0));
+  }
+  const StepResponse r = analyse_step_response(t, e, {.fraction = 0.02, .floor = band_rad});
+  EXPECT_FALSE(r.overshoot.has_value());
+  EXPECT_NEAR(r.overshoot_abs, 0.0873 - 0.001, 1e-4);
+  EXPECT_NEAR(r.peak_abs_error, 0.0873 - 0.001, 1e-4);
 }
 
 TEST(Metrics, NeverSettledWhenTheLastSampleIsOutside) {
