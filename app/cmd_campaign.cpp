@@ -121,6 +121,10 @@ int run_in_this_process(const CampaignOptions& o, const verification::Shard& sha
 }
 
 #ifdef SHELFCROSS_WITH_MPI
+std::chrono::milliseconds rank_timeout(const CampaignOptions& o) {
+  return std::chrono::milliseconds(static_cast<std::int64_t>(o.rank_timeout_s * 1000.0));
+}
+
 int run_under_mpi(const CampaignOptions& o, const verification::Shard& shard) {
   distributed::MpiSession mpi;
   if (mpi.size() == 1) return run_in_this_process(o, shard);
@@ -134,7 +138,7 @@ int run_under_mpi(const CampaignOptions& o, const verification::Shard& shard) {
     if (!setup.error.empty()) return 2;  // rank 0 reports it
     auto nominal = std::make_shared<const verification::Scenario>(
         verification::parse_scenario(setup.scenario_yaml, "scenario from rank 0"));
-    distributed::serve_campaign(mpi, setup.campaign_seed, o.jobs, worker_factory(nominal));
+    distributed::serve_campaign(mpi, setup.campaign_seed, o.jobs, worker_factory(nominal), rank_timeout(o));
     return 0;
   }
   std::optional<OpenedCampaign> c;
@@ -152,7 +156,7 @@ int run_under_mpi(const CampaignOptions& o, const verification::Shard& shard) {
   const distributed::CoordinatorResult r = distributed::coordinate_campaign(
       mpi, c->store, o.runs,
       {.on_progress = progress_printer(), .stop = &g_stop, .shard = shard,
-       .rank_timeout = std::chrono::milliseconds(static_cast<std::int64_t>(o.rank_timeout_s * 1000.0))});
+       .rank_timeout = rank_timeout(o)});
   const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (r.ranks_lost > 0) std::cerr << r.ranks_lost << " worker rank(s) lost; their runs were handed out again\n";
   if (r.ranks_failed > 0) std::cerr << r.ranks_failed << " worker rank(s) could not start their workers\n";
@@ -176,7 +180,7 @@ const CommandRegistration kCampaign{
                      "combine the slices with `shelfcross merge`");
       sub.add_option("--rank-timeout", o->rank_timeout_s,
                      "under `mpirun --enable-recovery`: seconds of silence after which a worker rank counts as lost "
-                     "and its runs are handed out again")
+                     "and its runs are handed out again (and workers give up on a silent rank 0)")
           ->capture_default_str()
           ->check(CLI::Range(1.0, 86400.0));
       return [o]() -> int {

@@ -37,12 +37,45 @@ void check(int code, const char* what) {
   }
 }
 
-void send_bytes(const std::string& bytes, int dest, Tag tag) {
-  check(MPI_Send(bytes.data(), static_cast<int>(bytes.size()), MPI_CHAR, dest, tag, MPI_COMM_WORLD), "MPI_Send");
+/// The other side of a message is gone (or has not answered for the rank timeout).
+struct Unreachable : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// Sends `bytes`, polling for completion: a large message waits for the receiver to take it,
+/// and a receiver that died (under --enable-recovery) never does; after `timeout` this throws
+/// instead of spinning for ever.
+void send_bytes(std::string bytes, int dest, Tag tag, std::chrono::milliseconds timeout) {
+  auto buffer = std::make_unique<std::string>(std::move(bytes));
+  MPI_Request request;
+  check(MPI_Isend(buffer->data(), static_cast<int>(buffer->size()), MPI_CHAR, dest, tag, MPI_COMM_WORLD, &request),
+        "MPI_Isend");
+  const auto start = std::chrono::steady_clock::now();
+  for (;;) {
+    int done = 0;
+    check(MPI_Test(&request, &done, MPI_STATUS_IGNORE), "MPI_Test");
+    if (done) return;
+    if (std::chrono::steady_clock::now() - start > timeout) {
+      (void)buffer.release();  // MPI may still read it: left to the process's end
+      throw Unreachable("rank " + std::to_string(dest) + " took no message for " +
+                               std::to_string(timeout.count() / 1000) + " s");
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
 }
 
 void send_int64(std::int64_t value, int dest, Tag tag) {
   check(MPI_Send(&value, 1, MPI_INT64_T, dest, tag, MPI_COMM_WORLD), "MPI_Send");
+}
+
+/// A 0 or 1 without waiting for it to arrive and without failing: for a rank that may be
+/// dead. The buffer is static: the send may still be pending when the caller returns.
+void post_flag(bool flag, int dest, Tag tag) {
+  static const std::int64_t kValues[2] = {0, 1};
+  MPI_Request request;
+  if (MPI_Isend(&kValues[flag], 1, MPI_INT64_T, dest, tag, MPI_COMM_WORLD, &request) == MPI_SUCCESS) {
+    MPI_Request_free(&request);
+  }
 }
 
 struct Message {
@@ -162,6 +195,11 @@ CoordinatorResult coordinate_campaign(MpiSession& mpi, verification::ResultsStor
     for (std::int64_t index : rank.in_flight) collector.give_back(index);
     rank.in_flight.clear();
   };
+  const auto lose = [&](Rank& rank) {
+    retire(rank, State::lost);
+    ++result.ranks_lost;
+  };
+  auto last_beat = start;
 
   for (;;) {
     // Hand out: every free thread of every active rank gets the next pending index.
@@ -170,11 +208,11 @@ CoordinatorResult coordinate_campaign(MpiSession& mpi, verification::ResultsStor
     for (auto& [r, rank] : ranks) {
       if (rank.state != State::active) continue;
       any_active = true;
-      while (static_cast<std::int64_t>(rank.in_flight.size()) < rank.slots) {
+      while (rank.state == State::active && static_cast<std::int64_t>(rank.in_flight.size()) < rank.slots) {
         const auto index = collector.next_index();
         if (!index) break;
-        send_int64(*index, r, kAssign);
         rank.in_flight.insert(*index);
+        if (MPI_Send(&*index, 1, MPI_INT64_T, r, kAssign, MPI_COMM_WORLD) != MPI_SUCCESS) lose(rank);
       }
       in_flight += static_cast<std::int64_t>(rank.in_flight.size());
     }
@@ -202,21 +240,23 @@ CoordinatorResult coordinate_campaign(MpiSession& mpi, verification::ResultsStor
 
     const auto now = Clock::now();
     for (auto& [r, rank] : ranks) {
-      if (rank.state == State::active && now - rank.last_heard > options.rank_timeout) {
-        retire(rank, State::lost);
-        ++result.ranks_lost;
+      if (rank.state == State::active && now - rank.last_heard > options.rank_timeout) lose(rank);
+    }
+    // Heartbeats the other way, so workers can tell a coordinator that died (under
+    // --enable-recovery the launcher would leave them waiting for ever).
+    if (now - last_beat >= kHeartbeatInterval) {
+      for (auto& [r, rank] : ranks) {
+        if (rank.state != State::lost) post_flag(false, r, kHeartbeat);
       }
+      last_beat = now;
     }
   }
 
   // Every rank leaves; a lost one may be gone, so its message is not waited for.
   const std::int64_t leave_without_finalize = result.ranks_lost > 0;
-  std::vector<MPI_Request> lost_requests;
   for (auto& [r, rank] : ranks) {
     if (rank.state == State::lost) {
-      MPI_Request request;
-      MPI_Isend(&leave_without_finalize, 1, MPI_INT64_T, r, kFinish, MPI_COMM_WORLD, &request);
-      MPI_Request_free(&request);
+      post_flag(leave_without_finalize, r, kFinish);
     } else {
       send_int64(leave_without_finalize, r, kFinish);
     }
@@ -229,14 +269,19 @@ CoordinatorResult coordinate_campaign(MpiSession& mpi, verification::ResultsStor
 // ---------------------------------------------------------------------------------------------
 // Ranks 1..N-1
 
-void serve_campaign(MpiSession& mpi, std::uint64_t campaign_seed, int jobs, const verification::WorkerFactory& make_worker) {
+namespace {
+
+void serve(MpiSession& mpi, std::uint64_t campaign_seed, int jobs, const verification::WorkerFactory& make_worker,
+           std::chrono::milliseconds coordinator_timeout) {
   verification::RunPool pool(jobs, campaign_seed, make_worker);
   send_int64(pool.jobs(), kCoordinator, kHello);
   auto last_sent = Clock::now();
+  auto last_heard = last_sent;
   std::exception_ptr failure;
   for (;;) {
     bool finish = false;
     while (auto m = poll(kCoordinator)) {
+      last_heard = Clock::now();
       if (m->tag == kAssign) {
         pool.submit(m->int64());
       } else if (m->tag == kFinish) {
@@ -246,6 +291,10 @@ void serve_campaign(MpiSession& mpi, std::uint64_t campaign_seed, int jobs, cons
       }
     }
     if (finish) break;
+    if (Clock::now() - last_heard > coordinator_timeout) {
+      throw Unreachable("rank " + std::to_string(mpi.rank()) + ": nothing heard from rank 0 for " +
+                               std::to_string(coordinator_timeout.count() / 1000) + " s; leaving");
+    }
     std::optional<RunRecord> record;
     if (!failure && pool.in_flight() > 0) {
       try {
@@ -254,21 +303,35 @@ void serve_campaign(MpiSession& mpi, std::uint64_t campaign_seed, int jobs, cons
         // No thread could make its worker: the runs go back to rank 0, which hands them to
         // other ranks; this rank waits to be told to leave.
         failure = std::current_exception();
-        send_bytes("", kCoordinator, kFailed);
+        send_bytes("", kCoordinator, kFailed, coordinator_timeout);
         last_sent = Clock::now();
       }
     } else {
       std::this_thread::sleep_for(kPollInterval);
     }
     if (record) {
-      send_bytes(encode_record(*record), kCoordinator, kResult);
+      send_bytes(encode_record(*record), kCoordinator, kResult, coordinator_timeout);
       last_sent = Clock::now();
     } else if (Clock::now() - last_sent >= kHeartbeatInterval) {
-      send_bytes("", kCoordinator, kHeartbeat);
+      send_bytes("", kCoordinator, kHeartbeat, coordinator_timeout);
       last_sent = Clock::now();
     }
   }
   if (failure) std::rethrow_exception(failure);
+}
+
+}  // namespace
+
+void serve_campaign(MpiSession& mpi, std::uint64_t campaign_seed, int jobs, const verification::WorkerFactory& make_worker,
+                    std::chrono::milliseconds coordinator_timeout) {
+  try {
+    serve(mpi, campaign_seed, jobs, make_worker, coordinator_timeout);
+  } catch (const Unreachable&) {
+    // Rank 0 is gone or unreachable: MPI_Finalize would wait for it for ever. (A worker that
+    // could not be made is reported to rank 0 first and leaves through "finish", normally.)
+    mpi.leave_without_finalize();
+    throw;
+  }
 }
 
 }  // namespace shelfcross::distributed

@@ -12,7 +12,7 @@
 //   hello      worker -> 0   its thread count: how many runs it may hold at once
 //   assign     0 -> worker   one run index to run
 //   result     worker -> 0   a finished run's record (JSON)
-//   heartbeat  worker -> 0   once a second, so a rank that went silent can be told
+//   heartbeat  both ways, once a second, so a rank (or rank 0) that went silent can be told
 //   failed     worker -> 0   it could not make its workers (e.g. no EGL): its runs go back
 //   finish     0 -> worker   leave; whether to skip MPI_Finalize (a rank was lost)
 //
@@ -22,7 +22,8 @@
 // goes on: the coordinator declares a rank silent for longer than the rank timeout lost and
 // hands its runs in flight out again; a result that still arrives from it later is committed
 // if no one else delivered that run first (it is the same record). Since MPI_Finalize would
-// wait for the lost rank forever, every rank then leaves without it.
+// wait for the lost rank forever, every rank then leaves without it. Workers that hear nothing
+// from rank 0 for the rank timeout (it died under --enable-recovery) leave with an error.
 //
 // The coordinator and the workers wait for messages by polling (MPI_Iprobe, then a 1 ms
 // sleep) instead of a blocking receive, which Open MPI implements as a busy loop that would
@@ -97,9 +98,10 @@ CoordinatorResult coordinate_campaign(MpiSession& mpi, verification::ResultsStor
                                       const CoordinatorOptions& options);
 
 /// Ranks 1..N-1: run what rank 0 hands out on a RunPool of `jobs` threads until it says finish.
-/// Throws the workers' construction error if none could be made (after telling rank 0).
+/// Throws the workers' construction error if none could be made (after telling rank 0), and
+/// std::runtime_error when rank 0 has been silent (no heartbeat) for `coordinator_timeout`.
 void serve_campaign(MpiSession& mpi, std::uint64_t campaign_seed, int jobs,
-                    const verification::WorkerFactory& make_worker);
+                    const verification::WorkerFactory& make_worker, std::chrono::milliseconds coordinator_timeout);
 
 /// A run record as the message that carries it (JSON), and back; decode throws
 /// std::invalid_argument on a malformed message.
