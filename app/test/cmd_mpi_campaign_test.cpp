@@ -18,6 +18,8 @@ using namespace shelfcross::app::test;
 std::vector<std::string> mpirun(int ranks, const std::vector<std::string>& extra_mpirun_args) {
   setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
   setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
+  // Debug preset: Open MPI's own lifetime allocations are not shelfcross's leaks.
+  setenv("LSAN_OPTIONS", "suppressions=" SHELFCROSS_SOURCE_DIR "/app/test/lsan_openmpi.supp", 0);
   std::vector<std::string> c{SHELFCROSS_MPIEXEC, "-np", std::to_string(ranks), "--oversubscribe", "--bind-to", "none",
                              "--mca", "btl", "self,vader", "--mca", "oob_tcp_if_include", "lo"};
   c.insert(c.end(), extra_mpirun_args.begin(), extra_mpirun_args.end());
