@@ -19,7 +19,8 @@ struct MergeCounts {
 /// target) must be the same scenario and seed, else ResultsMismatch. A run index stored twice
 /// must have the same run hash (same scenario, seed and index give the same run); differing
 /// hashes mean the builds that made them disagree, and are refused with ResultsMismatch.
-/// The target is written in one transaction: on any error it is left as it was.
+/// Every check comes before the runs are written, in one transaction: on any error, no run is
+/// added to the target.
 MergeCounts merge_campaigns(const std::vector<std::filesystem::path>& sources, const std::filesystem::path& target);
 
 }  // namespace shelfcross::verification
