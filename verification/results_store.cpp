@@ -92,20 +92,25 @@ std::vector<std::int64_t> ResultsStore::finished_indices() const {
   return out;
 }
 
-void ResultsStore::insert(const RunRecord& run) {
+void ResultsStore::insert(const RunRecord& run) { insert(std::vector<RunRecord>{run}); }
+
+void ResultsStore::insert(const std::vector<RunRecord>& runs) {
   SQLite::Transaction tx(*db_);
   SQLite::Statement q(*db_,
                       "INSERT INTO runs(run_index, seed, dispersion_json, outcome, metrics_json, run_hash, wall_s, trace_json)"
                       " VALUES(?, ?, ?, ?, ?, ?, ?, ?)");
-  q.bind(1, static_cast<std::int64_t>(run.index));
-  q.bind(2, std::to_string(run.seed));
-  q.bind(3, run.dispersion_json);
-  q.bind(4, run.outcome);
-  q.bind(5, run.metrics_json);
-  q.bind(6, run.run_hash);
-  q.bind(7, run.wall_s);
-  q.bind(8, run.trace_json);
-  q.exec();
+  for (const RunRecord& run : runs) {
+    q.bind(1, static_cast<std::int64_t>(run.index));
+    q.bind(2, std::to_string(run.seed));
+    q.bind(3, run.dispersion_json);
+    q.bind(4, run.outcome);
+    q.bind(5, run.metrics_json);
+    q.bind(6, run.run_hash);
+    q.bind(7, run.wall_s);
+    q.bind(8, run.trace_json);
+    q.exec();
+    q.reset();
+  }
   tx.commit();
 }
 

@@ -66,6 +66,8 @@ class ResultsStore {
   std::vector<std::int64_t> finished_indices() const;
   /// Commits one run in its own transaction; a run index already present is refused.
   void insert(const RunRecord& run);
+  /// Commits several runs in one transaction (all or none); a run index already present is refused.
+  void insert(const std::vector<RunRecord>& runs);
   /// Every stored run, by index.
   std::vector<RunRecord> runs() const;
 

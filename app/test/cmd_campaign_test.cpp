@@ -1,83 +1,17 @@
 // `shelfcross campaign` as a user runs it: killed with SIGKILL mid-campaign and started again,
 // it completes with every run present once and the campaign hash of an uninterrupted one;
-// `replay` reproduces a stored run's hash; `report` writes the report.
-#include <fcntl.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
-
-#include <filesystem>
-#include <fstream>
+// `replay` reproduces a stored run's hash; `report` writes the report; shards of a campaign
+// (`--shard I/N`) merged with `merge` equal the campaign run by one process.
 #include <set>
-#include <sstream>
-#include <string>
-#include <vector>
 
-#include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
-#include <SQLiteCpp/SQLiteCpp.h>
-
-extern char** environ;
+#include "campaign_helpers.hpp"
 
 namespace {
 
-namespace fs = std::filesystem;
-
-pid_t spawn(const std::vector<std::string>& args) {
-  std::vector<char*> argv;
-  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
-  EXPECT_EQ(posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ), 0);
-  posix_spawn_file_actions_destroy(&actions);
-  return pid;
-}
-
-int wait_exit(pid_t pid) {
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
-
-int stored_runs(const fs::path& db) {
-  if (!fs::exists(db)) return 0;
-  try {
-    SQLite::Database d(db.string(), SQLite::OPEN_READONLY);
-    d.exec("PRAGMA busy_timeout=5000");
-    return d.execAndGet("SELECT COUNT(*) FROM runs").getInt();
-  } catch (const std::exception&) {
-    return 0;  // not created yet
-  }
-}
-
-// The default scenario with runs cut at 4 s: start-up and take-off, enough to differ per seed.
-fs::path short_scenario(const fs::path& dir) {
-  std::ifstream in(std::string(SHELFCROSS_SOURCE_DIR) + "/scenarios/paper_test_shelf.yaml");
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string yaml = text.str();
-  const auto at = yaml.find("cosim:\n");
-  yaml.insert(at + 7, "  trajectory_rate_hz: 25\n");
-  const auto timeout = yaml.find("  timeout_s: 120");
-  yaml.replace(timeout, 16, "  timeout_s: 4");
-  const fs::path path = dir / "short.yaml";
-  std::ofstream(path) << yaml;
-  return path;
-}
-
-std::string campaign_hash(const fs::path& dir) {
-  std::ifstream in(dir / "summary.json");
-  return nlohmann::json::parse(in)["campaign_hash"].get<std::string>();
-}
+using namespace shelfcross::app::test;
 
 TEST(CmdCampaign, KilledMidwayAndRestartedEqualsUninterrupted) {
-  const fs::path root = fs::temp_directory_path() / "shelfcross_cmd_campaign";
-  fs::remove_all(root);
-  fs::create_directories(root);
+  const fs::path root = fresh_dir("cmd_campaign");
   const std::string scenario = short_scenario(root).string();
   const auto command = [&](const fs::path& out) {
     return std::vector<std::string>{SHELFCROSS_PROGRAM, "campaign", "--scenario", scenario, "--runs", "4",
@@ -112,6 +46,54 @@ TEST(CmdCampaign, KilledMidwayAndRestartedEqualsUninterrupted) {
   auto other = command(whole);
   other[7] = "78";
   EXPECT_EQ(wait_exit(spawn(other)), 2);
+}
+
+TEST(CmdCampaign, ShardsMergedEqualOneProcess) {
+  const fs::path root = fresh_dir("cmd_campaign_shards");
+  const std::string scenario = short_scenario(root).string();
+  const auto command = [&](const fs::path& out, const std::string& shard) {
+    std::vector<std::string> c{SHELFCROSS_PROGRAM, "campaign", "--scenario", scenario, "--runs", "4",
+                               "--seed",           "31",       "--jobs",     "1",      "--out",  out.string()};
+    if (!shard.empty()) c.insert(c.end(), {"--shard", shard});
+    return c;
+  };
+  EXPECT_EQ(wait_exit(spawn(command(root / "whole", ""))), 0);
+  // Shard 0/2 holds runs 0, 2 and shard 1/2 runs 1, 3: disjoint, together all.
+  EXPECT_EQ(wait_exit(spawn(command(root / "s0", "0/2"))), 0);
+  EXPECT_EQ(wait_exit(spawn(command(root / "s1", "1/2"))), 0);
+  const auto indices = [](const fs::path& db) {
+    std::vector<int> out;
+    for (const auto& [index, hash] : stored_hashes(db)) out.push_back(index);
+    return out;
+  };
+  EXPECT_EQ(indices(root / "s0" / "results.sqlite"), (std::vector<int>{0, 2}));
+  EXPECT_EQ(indices(root / "s1" / "results.sqlite"), (std::vector<int>{1, 3}));
+  EXPECT_EQ(campaign_hash(root / "s0"), "");  // a shard alone is not the campaign
+
+  // Merging the first shard only: incomplete; then the second too (the first again is harmless).
+  const std::string merged = (root / "merged").string();
+  EXPECT_EQ(wait_exit(spawn({SHELFCROSS_PROGRAM, "merge", (root / "s0").string(), "--out", merged})), 0);
+  EXPECT_EQ(campaign_hash(merged), "");
+  EXPECT_EQ(wait_exit(spawn({SHELFCROSS_PROGRAM, "merge", (root / "s0").string(), (root / "s1").string(), "--out",
+                             merged})),
+            0);
+  EXPECT_EQ(stored_hashes(fs::path(merged) / "results.sqlite"), stored_hashes(root / "whole" / "results.sqlite"));
+  EXPECT_EQ(campaign_hash(merged), campaign_hash(root / "whole"));
+  EXPECT_EQ(campaign_hash(merged).size(), 32u);
+  EXPECT_TRUE(fs::exists(fs::path(merged) / "report.md"));
+
+  // Bad input exits 2: a malformed shard, a shard number out of range, a missing source, and a
+  // shard of another campaign (other seed).
+  EXPECT_EQ(wait_exit(spawn(command(root / "bad", "2/2"))), 2);
+  EXPECT_EQ(wait_exit(spawn(command(root / "bad", "one/2"))), 2);
+  EXPECT_EQ(wait_exit(spawn({SHELFCROSS_PROGRAM, "merge", (root / "nowhere").string(), "--out", merged})), 2);
+  auto other = command(root / "other", "1/2");
+  other[5] = "1";  // runs 1, shard 1/2: no run, only the campaign's database (seed 32)
+  other[7] = "32";
+  EXPECT_EQ(wait_exit(spawn(other)), 0);
+  EXPECT_EQ(wait_exit(spawn({SHELFCROSS_PROGRAM, "merge", (root / "s0").string(), (root / "other").string(), "--out",
+                             (root / "mixed").string()})),
+            2);
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 // The worker pool: every pending run exactly once, results independent of the worker count,
-// resume skips finished runs, a throwing worker is recorded and the campaign goes on.
+// resume skips finished runs, a throwing worker is recorded and the campaign goes on; shards
+// are disjoint slices that merge into the whole campaign; a run lost in flight is handed out
+// again and a run delivered twice is stored once.
 #include <atomic>
 #include <filesystem>
 #include <thread>
@@ -7,6 +9,8 @@
 #include <gtest/gtest.h>
 
 #include "shelfcross/random.hpp"
+#include "verification/campaign.hpp"
+#include "verification/campaign_merge.hpp"
 #include "verification/campaign_pool.hpp"
 #include "verification/run_hash.hpp"
 
@@ -93,6 +97,82 @@ TEST(CampaignPool, StopsOnRequestAndResumesWithoutRepeats) {
   ResultsStore whole = ResultsStore::open_or_create(fresh_db("whole"), meta);
   run_pending(whole, 3, 30, factory, {.jobs = 1});
   EXPECT_EQ(without_wall_time(store.runs()), without_wall_time(whole.runs()));
+}
+
+TEST(CampaignPool, ParsesShards) {
+  EXPECT_EQ(parse_shard("0/1"), (Shard{0, 1}));
+  EXPECT_EQ(parse_shard("3/4"), (Shard{3, 4}));
+  for (const char* bad : {"4/4", "-1/4", "1/0", "1", "a/4", "1/4x", "/4", "1/"}) {
+    EXPECT_THROW(parse_shard(bad), std::invalid_argument) << bad;
+  }
+}
+
+TEST(CampaignPool, ShardsMergeIntoTheWholeCampaign) {
+  const CampaignMeta meta{"s", 9, 23};
+  const auto factory = [](int) { return std::make_unique<DrawWorker>(); };
+  ResultsStore whole = ResultsStore::open_or_create(fresh_db("shard_whole"), meta);
+  run_pending(whole, 9, 23, factory, {.jobs = 2});
+  std::vector<std::filesystem::path> shard_dbs;
+  for (int k = 0; k < 3; ++k) {
+    shard_dbs.push_back(fresh_db("shard" + std::to_string(k)));
+    ResultsStore shard = ResultsStore::open_or_create(shard_dbs.back(), meta);
+    EXPECT_EQ(run_pending(shard, 9, 23, factory, {.jobs = 2, .shard = {k, 3}}), k < 2 ? 8 : 7);
+    for (std::int64_t index : shard.finished_indices()) EXPECT_EQ(index % 3, k);
+    EXPECT_EQ(summarize_campaign(shard.runs(), 23)["campaign_hash"], "");
+  }
+  const auto target = fresh_db("shard_merged");
+  const MergeCounts counts = merge_campaigns(shard_dbs, target);
+  EXPECT_EQ(counts.added, 23);
+  EXPECT_EQ(counts.duplicates, 0);
+  ResultsStore merged = ResultsStore::open_existing(target);
+  EXPECT_EQ(merged.meta(), meta);
+  EXPECT_EQ(without_wall_time(merged.runs()), without_wall_time(whole.runs()));
+  const auto hash = summarize_campaign(whole.runs(), 23)["campaign_hash"].get<std::string>();
+  EXPECT_EQ(hash.size(), 32u);
+  EXPECT_EQ(summarize_campaign(merged.runs(), 23)["campaign_hash"], hash);
+  // Merging a shard again adds nothing.
+  EXPECT_EQ(merge_campaigns({shard_dbs[1]}, target).duplicates, 8);
+
+  // A run stored with another hash (another build) is refused, and the target is unchanged.
+  const auto odd = fresh_db("shard_odd");
+  {
+    ResultsStore s = ResultsStore::open_or_create(odd, meta);
+    RunRecord r = whole.runs()[4];
+    r.run_hash = std::string(32, 'f');
+    s.insert(r);
+  }
+  EXPECT_THROW(merge_campaigns({odd}, target), ResultsMismatch);
+  // Another campaign (other seed) is refused.
+  const auto other = fresh_db("shard_other");
+  ResultsStore::open_or_create(other, CampaignMeta{"s", 10, 23});
+  EXPECT_THROW(merge_campaigns({shard_dbs[0], other}, fresh_db("shard_mixed")), ResultsMismatch);
+  EXPECT_EQ(merged.runs().size(), 23u);
+}
+
+TEST(CampaignPool, CollectorHandsLostRunsOutAgainAndStoresEachRunOnce) {
+  const CampaignMeta meta{"s", 4, 5};
+  ResultsStore store = ResultsStore::open_or_create(fresh_db("collector"), meta);
+  store.insert(DrawWorker().run(1, run_seed(4, 1)));
+  CampaignCollector collector(store, 5, {});
+  EXPECT_EQ(collector.progress().done, 1);
+  EXPECT_EQ(collector.progress().total, 5);
+  EXPECT_EQ(collector.next_index(), 0);
+  EXPECT_EQ(collector.next_index(), 2);
+  collector.give_back(0);  // its worker died
+  EXPECT_EQ(collector.next_index(), 0);
+  EXPECT_EQ(collector.next_index(), 3);
+  collector.give_back(2);
+  // Run 2 arrives after all from the worker thought lost: stored, and not handed out again.
+  EXPECT_TRUE(collector.commit(DrawWorker().run(2, run_seed(4, 2))));
+  EXPECT_FALSE(collector.commit(DrawWorker().run(2, run_seed(4, 2))));
+  EXPECT_EQ(collector.next_index(), 4);
+  EXPECT_EQ(collector.next_index(), std::nullopt);
+  EXPECT_TRUE(collector.exhausted());
+  EXPECT_FALSE(collector.complete());
+  for (std::int64_t i : {0, 3, 4}) EXPECT_TRUE(collector.commit(DrawWorker().run(i, run_seed(4, i))));
+  EXPECT_TRUE(collector.complete());
+  EXPECT_EQ(collector.committed(), 4);
+  EXPECT_EQ(store.finished_indices(), (std::vector<std::int64_t>{0, 1, 2, 3, 4}));
 }
 
 }  // namespace

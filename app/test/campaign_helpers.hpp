@@ -1,0 +1,98 @@
+#pragma once
+// What the campaign CLI tests share: starting the program (or mpirun) as a child process,
+// waiting for it, a short scenario, and reading a campaign's results back.
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <SQLiteCpp/SQLiteCpp.h>
+
+extern char** environ;
+
+namespace shelfcross::app::test {
+
+namespace fs = std::filesystem;
+
+/// Starts `args` (args[0] an absolute path) with stdout and stderr into `log` (/dev/null if empty).
+inline pid_t spawn(const std::vector<std::string>& args, const std::string& log = "") {
+  std::vector<char*> argv;
+  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  const std::string target = log.empty() ? "/dev/null" : log;
+  posix_spawn_file_actions_addopen(&actions, 1, target.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+  posix_spawn_file_actions_adddup2(&actions, 1, 2);
+  EXPECT_EQ(posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ), 0);
+  posix_spawn_file_actions_destroy(&actions);
+  return pid;
+}
+
+/// Exit code, or 128 + signal.
+inline int wait_exit(pid_t pid) {
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+/// Runs stored so far (0 while the database does not exist yet).
+inline int stored_runs(const fs::path& db) {
+  if (!fs::exists(db)) return 0;
+  try {
+    SQLite::Database d(db.string(), SQLite::OPEN_READONLY);
+    d.exec("PRAGMA busy_timeout=5000");
+    return d.execAndGet("SELECT COUNT(*) FROM runs").getInt();
+  } catch (const std::exception&) {
+    return 0;  // not created yet
+  }
+}
+
+/// (run index, run hash) of every stored run, by index.
+inline std::vector<std::pair<int, std::string>> stored_hashes(const fs::path& db) {
+  SQLite::Database d(db.string(), SQLite::OPEN_READONLY);
+  SQLite::Statement q(d, "SELECT run_index, run_hash FROM runs ORDER BY run_index");
+  std::vector<std::pair<int, std::string>> out;
+  while (q.executeStep()) out.emplace_back(q.getColumn(0).getInt(), q.getColumn(1).getString());
+  return out;
+}
+
+/// The default scenario with runs cut at 4 s: start-up and take-off, enough to differ per seed.
+inline fs::path short_scenario(const fs::path& dir) {
+  std::ifstream in(std::string(SHELFCROSS_SOURCE_DIR) + "/scenarios/paper_test_shelf.yaml");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string yaml = text.str();
+  const auto at = yaml.find("cosim:\n");
+  yaml.insert(at + 7, "  trajectory_rate_hz: 25\n");
+  const auto timeout = yaml.find("  timeout_s: 120");
+  yaml.replace(timeout, 16, "  timeout_s: 4");
+  const fs::path path = dir / "short.yaml";
+  std::ofstream(path) << yaml;
+  return path;
+}
+
+inline std::string campaign_hash(const fs::path& dir) {
+  std::ifstream in(dir / "summary.json");
+  return nlohmann::json::parse(in)["campaign_hash"].get<std::string>();
+}
+
+/// A fresh, empty folder under the temp directory, unique to this process.
+inline fs::path fresh_dir(const std::string& name) {
+  const fs::path root = fs::temp_directory_path() / ("shelfcross_" + name + "_" + std::to_string(getpid()));
+  fs::remove_all(root);
+  fs::create_directories(root);
+  return root;
+}
+
+}  // namespace shelfcross::app::test

@@ -1,0 +1,147 @@
+// `shelfcross campaign` under mpirun (loopback only, oversubscribed on a small machine): three
+// ranks (a coordinator and two workers) give the per-run hashes and the campaign hash of one
+// process; a worker rank killed mid-campaign costs only its runs in flight: Open MPI aborts
+// the job, and the same command again completes it with every run once; with
+// `mpirun --enable-recovery` the job goes on and completes in one go.
+#ifdef SHELFCROSS_MPIEXEC
+#include <dirent.h>
+
+#include <cstdlib>
+
+#include "campaign_helpers.hpp"
+
+namespace {
+
+using namespace shelfcross::app::test;
+
+// As root (CI), Open MPI wants both variables; shared memory and loopback only.
+std::vector<std::string> mpirun(int ranks, const std::vector<std::string>& extra_mpirun_args) {
+  setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
+  setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
+  // Debug preset: Open MPI's own lifetime allocations are not shelfcross's leaks.
+  setenv("LSAN_OPTIONS", "suppressions=" SHELFCROSS_SOURCE_DIR "/app/test/lsan_openmpi.supp", 0);
+  std::vector<std::string> c{SHELFCROSS_MPIEXEC, "-np", std::to_string(ranks), "--oversubscribe", "--bind-to", "none",
+                             "--mca", "btl", "self,vader", "--mca", "oob_tcp_if_include", "lo"};
+  c.insert(c.end(), extra_mpirun_args.begin(), extra_mpirun_args.end());
+  c.push_back(SHELFCROSS_PROGRAM);
+  return c;
+}
+
+std::vector<std::string> campaign_args(const fs::path& scenario, int runs, const fs::path& out) {
+  return {"campaign", "--scenario", scenario.string(), "--runs", std::to_string(runs), "--seed", "2024",
+          "--jobs", "1", "--out", out.string()};
+}
+
+std::vector<std::string> concat(std::vector<std::string> a, const std::vector<std::string>& b) {
+  a.insert(a.end(), b.begin(), b.end());
+  return a;
+}
+
+std::string read_file(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+/// The process id of MPI rank `rank` among the children of mpirun `launcher` (0 if none yet).
+pid_t rank_pid(pid_t launcher, int rank) {
+  const std::string wanted = "OMPI_COMM_WORLD_RANK=" + std::to_string(rank);
+  for (const auto& entry : fs::directory_iterator("/proc")) {
+    const std::string name = entry.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    // /proc/PID/stat: "pid (comm) state ppid ..."; comm may hold spaces, so read after ')'.
+    const std::string stat = read_file(entry.path() / "stat");
+    const auto close = stat.rfind(')');
+    if (close == std::string::npos) continue;
+    std::istringstream rest(stat.substr(close + 1));
+    std::string state;
+    pid_t ppid = 0;
+    rest >> state >> ppid;
+    if (ppid != launcher) continue;
+    std::string environ_text = read_file(entry.path() / "environ");
+    for (size_t at = 0; at < environ_text.size();) {
+      const size_t end = environ_text.find('\0', at);
+      if (environ_text.compare(at, (end == std::string::npos ? environ_text.size() : end) - at, wanted) == 0) {
+        return static_cast<pid_t>(std::stoi(name));
+      }
+      if (end == std::string::npos) break;
+      at = end + 1;
+    }
+  }
+  return 0;
+}
+
+std::vector<int> indices(const fs::path& db) {
+  std::vector<int> out;
+  for (const auto& [index, hash] : stored_hashes(db)) out.push_back(index);
+  return out;
+}
+
+TEST(MpiCampaign, ThreeRanksEqualOneProcess) {
+  const fs::path root = fresh_dir("mpi_campaign_equal");
+  const fs::path scenario = short_scenario(root);
+  EXPECT_EQ(wait_exit(spawn(concat({SHELFCROSS_PROGRAM}, campaign_args(scenario, 4, root / "one")))), 0);
+  const fs::path log = root / "mpi.log";
+  EXPECT_EQ(wait_exit(spawn(concat(mpirun(3, {}), campaign_args(scenario, 4, root / "mpi")), log.string())), 0)
+      << read_file(log);
+  EXPECT_NE(read_file(log).find("campaign on 2 worker ranks x 1 threads"), std::string::npos) << read_file(log);
+  EXPECT_EQ(stored_hashes(root / "mpi" / "results.sqlite"), stored_hashes(root / "one" / "results.sqlite"));
+  EXPECT_EQ(campaign_hash(root / "mpi"), campaign_hash(root / "one"));
+  EXPECT_EQ(campaign_hash(root / "one").size(), 32u);
+  // The same command again resumes: nothing left to do, nothing run twice.
+  EXPECT_EQ(wait_exit(spawn(concat(mpirun(3, {}), campaign_args(scenario, 4, root / "mpi")))), 0);
+  EXPECT_EQ(indices(root / "mpi" / "results.sqlite"), (std::vector<int>{0, 1, 2, 3}));
+  // Bad input on rank 0 (another seed into the same folder): every rank leaves, exit code 2.
+  auto other = concat(mpirun(3, {}), campaign_args(scenario, 4, root / "mpi"));
+  other[other.size() - 5] = "2025";
+  EXPECT_EQ(wait_exit(spawn(other)), 2);
+}
+
+// Kills worker rank 1 once the first run is committed (it is then most likely in a run).
+void kill_rank_one_after_first_run(pid_t launcher, const fs::path& db) {
+  pid_t victim = 0;
+  for (int i = 0; i < 6000 && (stored_runs(db) < 1 || victim == 0); ++i) {
+    if (victim == 0) victim = rank_pid(launcher, 1);
+    usleep(10000);
+  }
+  ASSERT_GE(stored_runs(db), 1);
+  ASSERT_NE(victim, 0);
+  kill(victim, SIGKILL);
+}
+
+TEST(MpiCampaign, KilledWorkerRankThenResumeCompletesEveryRunOnce) {
+  const fs::path root = fresh_dir("mpi_campaign_killed");
+  const fs::path scenario = short_scenario(root);
+  const auto command = concat(mpirun(3, {}), campaign_args(scenario, 6, root / "mpi"));
+  const pid_t launcher = spawn(command);
+  kill_rank_one_after_first_run(launcher, root / "mpi" / "results.sqlite");
+  EXPECT_NE(wait_exit(launcher), 0);  // Open MPI aborts the job
+  const int before = stored_runs(root / "mpi" / "results.sqlite");
+  EXPECT_GE(before, 1);
+  EXPECT_LT(before, 6);
+  const fs::path log = root / "resume.log";
+  EXPECT_EQ(wait_exit(spawn(command, log.string())), 0) << read_file(log);
+  EXPECT_EQ(indices(root / "mpi" / "results.sqlite"), (std::vector<int>{0, 1, 2, 3, 4, 5}));
+  EXPECT_EQ(wait_exit(spawn(concat({SHELFCROSS_PROGRAM}, campaign_args(scenario, 6, root / "one")))), 0);
+  EXPECT_EQ(stored_hashes(root / "mpi" / "results.sqlite"), stored_hashes(root / "one" / "results.sqlite"));
+  EXPECT_EQ(campaign_hash(root / "mpi"), campaign_hash(root / "one"));
+}
+
+TEST(MpiCampaign, KilledWorkerRankUnderRecoveryCompletesInOneGo) {
+  const fs::path root = fresh_dir("mpi_campaign_recovery");
+  const fs::path scenario = short_scenario(root);
+  const fs::path log = root / "mpi.log";
+  const pid_t launcher = spawn(concat(concat(mpirun(3, {"--enable-recovery"}), campaign_args(scenario, 6, root / "mpi")),
+                                      {"--rank-timeout", "3"}),
+                               log.string());
+  kill_rank_one_after_first_run(launcher, root / "mpi" / "results.sqlite");
+  EXPECT_EQ(wait_exit(launcher), 0) << read_file(log);
+  EXPECT_NE(read_file(log).find("1 worker rank(s) lost"), std::string::npos) << read_file(log);
+  EXPECT_EQ(indices(root / "mpi" / "results.sqlite"), (std::vector<int>{0, 1, 2, 3, 4, 5}));
+  EXPECT_EQ(wait_exit(spawn(concat({SHELFCROSS_PROGRAM}, campaign_args(scenario, 6, root / "one")))), 0);
+  EXPECT_EQ(campaign_hash(root / "mpi"), campaign_hash(root / "one"));
+}
+
+}  // namespace
+#endif
