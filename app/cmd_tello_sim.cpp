@@ -3,9 +3,14 @@
 // signal (SIGINT, SIGTERM), or --max-seconds. Prints what happened; --report FILE as JSON.
 #include <csignal>
 #include <fstream>
+#include <set>
 #include <iostream>
 
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+
 #include "command_registry.hpp"
+#include "verification/dispersion.hpp"
 #include "verification/scenario.hpp"
 #include "verification/tello_emulator.hpp"
 
@@ -21,7 +26,30 @@ struct TelloSimOptions {
   std::string video_stall;
   double max_seconds = 0.0;
   std::string report;
+  bool nominal = false;
+  std::string write_calibration;
 };
+
+// Dispersed parameters the emulator's world takes from the draw; the others describe the
+// co-simulation's modelled link and computer, which here are real sockets and the real
+// tello_pilot (faults: --loss-*, --delay-*), or the flight software's belief about the camera
+// (--write-calibration hands it to tello_pilot --calibration).
+bool applies_to_the_world(const std::string& name) {
+  static const std::set<std::string> not_world{
+      "camera_focal_error_rel", "camera_cx_error_px", "camera_cy_error_px",   "video_latency_mean_s",
+      "frame_drop_probability", "command_latency_mean_s", "command_loss_probability", "compute_latency_s"};
+  return not_world.count(name) == 0;
+}
+
+/// The believed camera as an OpenCV calibration file, as tello_pilot --calibration reads it.
+void write_calibration(const std::string& path, const CameraIntrinsics& c) {
+  cv::FileStorage fs(path, cv::FileStorage::WRITE);
+  if (!fs.isOpened()) throw std::runtime_error("tello-sim: cannot write " + path);
+  const cv::Mat K = (cv::Mat_<double>(3, 3) << c.fx_px, 0, c.cx_px, 0, c.fy_px, c.cy_px, 0, 0, 1);
+  const cv::Mat d = (cv::Mat_<double>(1, 5) << c.k1, c.k2, c.p1, c.p2, c.k3);
+  fs << "image_width" << c.width_px << "image_height" << c.height_px << "camera_matrix" << K
+     << "distortion_coefficients" << d;
+}
 
 /// "T,D" in seconds.
 void parse_stall(const std::string& text, verification::EmulatorFaults& f) {
@@ -49,7 +77,13 @@ const CommandRegistration kTelloSim{
       const auto probability = CLI::Range(0.0, 1.0);
       const auto delay = CLI::Range(0.0, 600000.0);
       sub.add_option("--scenario", o->scenario, "scenario file (the world, camera, vehicle)")->capture_default_str();
-      sub.add_option("--seed", c.seed, "seed of wind, render noise and fault draws")->capture_default_str();
+      sub.add_option("--seed", c.seed,
+                     "seed of the scenario's dispersions (as `shelfcross run --seed`), wind, render noise and fault draws")
+          ->capture_default_str();
+      sub.add_flag("--nominal", o->nominal, "fly the nominal scenario: no dispersion draws");
+      sub.add_option("--write-calibration", o->write_calibration,
+                     "write the flight software's believed camera of this seed (the dispersed calibration error) "
+                     "as an OpenCV calibration file for tello_pilot --calibration");
       sub.add_option("--bind-ip", c.bind_ip, "address of the emulated drone's sockets")->capture_default_str();
       sub.add_option("--command-port", c.command_port, "the drone's command port (0: any free port, printed)")
           ->capture_default_str()->check(CLI::Range(0, 65535));
@@ -82,6 +116,9 @@ const CommandRegistration kTelloSim{
       sub.add_option("--key-interval", c.key_interval_frames,
                      "frames between key frames (0: one per second, as the Tello)")
           ->capture_default_str()->check(CLI::Range(0, 600));
+      sub.add_option("--slices", c.slices_per_frame,
+                     "slices per picture (bands of macroblock rows; a lost datagram damages the rest of its slice)")
+          ->capture_default_str()->check(CLI::Range(1, 45));
       sub.add_option("--linger", c.linger_s, "after landing, end when no datagram came this long (s)")
           ->capture_default_str()->check(CLI::Range(0.0, 3600.0));
       sub.add_option("--max-seconds", o->max_seconds, "end after this long (s; 0: no limit)")
@@ -94,7 +131,18 @@ const CommandRegistration kTelloSim{
         } catch (const std::invalid_argument& e) {
           throw UsageError(e.what());
         }
-        const verification::Scenario scenario = verification::load_scenario(o->scenario);
+        const verification::Scenario nominal = verification::load_scenario(o->scenario);
+        // The world of this seed, drawn as `shelfcross run --seed` draws it.
+        verification::RunSetup setup;
+        if (o->nominal) {
+          setup.seed = o->config.seed;
+          setup.scenario = std::make_shared<verification::Scenario>(nominal);
+          setup.believed_camera = nominal.camera;
+        } else {
+          setup = verification::disperse(nominal, o->config.seed);
+        }
+        const verification::Scenario& scenario = *setup.scenario;
+        if (!o->write_calibration.empty()) write_calibration(o->write_calibration, setup.believed_camera);
         verification::TelloEmulator emulator(scenario, o->config);
         std::signal(SIGINT, on_stop_signal);
         std::signal(SIGTERM, on_stop_signal);
@@ -103,13 +151,28 @@ const CommandRegistration kTelloSim{
                   << emulator.state_source_port() << " to port " << o->config.client_state_port
                   << ", video from port " << emulator.video_source_port() << " to port "
                   << o->config.client_video_port << "\n"
-                  << "renderer: " << emulator.renderer_description() << std::endl;
+                  << (o->nominal ? "nominal scenario (no dispersion)\n" : "");
+        if (!setup.drawn.empty()) {
+          std::cout << "dispersions of seed " << setup.seed << ":";
+          for (const auto& [name, value] : setup.drawn) {
+            std::cout << " " << name << "=" << value << (applies_to_the_world(name) ? "" : "(not applied)");
+          }
+          std::cout << "\n(not applied: the link and computer are real here, use --loss-*/--delay-*; the camera "
+                       "error is the pilot's belief, see --write-calibration)\n";
+        }
+        std::cout << "renderer: " << emulator.renderer_description() << std::endl;
         verification::run_tello_emulator(emulator, g_stop, o->max_seconds);
         const verification::EmulatorReport report = emulator.report();
         std::cout << verification::emulator_report_text(report) << std::flush;
         if (!o->report.empty()) {
+          nlohmann::json j = nlohmann::json::parse(verification::emulator_report_json(report));
+          nlohmann::json drawn = nlohmann::json::object();
+          for (const auto& [name, value] : setup.drawn) drawn[name] = {{"value", value}, {"applied", applies_to_the_world(name)}};
+          j["seed"] = setup.seed;
+          j["dispersed"] = !o->nominal;
+          j["dispersions"] = drawn;
           std::ofstream out(o->report);
-          out << verification::emulator_report_json(report) << "\n";
+          out << j.dump(2) << "\n";
           if (!out) {
             std::cerr << "tello-sim: cannot write " << o->report << "\n";
             return 1;

@@ -86,16 +86,18 @@ void validate_emulator_config(const EmulatorConfig& c) {
   if (!(c.linger_s >= 0.0 && std::isfinite(c.linger_s))) throw std::invalid_argument("linger must be >= 0 s");
   if (c.client_state_port == 0 || c.client_video_port == 0) throw std::invalid_argument("client ports must be 1..65535");
   if (c.key_interval_frames < 0 || c.key_interval_frames > 600) throw std::invalid_argument("key interval must be 0..600 frames");
+  if (c.slices_per_frame < 1 || c.slices_per_frame > 45) throw std::invalid_argument("slices per frame must be 1..45");
   if (c.max_datagram_bytes < 16) throw std::invalid_argument("max datagram size must be >= 16 bytes");
   tello::parse_ipv4(c.bind_ip);  // throws std::invalid_argument naming the text
 }
 
 struct TelloEmulator::VideoWorker {
-  VideoWorker(const Scenario& sc, int key_interval_frames)
+  VideoWorker(const Scenario& sc, int key_interval_frames, int slices)
       : renderer(sc.warehouse, sc.camera, render_options_for(sc)),
         encoder(sc.camera.width_px, sc.camera.height_px, std::max(1, static_cast<int>(std::lround(sc.frame_rate_hz))),
                 key_interval_frames > 0 ? key_interval_frames
-                                        : std::max(1, static_cast<int>(std::lround(sc.frame_rate_hz)))),
+                                        : std::max(1, static_cast<int>(std::lround(sc.frame_rate_hz))),
+                23, std::min(slices, (sc.camera.height_px + 15) / 16)),
         motion_blur(sc.cosim.motion_blur_samples > 1) {}
   render::Renderer renderer;
   tello::H264Encoder encoder;
@@ -131,6 +133,8 @@ TelloEmulator::TelloEmulator(const Scenario& scenario, EmulatorConfig config)
       crossing_(scenario_->warehouse.shelves.at(0), tello_.state().p_WB_m) {
   if (!scenario_->start.landed) throw std::invalid_argument("the Tello emulator starts landed (start.landed: true)");
   report_.inventory_truth = true_inventory(*scenario_);
+  report_.start_p_W_m = scenario_->start.p_WB_m;
+  report_.start_yaw_rad = scenario_->start.yaw_rad;
   // The renderer's EGL context is made current on the thread that creates it, and a context
   // is current on one thread at a time: the worker creates (and alone uses) the renderer.
   worker_ = std::thread([this] { video_loop(); });
@@ -330,6 +334,17 @@ void TelloEmulator::deliver(TimeNs t, const IncomingCommand& c) {
         std::lock_guard lock(mutex_);
         ++counters_.injected_errors;
       }
+      // The drone received a command and answered it: that counts for its 15 s no-command
+      // watchdog like any other ("any command counts", PROTOCOL.md). The simulated firmware
+      // only learns of a datagram through a command, so it is handed the one command with no
+      // effect but an immediate answer, a read, whose answer is dropped.
+      try {
+        (void)tello_.submit(t, "sdk?");
+      } catch (const std::exception& e) {
+        end_detail_ = e.what();
+        end("numerical_failure");
+        return;
+      }
       send_reply(t, joystick ? "error Not joystick" : "error No valid imu", c.from);
       return;
     }
@@ -394,7 +409,7 @@ void TelloEmulator::video_loop() {
     std::unique_ptr<VideoWorker> worker;
     std::string error;
     try {
-      worker = std::make_unique<VideoWorker>(*scenario_, config_.key_interval_frames);
+      worker = std::make_unique<VideoWorker>(*scenario_, config_.key_interval_frames, config_.slices_per_frame);
       renderer_description_ = worker->renderer.backend_description();
     } catch (const std::exception& e) {
       error = e.what();
@@ -489,6 +504,7 @@ std::string emulator_report_json(const EmulatorReport& r) {
          {"entry_offset_z_m", opt(r.entry_offset_z_m)},
          {"min_clearance_m", opt(r.min_clearance_m)},
          {"inventory_truth", inventory},
+         {"start", {{"p_W_m", {r.start_p_W_m.x(), r.start_p_W_m.y(), r.start_p_W_m.z()}}, {"yaw_rad", r.start_yaw_rad}}},
          {"counters",
           {{"commands_received", c.commands_received}, {"commands_dropped", c.commands_dropped},
            {"commands_malformed", c.commands_malformed}, {"commands_delivered", c.commands_delivered},

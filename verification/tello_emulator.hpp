@@ -101,6 +101,8 @@ struct EmulatorConfig {
   /// almost nothing through a few percent of datagram loss with 1 s between key frames
   /// (a 1 s group is ~100 datagrams); shorter intervals trade bandwidth for recovery.
   int key_interval_frames = 0;
+  /// Slices per picture (bands of whole macroblock rows; 1..45 at 720 rows). SLICES_DOC
+  int slices_per_frame = 45;
   double linger_s = 8.0;                    ///< after landing: end when no datagram came this long
   std::size_t max_datagram_bytes = 256;     ///< longer command datagrams are malformed
 };
@@ -151,6 +153,8 @@ struct EmulatorReport {
   std::optional<double> entry_offset_y_m, entry_offset_z_m;
   std::optional<double> min_clearance_m;          ///< to any shelf part near shelf 0
   std::set<InventoryEntry> inventory_truth;       ///< (marker id, shelf, level, column) of shelf 0
+  Eigen::Vector3d start_p_W_m = Eigen::Vector3d::Zero();  ///< the scenario's (dispersed) start
+  double start_yaw_rad = 0.0;
   EmulatorCounters counters;
 };
 

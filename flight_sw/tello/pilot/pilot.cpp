@@ -85,6 +85,7 @@ class Pilot {
       if (e.kind == K::State && e.state) {
         last_state_ns_ = e.t_ns;
         battery_pct_ = e.state->battery_pct;
+        last_height_m_ = e.state->height_m;
         inputs.emplace_back(*e.state);
       } else if (e.kind == K::Sent && e.command == "takeoff") {
         if (!airborne_) airborne_since_ns_ = e.t_ns;
@@ -92,6 +93,12 @@ class Pilot {
       } else if (e.kind == K::Reply || e.kind == K::Failed) {
         const bool ok = e.kind == K::Reply && flight_sw::is_ok_reply(e.reply);
         if (e.command == "land" && ok) airborne_ = false;
+        // A refused takeoff ("error No valid imu", ...) left the drone on the ground, unless
+        // the state stream says otherwise.
+        if (e.command == "takeoff" && e.kind == K::Reply && !ok &&
+            !(last_height_m_ && *last_height_m_ > kAirborneHeight_m)) {
+          airborne_ = false;
+        }
         if (e.tag == kTagFlightSoftware && e.kind == K::Reply) inputs.emplace_back(SdkReply{e.t_ns, e.reply});
         if (e.tag == kTagPilot && e.command == "land") {
           land_done_ = true;
@@ -102,7 +109,7 @@ class Pilot {
     if (auto f = video_->take_latest()) {
       const TimeNs taken = clock_.now_ns();
       log_.write(taken, "frame", {{"index", f->index}, {"rx_ns", f->t_ns}, {"handed_ns", f->handed_ns},
-                                  {"rows", f->bgr.rows}, {"cols", f->bgr.cols}});
+                                  {"damaged", f->damaged}, {"rows", f->bgr.rows}, {"cols", f->bgr.cols}});
       last_frame_ns_ = f->handed_ns;
       if (hover_override_) {
         hover_override_ = false;
@@ -206,6 +213,7 @@ class Pilot {
     opt.tag = kTagPilot;
     opt.urgent = true;
     opt.retries = 3;
+    opt.retry_unless_ok = true;  // "error Not joystick" to a land: ask again, never give up at once
     opt.timeout_ns = seconds_to_ns(o_.failsafes.land_reply_s);
     driver_->submit("land", opt);
   }
@@ -317,6 +325,8 @@ class Pilot {
   std::optional<TimeNs> last_state_ns_;
   std::optional<TimeNs> last_frame_ns_;
   int battery_pct_ = -1;
+  std::optional<double> last_height_m_;
+  static constexpr double kAirborneHeight_m = 0.2;
   bool airborne_ = false;
   TimeNs airborne_since_ns_ = 0;
   bool hover_override_ = false;
