@@ -3,14 +3,11 @@
 // signal (SIGINT, SIGTERM), or --max-seconds. Prints what happened; --report FILE as JSON.
 #include <csignal>
 #include <fstream>
-#include <set>
 #include <iostream>
 
-#include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
 #include "command_registry.hpp"
-#include "verification/dispersion.hpp"
 #include "verification/scenario.hpp"
 #include "verification/tello_emulator.hpp"
 
@@ -29,17 +26,6 @@ struct TelloSimOptions {
   bool nominal = false;
   std::string write_calibration;
 };
-
-// Dispersed parameters the emulator's world takes from the draw; the others describe the
-// co-simulation's modelled link and computer, which here are real sockets and the real
-// tello_pilot (faults: --loss-*, --delay-*), or the flight software's belief about the camera
-// (--write-calibration hands it to tello_pilot --calibration).
-bool applies_to_the_world(const std::string& name) {
-  static const std::set<std::string> not_world{
-      "camera_focal_error_rel", "camera_cx_error_px", "camera_cy_error_px",   "video_latency_mean_s",
-      "frame_drop_probability", "command_latency_mean_s", "command_loss_probability", "compute_latency_s"};
-  return not_world.count(name) == 0;
-}
 
 /// The believed camera as an OpenCV calibration file, as tello_pilot --calibration reads it.
 void write_calibration(const std::string& path, const CameraIntrinsics& c) {
@@ -133,17 +119,11 @@ const CommandRegistration kTelloSim{
         }
         const verification::Scenario nominal = verification::load_scenario(o->scenario);
         // The world of this seed, drawn as `shelfcross run --seed` draws it.
-        verification::RunSetup setup;
-        if (o->nominal) {
-          setup.seed = o->config.seed;
-          setup.scenario = std::make_shared<verification::Scenario>(nominal);
-          setup.believed_camera = nominal.camera;
-        } else {
-          setup = verification::disperse(nominal, o->config.seed);
-        }
+        o->config.disperse = !o->nominal;
+        verification::TelloEmulator emulator(nominal, o->config);
+        const verification::RunSetup& setup = emulator.setup();
         const verification::Scenario& scenario = *setup.scenario;
         if (!o->write_calibration.empty()) write_calibration(o->write_calibration, setup.believed_camera);
-        verification::TelloEmulator emulator(scenario, o->config);
         std::signal(SIGINT, on_stop_signal);
         std::signal(SIGTERM, on_stop_signal);
         std::cout << "tello-sim " << scenario.name << " seed " << o->config.seed << ": commands on "
@@ -155,7 +135,7 @@ const CommandRegistration kTelloSim{
         if (!setup.drawn.empty()) {
           std::cout << "dispersions of seed " << setup.seed << ":";
           for (const auto& [name, value] : setup.drawn) {
-            std::cout << " " << name << "=" << value << (applies_to_the_world(name) ? "" : "(not applied)");
+            std::cout << " " << name << "=" << value << (verification::emulator_applies_dispersion(name) ? "" : "(not applied)");
           }
           std::cout << "\n(not applied: the link and computer are real here, use --loss-*/--delay-*; the camera "
                        "error is the pilot's belief, see --write-calibration)\n";
@@ -165,14 +145,8 @@ const CommandRegistration kTelloSim{
         const verification::EmulatorReport report = emulator.report();
         std::cout << verification::emulator_report_text(report) << std::flush;
         if (!o->report.empty()) {
-          nlohmann::json j = nlohmann::json::parse(verification::emulator_report_json(report));
-          nlohmann::json drawn = nlohmann::json::object();
-          for (const auto& [name, value] : setup.drawn) drawn[name] = {{"value", value}, {"applied", applies_to_the_world(name)}};
-          j["seed"] = setup.seed;
-          j["dispersed"] = !o->nominal;
-          j["dispersions"] = drawn;
           std::ofstream out(o->report);
-          out << j.dump(2) << "\n";
+          out << verification::emulator_report_json(report) << "\n";
           if (!out) {
             std::cerr << "tello-sim: cannot write " << o->report << "\n";
             return 1;

@@ -63,6 +63,7 @@
 #include "plant/collision.hpp"
 #include "plant/simulated_tello.hpp"
 #include "shelfcross/random.hpp"
+#include "verification/dispersion.hpp"
 #include "verification/metrics.hpp"
 #include "verification/scenario.hpp"
 #include "verification/vehicle_truth.hpp"
@@ -94,7 +95,14 @@ struct EmulatorConfig {
   std::uint16_t client_video_port = 11111;  ///< video goes to this port of the `command` sender
   std::uint16_t state_source_port = 0;      ///< the emulator's state socket; 0: ephemeral
   std::uint16_t video_source_port = 0;      ///< the emulator's video socket; 0: ephemeral
-  std::uint64_t seed = 1;                   ///< wind, render noise and fault draws
+  std::uint64_t seed = 1;                   ///< wind, render noise and fault draws (and dispersions)
+  /// Draw the scenario's dispersions for `seed` first (verification::disperse, exactly as
+  /// `shelfcross run --seed` does) and fly that world. Of the draws, the world's (start,
+  /// light, boxes, autopilot, mass, wind) apply; the co-simulation's modelled link and
+  /// computer (video_latency_mean_s, frame_drop_probability, command_latency_mean_s,
+  /// command_loss_probability, compute_latency_s) do not (here they are real: use the faults
+  /// below), nor does the believed camera's error (the client's calibration; setup() has it).
+  bool disperse = false;
   EmulatorFaults faults;
   /// Frames between key frames; 0: one key frame per second (the Tello's stream). A receiver
   /// that discards pictures from a lost datagram to the next key frame (tello_pilot's) gets
@@ -155,8 +163,14 @@ struct EmulatorReport {
   std::set<InventoryEntry> inventory_truth;       ///< (marker id, shelf, level, column) of shelf 0
   Eigen::Vector3d start_p_W_m = Eigen::Vector3d::Zero();  ///< the scenario's (dispersed) start
   double start_yaw_rad = 0.0;
+  std::uint64_t seed = 0;
+  bool dispersed = false;
+  DrawnValues drawn;               ///< the seed's dispersion draws (dispersed only)
   EmulatorCounters counters;
 };
+
+/// Whether the emulator's world takes a dispersed parameter (see EmulatorConfig::disperse).
+bool emulator_applies_dispersion(const std::string& name);
 
 std::string emulator_report_json(const EmulatorReport& report);
 std::string emulator_report_text(const EmulatorReport& report);
@@ -188,6 +202,8 @@ class TelloEmulator {
   std::uint16_t state_source_port() const { return state_socket_.local_port(); }
   std::uint16_t video_source_port() const { return video_socket_.local_port(); }
   const plant::SimulatedTello& tello() const { return tello_; }
+  /// The world flown (dispersed or nominal) and the camera its client would believe.
+  const RunSetup& setup() const { return setup_; }
   TimeNs time_ns() const { return tello_.time_ns(); }
   /// "EGL ... GL_RENDERER ..." of the video renderer.
   std::string renderer_description() const;
@@ -229,6 +245,7 @@ class TelloEmulator {
   void flush_locked(TimeNs now_ns);
   void video_loop();
 
+  RunSetup setup_;
   std::shared_ptr<const Scenario> scenario_;
   EmulatorConfig config_;
   tello::UdpSocket command_socket_, state_socket_, video_socket_;
@@ -248,6 +265,8 @@ class TelloEmulator {
   std::optional<tello::Endpoint> client_;      ///< the sender of `command`
   tello::Endpoint manoeuvre_reply_to_;         ///< the sender of the latest non-rc command
   bool video_was_on_ = false;
+  std::int64_t next_key_capture_ = 0;          ///< the capture index due for the next key frame
+  std::int64_t key_interval_captures() const;
   Eigen::Isometry3d X_prev_, X_WC_prev_frame_;
   Eigen::Vector3d v_prev_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d a_W_ = Eigen::Vector3d::Zero();

@@ -165,6 +165,11 @@ void VideoReceiver::finish_frame(TimeNs t_ns, bool lost_end) {
   frame_bytes_.clear();
   frame_overflow_ = false;
 
+  if (r.pictures > 0 && r.key_frame) {
+    ++key_frames_;
+    damage_events_ = 0;
+  }
+  if (damaged) ++damage_events_;
   // A clean key frame ends the damage (and starts the stream); any sign of damage starts it.
   if (!damaged && r.pictures > 0 && r.clean && r.key_frame) {
     synced_ = true;
@@ -190,6 +195,8 @@ void VideoReceiver::finish_frame(TimeNs t_ns, bool lost_end) {
   frame.t_ns = t_ns;
   frame.index = next_index_++;
   frame.damaged = damaged_since_key_;
+  frame.key_group = key_frames_;
+  frame.damage_events = damage_events_;
   frame.handed_ns = clock_.now_ns();
   if (mailbox_) ++stats_.replaced;
   mailbox_ = std::move(frame);

@@ -60,6 +60,14 @@ struct VideoFrame {
   TimeNs handed_ns = 0;     ///< when it was put in the mailbox (decoded and converted)
   std::int64_t index = 0;   ///< 0, 1, 2, ... over handed-over frames; a gap = frames replaced
   bool damaged = false;     ///< error-concealed: damage since the last clean key frame
+  /// Key frames decoded before and with this frame: frames of one group of pictures share
+  /// it (and their damage: it lasts until the next key frame), frames of two groups do not.
+  std::int64_t key_group = 0;
+  /// Frames with a sign of damage since the last key frame, this one and a damaged key frame
+  /// included: 0 for a clean frame of a clean group; each lost datagram adds a band (two
+  /// slices or so) concealed from the previous picture, and the bands add up until the next
+  /// key frame. A measure of how much of the picture is guesswork.
+  int damage_events = 0;
   cv::Mat bgr;              ///< CV_8UC3
 };
 
@@ -120,6 +128,8 @@ class VideoReceiver {
   TimeNs last_datagram_ns_ = 0;     ///< arrival of the newest datagram of the frame gathered
   bool synced_ = false;             ///< a key frame decoded cleanly since the start
   bool damaged_since_key_ = false;  ///< a sign of damage since the last clean key frame
+  std::int64_t key_frames_ = 0;     ///< key frames decoded (damaged or not)
+  int damage_events_ = 0;           ///< damaged frames since the last key frame (see VideoFrame)
   struct ThreadState;
   std::unique_ptr<ThreadState> thread_state_;
 
