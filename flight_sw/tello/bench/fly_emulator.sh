@@ -3,7 +3,9 @@
 # flies it, for measurements by hand:
 #   flight_sw/tello/bench/fly_emulator.sh OUT_DIR [tello-sim options...] [-- tello_pilot options...]
 # Writes OUT_DIR/{emulator.txt,report.json,pilot.txt,flight_log.jsonl,inventory.json}.
-# Run from the source root after `cmake --build --preset release`.
+# Run from the source root after `cmake --build --preset release`. EMU_NICE=N runs the emulator
+# at nice N (it stands in for the drone's own hardware: for latency measurements of tello_pilot
+# on a small machine, let the program under test have the CPU first).
 set -euo pipefail
 out=${1:?usage: fly_emulator.sh OUT_DIR [tello-sim options] [-- tello_pilot options]}
 shift
@@ -16,7 +18,7 @@ mkdir -p "$out"
 bin=build/release
 base=$((20000 + RANDOM % 20000))
 cmd=$base state=$((base + 1)) video=$((base + 2)) state_src=$((base + 3)) video_src=$((base + 4))
-"$bin/app/shelfcross" tello-sim --scenario scenarios/paper_test_shelf.yaml --bind-ip 127.0.0.1 \
+${EMU_NICE:+nice -n "$EMU_NICE"} "$bin/app/shelfcross" tello-sim --scenario scenarios/paper_test_shelf.yaml --bind-ip 127.0.0.1 \
   --command-port $cmd --client-state-port $state --client-video-port $video \
   --state-source-port $state_src --video-source-port $video_src --max-seconds 300 \
   --report "$out/report.json" "${emu_opts[@]}" > "$out/emulator.txt" 2>&1 &

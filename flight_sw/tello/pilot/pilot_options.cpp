@@ -158,7 +158,7 @@ std::optional<PilotOptions> parse_options(int argc, char** argv) {
                                    "damaged frames (lost datagrams): conceal (hand over error-concealed pictures, default) or discard (until the next clean key frame)");
   int damage_limit = 0;
   auto* o_dlimit = app.add_option("--damage-limit", damage_limit,
-                                  "approach: withhold frames with more than this many damaged frames since their key frame (default 2)")
+                                  "approach: withhold frames with more than this many damaged frames since their key frame (default 8)")
                        ->check(CLI::Range(0, 1000));
   app.add_option("--record-frames", o.record_dir,
                  "write every frame handed to the flight software to this folder as frame_INDEX[_damaged].png (costs time)");

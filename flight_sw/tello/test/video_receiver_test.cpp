@@ -189,6 +189,8 @@ void check_recovery(int drop_position, DamagedFrames mode) {
     }
     ASSERT_TRUE(f) << "concealed frame " << k << " not handed over";
     EXPECT_TRUE(f->damaged) << k;
+    EXPECT_EQ(f->key_group, 1) << k;      // the group of the first key frame
+    EXPECT_EQ(f->damage_events, 1) << k;  // frame 3's loss, carried by prediction
     EXPECT_GT(psnr_db(f->bgr, rig.sources.back()), kMinConcealedPsnr_db) << k;
   }
   const auto s = rig.receiver->stats();
@@ -204,6 +206,8 @@ void check_recovery(int drop_position, DamagedFrames mode) {
     auto f = rig.receiver->take_latest();
     ASSERT_TRUE(f) << "no recovery at frame " << k;
     EXPECT_FALSE(f->damaged) << k;
+    EXPECT_EQ(f->key_group, 2) << k;
+    EXPECT_EQ(f->damage_events, 0) << k;
     EXPECT_GT(psnr_db(f->bgr, rig.sources.back()), kMinPsnr_db) << k;
   }
 }
