@@ -171,12 +171,17 @@ void VideoReceiver::finish_frame(TimeNs t_ns, bool lost_end) {
   }
   if (damaged) ++damage_events_;
   // A clean key frame ends the damage (and starts the stream); any sign of damage starts it.
-  if (!damaged && r.pictures > 0 && r.clean && r.key_frame) {
+  // Conceal mode starts at the first key frame that gives a picture, damaged or not (at a few
+  // percent of loss a clean one may take many groups to come: a key frame is 20 to 40
+  // datagrams); its lost bands have no previous picture to come from and stay marked.
+  const bool key = r.pictures > 0 && r.key_frame;
+  if (!damaged && key && r.clean) {
     synced_ = true;
     damaged_since_key_ = false;
   } else if (damaged) {
     damaged_since_key_ = true;
   }
+  if (key && config_.damaged == DamagedFrames::conceal) synced_ = true;
   const bool hand_over = synced_ && r.pictures > 0 &&
                          (config_.damaged == DamagedFrames::conceal || !damaged_since_key_);
 

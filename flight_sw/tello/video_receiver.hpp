@@ -21,8 +21,8 @@
 //   discard: nothing is handed over from the first sign of damage until a key frame decodes
 //     cleanly (at a few percent of datagram loss almost nothing gets through: a 1 s group of
 //     pictures is ~100 datagrams).
-// Before the first clean key frame nothing is handed over in either mode (nothing to conceal
-// from).
+// Nothing is handed over before the first key frame (conceal: the first that gives a picture,
+// marked damaged if it is; discard: the first clean one).
 //
 // Datagrams from anyone but drone_ip (and source_port when set) are dropped and counted.
 // Times come from the Clock (its now_ns() is called from the receiver thread).
@@ -126,7 +126,7 @@ class VideoReceiver {
   std::string frame_bytes_;
   bool frame_overflow_ = false;
   TimeNs last_datagram_ns_ = 0;     ///< arrival of the newest datagram of the frame gathered
-  bool synced_ = false;             ///< a key frame decoded cleanly since the start
+  bool synced_ = false;             ///< a key frame decoded since the start (discard: a clean one)
   bool damaged_since_key_ = false;  ///< a sign of damage since the last clean key frame
   std::int64_t key_frames_ = 0;     ///< key frames decoded (damaged or not)
   int damage_events_ = 0;           ///< damaged frames since the last key frame (see VideoFrame)

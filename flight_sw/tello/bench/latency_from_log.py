@@ -3,6 +3,7 @@
 
   receive: a frame's last datagram in (frame.rx_ns) -> decoded frame in the mailbox (frame.handed_ns)
   taken:   mailbox -> taken by the main loop (frame.t_ns)
+  step:    decoded frame -> the flight software returned its rc (taken + FlightSoftware::step)
   answer:  decoded frame -> the rc datagram that carries the flight software's answer to it leaves
            the socket (rc_sent.t_ns): the flight software's rc whose fsw_t_ns is the frame's stamp,
            matched to the first rc_sent of that text at or after it. "changed" answers differ from
@@ -37,23 +38,28 @@ def main():
             receive.append(j["handed_ns"] - j["rx_ns"])
             taken.append(j["t_ns"] - j["handed_ns"])
             frames[j["handed_ns"]] = j
-    changed, same = [], []
+    changed, same, step, driver = [], [], [], []
     on_wire = None  # the sticks last sent
-    pending = []    # (frame handed_ns, text, changed?) awaiting their rc_sent
+    pending = []    # (frame handed_ns, text, changed?, answered_ns) awaiting their rc_sent
     for j in lines:
         if j["type"] == "fsw_command" and j["text"].startswith("rc ") and j["fsw_t_ns"] in frames:
-            pending.append((j["fsw_t_ns"], j["text"], j["text"] != on_wire))
+            step.append(j["t_ns"] - j["fsw_t_ns"])
+            pending.append((j["fsw_t_ns"], j["text"], j["text"] != on_wire, j["t_ns"]))
         elif j["type"] in ("rc_sent", "keepalive"):
             on_wire = j["command"]
             rest = []
-            for handed, text, is_changed in pending:
+            for handed, text, is_changed, answered in pending:
                 if text == j["command"]:
                     (changed if is_changed else same).append(j["t_ns"] - handed)
+                    if is_changed:
+                        driver.append(j["t_ns"] - answered)
                 elif j["t_ns"] - handed < 2_000_000_000:
-                    rest.append((handed, text, is_changed))
+                    rest.append((handed, text, is_changed, answered))
             pending = rest
     show("last datagram -> decoded, handed", receive)
     show("handed -> taken by the main loop", taken)
+    show("handed -> flight software's rc", step)
+    show("its rc -> rc out (changed sticks)", driver)
     show("handed -> rc out (changed sticks)", changed)
     show("handed -> rc out (same sticks)", same)
     show("handed -> rc out (all answers)", changed + same)
