@@ -11,9 +11,11 @@
 //     that sent `command`, from state_source_port;
 //   - after `streamon`, the camera (the scenario's intrinsics and mount, the co-simulation's
 //     renderer) at the scenario's frame rate, encoded by tello::H264Encoder (libx264
-//     zero-latency, SPS and PPS before every key frame, a key frame per second and on the first
-//     frame after streamon), cut by tello::tello_datagrams into 1460-byte datagrams with a
-//     short last one, to client_video_port of that address, from video_source_port.
+//     zero-latency, SPS and PPS before every key frame, a key frame per second of captures
+//     (dropped captures do not stretch the group) and on the first frame after streamon, one
+//     slice per macroblock row by default), cut by tello::tello_datagrams into 1460-byte
+//     datagrams with a short last one, to client_video_port of that address, from
+//     video_source_port. Why these settings: flight_sw/tello/README.md, tello-sim.
 //
 // Time. The emulator holds no clock: advance(now_ns) is told the time elapsed since it
 // started, and simulated time follows it. The plant and the autopilot advance tick by tick
@@ -104,12 +106,14 @@ struct EmulatorConfig {
   /// below), nor does the believed camera's error (the client's calibration; setup() has it).
   bool disperse = false;
   EmulatorFaults faults;
-  /// Frames between key frames; 0: one key frame per second (the Tello's stream). A receiver
-  /// that discards pictures from a lost datagram to the next key frame (tello_pilot's) gets
-  /// almost nothing through a few percent of datagram loss with 1 s between key frames
-  /// (a 1 s group is ~100 datagrams); shorter intervals trade bandwidth for recovery.
+  /// Captures between key frames; 0: one key frame per second (the Tello's stream). Counted
+  /// in captures, not in frames encoded, so frames dropped under load do not stretch a group.
   int key_interval_frames = 0;
-  /// Slices per picture (bands of whole macroblock rows; 1..45 at 720 rows). SLICES_DOC
+  /// Slices per picture: bands of whole macroblock rows, 1..45 at 720 rows (more than the
+  /// picture has rows: one per row). A lost datagram damages the rest of its slice (and the
+  /// start of the next), concealed from the previous picture until the next key frame: one
+  /// slice per row (the default, row-band slicing as low-latency hardware encoders do) costs
+  /// a band per lost datagram, one slice per picture the rest of the picture.
   int slices_per_frame = 45;
   double linger_s = 8.0;                    ///< after landing: end when no datagram came this long
   std::size_t max_datagram_bytes = 256;     ///< longer command datagrams are malformed

@@ -251,6 +251,7 @@ TEST(TelloSimCommandLine, BadOptionsExit2WithAMessage) {
   expect_bad("--video-stall 5", "--video-stall");
   expect_bad("--video-stall 5,0", "video stall");
   expect_bad("--command-port 70000", "--command-port");
+  expect_bad("--slices 0", "--slices");
   expect_bad("--bind-ip 300.1.1.1", "300.1.1.1");
   expect_bad("--scenario /nonexistent/scenario.yaml", "/nonexistent/scenario.yaml");
   expect_bad("--frobnicate", "frobnicate");

@@ -410,6 +410,11 @@ TEST(TelloEmulatorConfig, BadSettingsAreRefused) {
   c = {};
   c.bind_ip = "localhost:1";
   EXPECT_THROW(validate_emulator_config(c), std::invalid_argument);
+  c = {};
+  c.slices_per_frame = 0;
+  EXPECT_THROW(validate_emulator_config(c), std::invalid_argument);
+  c.slices_per_frame = 46;
+  EXPECT_THROW(validate_emulator_config(c), std::invalid_argument);
   EXPECT_NO_THROW(validate_emulator_config(EmulatorConfig{}));
 }
 
