@@ -5,6 +5,8 @@
 #include <fstream>
 #include <iostream>
 
+#include <opencv2/core.hpp>
+
 #include "command_registry.hpp"
 #include "verification/scenario.hpp"
 #include "verification/tello_emulator.hpp"
@@ -21,7 +23,19 @@ struct TelloSimOptions {
   std::string video_stall;
   double max_seconds = 0.0;
   std::string report;
+  bool nominal = false;
+  std::string write_calibration;
 };
+
+/// The believed camera as an OpenCV calibration file, as tello_pilot --calibration reads it.
+void write_calibration(const std::string& path, const CameraIntrinsics& c) {
+  cv::FileStorage fs(path, cv::FileStorage::WRITE);
+  if (!fs.isOpened()) throw std::runtime_error("tello-sim: cannot write " + path);
+  const cv::Mat K = (cv::Mat_<double>(3, 3) << c.fx_px, 0, c.cx_px, 0, c.fy_px, c.cy_px, 0, 0, 1);
+  const cv::Mat d = (cv::Mat_<double>(1, 5) << c.k1, c.k2, c.p1, c.p2, c.k3);
+  fs << "image_width" << c.width_px << "image_height" << c.height_px << "camera_matrix" << K
+     << "distortion_coefficients" << d;
+}
 
 /// "T,D" in seconds.
 void parse_stall(const std::string& text, verification::EmulatorFaults& f) {
@@ -49,7 +63,13 @@ const CommandRegistration kTelloSim{
       const auto probability = CLI::Range(0.0, 1.0);
       const auto delay = CLI::Range(0.0, 600000.0);
       sub.add_option("--scenario", o->scenario, "scenario file (the world, camera, vehicle)")->capture_default_str();
-      sub.add_option("--seed", c.seed, "seed of wind, render noise and fault draws")->capture_default_str();
+      sub.add_option("--seed", c.seed,
+                     "seed of the scenario's dispersions (as `shelfcross run --seed`), wind, render noise and fault draws")
+          ->capture_default_str();
+      sub.add_flag("--nominal", o->nominal, "fly the nominal scenario: no dispersion draws");
+      sub.add_option("--write-calibration", o->write_calibration,
+                     "write the flight software's believed camera of this seed (the dispersed calibration error) "
+                     "as an OpenCV calibration file for tello_pilot --calibration");
       sub.add_option("--bind-ip", c.bind_ip, "address of the emulated drone's sockets")->capture_default_str();
       sub.add_option("--command-port", c.command_port, "the drone's command port (0: any free port, printed)")
           ->capture_default_str()->check(CLI::Range(0, 65535));
@@ -82,6 +102,9 @@ const CommandRegistration kTelloSim{
       sub.add_option("--key-interval", c.key_interval_frames,
                      "frames between key frames (0: one per second, as the Tello)")
           ->capture_default_str()->check(CLI::Range(0, 600));
+      sub.add_option("--slices", c.slices_per_frame,
+                     "slices per picture (bands of macroblock rows; a lost datagram damages the rest of its slice)")
+          ->capture_default_str()->check(CLI::Range(1, 45));
       sub.add_option("--linger", c.linger_s, "after landing, end when no datagram came this long (s)")
           ->capture_default_str()->check(CLI::Range(0.0, 3600.0));
       sub.add_option("--max-seconds", o->max_seconds, "end after this long (s; 0: no limit)")
@@ -94,8 +117,13 @@ const CommandRegistration kTelloSim{
         } catch (const std::invalid_argument& e) {
           throw UsageError(e.what());
         }
-        const verification::Scenario scenario = verification::load_scenario(o->scenario);
-        verification::TelloEmulator emulator(scenario, o->config);
+        const verification::Scenario nominal = verification::load_scenario(o->scenario);
+        // The world of this seed, drawn as `shelfcross run --seed` draws it.
+        o->config.disperse = !o->nominal;
+        verification::TelloEmulator emulator(nominal, o->config);
+        const verification::RunSetup& setup = emulator.setup();
+        const verification::Scenario& scenario = *setup.scenario;
+        if (!o->write_calibration.empty()) write_calibration(o->write_calibration, setup.believed_camera);
         std::signal(SIGINT, on_stop_signal);
         std::signal(SIGTERM, on_stop_signal);
         std::cout << "tello-sim " << scenario.name << " seed " << o->config.seed << ": commands on "
@@ -103,7 +131,16 @@ const CommandRegistration kTelloSim{
                   << emulator.state_source_port() << " to port " << o->config.client_state_port
                   << ", video from port " << emulator.video_source_port() << " to port "
                   << o->config.client_video_port << "\n"
-                  << "renderer: " << emulator.renderer_description() << std::endl;
+                  << (o->nominal ? "nominal scenario (no dispersion)\n" : "");
+        if (!setup.drawn.empty()) {
+          std::cout << "dispersions of seed " << setup.seed << ":";
+          for (const auto& [name, value] : setup.drawn) {
+            std::cout << " " << name << "=" << value << (verification::emulator_applies_dispersion(name) ? "" : "(not applied)");
+          }
+          std::cout << "\n(not applied: the link and computer are real here, use --loss-*/--delay-*; the camera "
+                       "error is the pilot's belief, see --write-calibration)\n";
+        }
+        std::cout << "renderer: " << emulator.renderer_description() << std::endl;
         verification::run_tello_emulator(emulator, g_stop, o->max_seconds);
         const verification::EmulatorReport report = emulator.report();
         std::cout << verification::emulator_report_text(report) << std::flush;

@@ -6,6 +6,7 @@
 #include <cassert>
 #include <chrono>
 #include <cmath>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <variant>
@@ -61,7 +62,24 @@ void check_delay(double ms, const char* name) {
   if (!(ms >= 0.0 && ms <= 600'000.0)) throw std::invalid_argument(std::string(name) + " must be 0..600000 ms");
 }
 
+RunSetup make_setup(const Scenario& nominal, const EmulatorConfig& c) {
+  if (c.disperse) return disperse(nominal, c.seed);
+  RunSetup setup;
+  setup.seed = c.seed;
+  setup.scenario = std::make_shared<Scenario>(nominal);
+  setup.believed_camera = nominal.camera;
+  return setup;
+}
+
 }  // namespace
+
+bool emulator_applies_dispersion(const std::string& name) {
+  static const std::set<std::string> not_applied{
+      "camera_focal_error_rel", "camera_cx_error_px",       "camera_cy_error_px",
+      "video_latency_mean_s",   "frame_drop_probability",   "command_latency_mean_s",
+      "command_loss_probability", "compute_latency_s"};
+  return not_applied.count(name) == 0;
+}
 
 void validate_emulator_config(const EmulatorConfig& c) {
   const EmulatorFaults& f = c.faults;
@@ -86,16 +104,20 @@ void validate_emulator_config(const EmulatorConfig& c) {
   if (!(c.linger_s >= 0.0 && std::isfinite(c.linger_s))) throw std::invalid_argument("linger must be >= 0 s");
   if (c.client_state_port == 0 || c.client_video_port == 0) throw std::invalid_argument("client ports must be 1..65535");
   if (c.key_interval_frames < 0 || c.key_interval_frames > 600) throw std::invalid_argument("key interval must be 0..600 frames");
+  if (c.slices_per_frame < 1 || c.slices_per_frame > 45) throw std::invalid_argument("slices per frame must be 1..45");
   if (c.max_datagram_bytes < 16) throw std::invalid_argument("max datagram size must be >= 16 bytes");
   tello::parse_ipv4(c.bind_ip);  // throws std::invalid_argument naming the text
 }
 
 struct TelloEmulator::VideoWorker {
-  VideoWorker(const Scenario& sc, int key_interval_frames)
+  VideoWorker(const Scenario& sc, int key_interval_frames, int slices)
       : renderer(sc.warehouse, sc.camera, render_options_for(sc)),
+        // The emulator forces every key frame (by capture time); the encoder's own interval
+        // is a backstop far beyond it.
         encoder(sc.camera.width_px, sc.camera.height_px, std::max(1, static_cast<int>(std::lround(sc.frame_rate_hz))),
-                key_interval_frames > 0 ? key_interval_frames
-                                        : std::max(1, static_cast<int>(std::lround(sc.frame_rate_hz)))),
+                4 * (key_interval_frames > 0 ? key_interval_frames
+                                             : std::max(1, static_cast<int>(std::lround(sc.frame_rate_hz)))),
+                23, std::min(slices, (sc.camera.height_px + 15) / 16)),
         motion_blur(sc.cosim.motion_blur_samples > 1) {}
   render::Renderer renderer;
   tello::H264Encoder encoder;
@@ -105,7 +127,8 @@ struct TelloEmulator::VideoWorker {
 };
 
 TelloEmulator::TelloEmulator(const Scenario& scenario, EmulatorConfig config)
-    : scenario_(std::make_shared<Scenario>(scenario)),
+    : setup_(make_setup(scenario, config)),
+      scenario_(setup_.scenario),
       config_((validate_emulator_config(config), std::move(config))),
       command_socket_(config_.bind_ip, config_.command_port),
       state_socket_(config_.bind_ip, config_.state_source_port),
@@ -131,6 +154,11 @@ TelloEmulator::TelloEmulator(const Scenario& scenario, EmulatorConfig config)
       crossing_(scenario_->warehouse.shelves.at(0), tello_.state().p_WB_m) {
   if (!scenario_->start.landed) throw std::invalid_argument("the Tello emulator starts landed (start.landed: true)");
   report_.inventory_truth = true_inventory(*scenario_);
+  report_.start_p_W_m = scenario_->start.p_WB_m;
+  report_.start_yaw_rad = scenario_->start.yaw_rad;
+  report_.seed = config_.seed;
+  report_.dispersed = config_.disperse;
+  report_.drawn = setup_.drawn;
   // The renderer's EGL context is made current on the thread that creates it, and a context
   // is current on one thread at a time: the worker creates (and alone uses) the renderer.
   worker_ = std::thread([this] { video_loop(); });
@@ -200,6 +228,11 @@ void TelloEmulator::receive_commands(TimeNs now_ns) {
     }
     incoming_.push({now_ns + ms_to_ns(config_.faults.commands.delay_ms), seq_++, d->bytes, d->from});
   }
+}
+
+std::int64_t TelloEmulator::key_interval_captures() const {
+  return config_.key_interval_frames > 0 ? config_.key_interval_frames
+                                         : std::max<std::int64_t>(1, std::llround(scenario_->frame_rate_hz));
 }
 
 void TelloEmulator::tick(TimeNs t, TimeNs now_ns) {
@@ -296,8 +329,12 @@ void TelloEmulator::tick(TimeNs t, TimeNs now_ns) {
       } else if (worker_busy_ || job_) {
         ++counters_.frames_dropped_busy;
       } else {
-        job_ = FrameJob{k_frame_, t, X_WC_prev_frame_, X_WC, noise_seed, !video_was_on_,
-                        {client_->ip, config_.client_video_port}};
+        // Key frames by capture time, not by frames encoded: frames dropped here (renderer
+        // busy) must not stretch the group of pictures past its interval, as they would
+        // if the encoder counted (the Tello's encoder sees every frame).
+        const bool key = !video_was_on_ || k_frame_ >= next_key_capture_;
+        if (key) next_key_capture_ = k_frame_ + key_interval_captures();
+        job_ = FrameJob{k_frame_, t, X_WC_prev_frame_, X_WC, noise_seed, key, {client_->ip, config_.client_video_port}};
         video_was_on_ = true;
         job_ready_.notify_one();
       }
@@ -329,6 +366,17 @@ void TelloEmulator::deliver(TimeNs t, const IncomingCommand& c) {
       {
         std::lock_guard lock(mutex_);
         ++counters_.injected_errors;
+      }
+      // The drone received a command and answered it: that counts for its 15 s no-command
+      // watchdog like any other ("any command counts", PROTOCOL.md). The simulated firmware
+      // only learns of a datagram through a command, so it is handed the one command with no
+      // effect but an immediate answer, a read, whose answer is dropped.
+      try {
+        (void)tello_.submit(t, "sdk?");
+      } catch (const std::exception& e) {
+        end_detail_ = e.what();
+        end("numerical_failure");
+        return;
       }
       send_reply(t, joystick ? "error Not joystick" : "error No valid imu", c.from);
       return;
@@ -394,7 +442,7 @@ void TelloEmulator::video_loop() {
     std::unique_ptr<VideoWorker> worker;
     std::string error;
     try {
-      worker = std::make_unique<VideoWorker>(*scenario_, config_.key_interval_frames);
+      worker = std::make_unique<VideoWorker>(*scenario_, config_.key_interval_frames, config_.slices_per_frame);
       renderer_description_ = worker->renderer.backend_description();
     } catch (const std::exception& e) {
       error = e.what();
@@ -489,6 +537,9 @@ std::string emulator_report_json(const EmulatorReport& r) {
          {"entry_offset_z_m", opt(r.entry_offset_z_m)},
          {"min_clearance_m", opt(r.min_clearance_m)},
          {"inventory_truth", inventory},
+         {"start", {{"p_W_m", {r.start_p_W_m.x(), r.start_p_W_m.y(), r.start_p_W_m.z()}}, {"yaw_rad", r.start_yaw_rad}}},
+         {"seed", r.seed},
+         {"dispersed", r.dispersed},
          {"counters",
           {{"commands_received", c.commands_received}, {"commands_dropped", c.commands_dropped},
            {"commands_malformed", c.commands_malformed}, {"commands_delivered", c.commands_delivered},
@@ -501,6 +552,9 @@ std::string emulator_report_json(const EmulatorReport& r) {
            {"key_frames", c.key_frames}, {"video_datagrams_sent", c.video_datagrams_sent},
            {"video_datagrams_dropped", c.video_datagrams_dropped}, {"video_bytes_sent", c.video_bytes_sent},
            {"send_errors", c.send_errors}}}};
+  json drawn = json::object();
+  for (const auto& [name, value] : r.drawn) drawn[name] = {{"value", value}, {"applied", emulator_applies_dispersion(name)}};
+  j["dispersions"] = drawn;
   if (r.contact) {
     j["contact"] = {{"t_s", ns_to_seconds(r.contact->t_ns)},
                     {"element", r.contact->element.name},

@@ -11,9 +11,11 @@
 //     that sent `command`, from state_source_port;
 //   - after `streamon`, the camera (the scenario's intrinsics and mount, the co-simulation's
 //     renderer) at the scenario's frame rate, encoded by tello::H264Encoder (libx264
-//     zero-latency, SPS and PPS before every key frame, a key frame per second and on the first
-//     frame after streamon), cut by tello::tello_datagrams into 1460-byte datagrams with a
-//     short last one, to client_video_port of that address, from video_source_port.
+//     zero-latency, SPS and PPS before every key frame, a key frame per second of captures
+//     (dropped captures do not stretch the group) and on the first frame after streamon, one
+//     slice per macroblock row by default), cut by tello::tello_datagrams into 1460-byte
+//     datagrams with a short last one, to client_video_port of that address, from
+//     video_source_port. Why these settings: flight_sw/tello/README.md, tello-sim.
 //
 // Time. The emulator holds no clock: advance(now_ns) is told the time elapsed since it
 // started, and simulated time follows it. The plant and the autopilot advance tick by tick
@@ -63,6 +65,7 @@
 #include "plant/collision.hpp"
 #include "plant/simulated_tello.hpp"
 #include "shelfcross/random.hpp"
+#include "verification/dispersion.hpp"
 #include "verification/metrics.hpp"
 #include "verification/scenario.hpp"
 #include "verification/vehicle_truth.hpp"
@@ -94,13 +97,24 @@ struct EmulatorConfig {
   std::uint16_t client_video_port = 11111;  ///< video goes to this port of the `command` sender
   std::uint16_t state_source_port = 0;      ///< the emulator's state socket; 0: ephemeral
   std::uint16_t video_source_port = 0;      ///< the emulator's video socket; 0: ephemeral
-  std::uint64_t seed = 1;                   ///< wind, render noise and fault draws
+  std::uint64_t seed = 1;                   ///< wind, render noise and fault draws (and dispersions)
+  /// Draw the scenario's dispersions for `seed` first (verification::disperse, exactly as
+  /// `shelfcross run --seed` does) and fly that world. Of the draws, the world's (start,
+  /// light, boxes, autopilot, mass, wind) apply; the co-simulation's modelled link and
+  /// computer (video_latency_mean_s, frame_drop_probability, command_latency_mean_s,
+  /// command_loss_probability, compute_latency_s) do not (here they are real: use the faults
+  /// below), nor does the believed camera's error (the client's calibration; setup() has it).
+  bool disperse = false;
   EmulatorFaults faults;
-  /// Frames between key frames; 0: one key frame per second (the Tello's stream). A receiver
-  /// that discards pictures from a lost datagram to the next key frame (tello_pilot's) gets
-  /// almost nothing through a few percent of datagram loss with 1 s between key frames
-  /// (a 1 s group is ~100 datagrams); shorter intervals trade bandwidth for recovery.
+  /// Captures between key frames; 0: one key frame per second (the Tello's stream). Counted
+  /// in captures, not in frames encoded, so frames dropped under load do not stretch a group.
   int key_interval_frames = 0;
+  /// Slices per picture: bands of whole macroblock rows, 1..45 at 720 rows (more than the
+  /// picture has rows: one per row). A lost datagram damages the rest of its slice (and the
+  /// start of the next), concealed from the previous picture until the next key frame: one
+  /// slice per row (the default, row-band slicing as low-latency hardware encoders do) costs
+  /// a band per lost datagram, one slice per picture the rest of the picture.
+  int slices_per_frame = 45;
   double linger_s = 8.0;                    ///< after landing: end when no datagram came this long
   std::size_t max_datagram_bytes = 256;     ///< longer command datagrams are malformed
 };
@@ -151,8 +165,16 @@ struct EmulatorReport {
   std::optional<double> entry_offset_y_m, entry_offset_z_m;
   std::optional<double> min_clearance_m;          ///< to any shelf part near shelf 0
   std::set<InventoryEntry> inventory_truth;       ///< (marker id, shelf, level, column) of shelf 0
+  Eigen::Vector3d start_p_W_m = Eigen::Vector3d::Zero();  ///< the scenario's (dispersed) start
+  double start_yaw_rad = 0.0;
+  std::uint64_t seed = 0;
+  bool dispersed = false;
+  DrawnValues drawn;               ///< the seed's dispersion draws (dispersed only)
   EmulatorCounters counters;
 };
+
+/// Whether the emulator's world takes a dispersed parameter (see EmulatorConfig::disperse).
+bool emulator_applies_dispersion(const std::string& name);
 
 std::string emulator_report_json(const EmulatorReport& report);
 std::string emulator_report_text(const EmulatorReport& report);
@@ -184,6 +206,8 @@ class TelloEmulator {
   std::uint16_t state_source_port() const { return state_socket_.local_port(); }
   std::uint16_t video_source_port() const { return video_socket_.local_port(); }
   const plant::SimulatedTello& tello() const { return tello_; }
+  /// The world flown (dispersed or nominal) and the camera its client would believe.
+  const RunSetup& setup() const { return setup_; }
   TimeNs time_ns() const { return tello_.time_ns(); }
   /// "EGL ... GL_RENDERER ..." of the video renderer.
   std::string renderer_description() const;
@@ -225,6 +249,7 @@ class TelloEmulator {
   void flush_locked(TimeNs now_ns);
   void video_loop();
 
+  RunSetup setup_;
   std::shared_ptr<const Scenario> scenario_;
   EmulatorConfig config_;
   tello::UdpSocket command_socket_, state_socket_, video_socket_;
@@ -244,6 +269,8 @@ class TelloEmulator {
   std::optional<tello::Endpoint> client_;      ///< the sender of `command`
   tello::Endpoint manoeuvre_reply_to_;         ///< the sender of the latest non-rc command
   bool video_was_on_ = false;
+  std::int64_t next_key_capture_ = 0;          ///< the capture index due for the next key frame
+  std::int64_t key_interval_captures() const;
   Eigen::Isometry3d X_prev_, X_WC_prev_frame_;
   Eigen::Vector3d v_prev_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d a_W_ = Eigen::Vector3d::Zero();

@@ -81,6 +81,7 @@ struct H264Decoder::Impl {
       const bool damaged = frame->decode_error_flags != 0 || (frame->flags & AV_FRAME_FLAG_CORRUPT);
       if (damaged) r.error = true;
       r.clean = !damaged;
+      r.concealed = damaged;
       r.key_frame = frame->key_frame || frame->pict_type == AV_PICTURE_TYPE_I;
       av_frame_unref(latest);
       av_frame_move_ref(latest, frame);
@@ -109,6 +110,9 @@ H264Decoder::H264Decoder() : impl_(std::make_unique<Impl>()) {
   c->thread_count = 1;                  // frame threads would add a frame of delay per thread
   c->thread_type = 0;
   c->has_b_frames = 0;
+  // Damaged pictures: concealed from the previous picture (see the header) and output.
+  c->flags |= AV_CODEC_FLAG_OUTPUT_CORRUPT;
+  c->error_concealment = FF_EC_GUESS_MVS | FF_EC_DEBLOCK | FF_EC_FAVOR_INTER;
   if (avcodec_open2(c, codec, nullptr) < 0) throw std::runtime_error("cannot open the H.264 decoder");
 }
 
@@ -170,9 +174,13 @@ struct H264Encoder::Impl {
   }
 };
 
-H264Encoder::H264Encoder(int width_px, int height_px, int fps, int key_interval, int crf)
+H264Encoder::H264Encoder(int width_px, int height_px, int fps, int key_interval, int crf, int slices)
     : impl_(std::make_unique<Impl>()) {
   quiet_ffmpeg();
+  if (slices < 1 || slices > (height_px + 15) / 16) {
+    throw std::invalid_argument("H264Encoder: slices must be 1.." + std::to_string((height_px + 15) / 16) +
+                                " (macroblock rows), got " + std::to_string(slices));
+  }
   const AVCodec* codec = avcodec_find_encoder_by_name("libx264");
   if (!codec) throw std::runtime_error("libavcodec has no libx264 encoder");
   AVCodecContext* c = impl_->ctx = avcodec_alloc_context3(codec);
@@ -189,7 +197,8 @@ H264Encoder::H264Encoder(int width_px, int height_px, int fps, int key_interval,
   av_opt_set(c->priv_data, "tune", "zerolatency", 0);
   av_opt_set(c->priv_data, "crf", std::to_string(crf).c_str(), 0);
   // Annex-B start codes, SPS/PPS before every key frame, no scene-cut key frames.
-  av_opt_set(c->priv_data, "x264-params", "repeat-headers=1:annexb=1:scenecut=0", 0);
+  const std::string params = "repeat-headers=1:annexb=1:scenecut=0:slices=" + std::to_string(slices);
+  av_opt_set(c->priv_data, "x264-params", params.c_str(), 0);
   if (avcodec_open2(c, codec, nullptr) < 0) throw std::runtime_error("cannot open libx264");
   impl_->frame = av_frame_alloc();
   impl_->packet = av_packet_alloc();

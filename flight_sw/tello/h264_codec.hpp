@@ -19,6 +19,7 @@ struct DecodeResult {
   bool error = false;     ///< the decoder refused the bytes or reported damage in a picture
   bool key_frame = false; ///< the last picture is an intra (IDR/I) picture
   bool clean = false;     ///< the last picture was decoded without reported damage
+  bool concealed = false; ///< the last picture has macroblocks filled in by error concealment
 };
 
 /// av_parser_parse2 with the h264 parser over access units (the receiver hands one
@@ -26,6 +27,14 @@ struct DecodeResult {
 /// holds a frame back waiting for the next start code), then the h264 decoder with
 /// AV_CODEC_FLAG_LOW_DELAY, AV_CODEC_FLAG2_FAST, one thread (no frame threads: no frame of
 /// delay) and no reordering delay: each access unit's picture comes out as it goes in.
+///
+/// Damage: libavcodec's error resilience is on (the h264 decoder's `enable_er` default, which
+/// needs no slice threads) with error_concealment = guess_mvs | deblock | favor_inter: the
+/// macroblocks of a lost or undecodable stretch are filled from the previous picture moved by
+/// the motion vectors guessed from their neighbours (favor_inter: also in intra pictures,
+/// where the default would interpolate spatially), and AV_CODEC_FLAG_OUTPUT_CORRUPT outputs
+/// such pictures (frame->decode_error_flags has FF_DECODE_ERROR_CONCEALMENT_ACTIVE) instead of
+/// holding them back. Whether to use them is the caller's choice (DecodeResult::concealed).
 class H264Decoder {
  public:
   H264Decoder();  ///< throws std::runtime_error when libavcodec has no h264 decoder
@@ -42,12 +51,14 @@ class H264Decoder {
   std::unique_ptr<Impl> impl_;
 };
 
-/// libx264 through libavcodec: ultrafast preset, zerolatency tune, one thread (one slice),
-/// no B-frames, Annex-B with SPS/PPS repeated before every key frame (as the Tello sends).
+/// libx264 through libavcodec: ultrafast preset, zerolatency tune, one thread, no B-frames,
+/// Annex-B with SPS/PPS repeated before every key frame (as the Tello sends), `slices` slices
+/// per picture (x264 `slices`: bands of whole macroblock rows; 1: one slice per picture).
 class H264Encoder {
  public:
-  /// Throws std::runtime_error when libavcodec has no libx264 encoder.
-  H264Encoder(int width_px, int height_px, int fps = 30, int key_interval = 30, int crf = 23);
+  /// Throws std::runtime_error when libavcodec has no libx264 encoder, std::invalid_argument
+  /// for slices outside 1..(macroblock rows).
+  H264Encoder(int width_px, int height_px, int fps = 30, int key_interval = 30, int crf = 23, int slices = 1);
   ~H264Encoder();
   H264Encoder(const H264Encoder&) = delete;
   H264Encoder& operator=(const H264Encoder&) = delete;

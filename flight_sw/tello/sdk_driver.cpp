@@ -21,6 +21,10 @@ std::string trim_reply(const std::string& raw) {
   return raw.substr(b, e - b);
 }
 
+bool ok_reply(const std::string& s) {
+  return s.size() == 2 && (s[0] == 'o' || s[0] == 'O') && (s[1] == 'k' || s[1] == 'K');
+}
+
 bool printable(const std::string& s) {
   return std::all_of(s.begin(), s.end(), [](char c) { return c >= 0x20 && c <= 0x7e; });
 }
@@ -34,6 +38,7 @@ const char* event_kind_name(DriverEvent::Kind kind) {
     case K::RcSent: return "rc_sent";
     case K::KeepAlive: return "keepalive";
     case K::Reply: return "reply";
+    case K::Refused: return "refused";
     case K::Retry: return "retry";
     case K::Failed: return "failed";
     case K::Abandoned: return "abandoned";
@@ -51,7 +56,7 @@ const char* event_kind_name(DriverEvent::Kind kind) {
 std::string DriverCounters::text() const {
   std::ostringstream s;
   s << "commands_sent=" << commands_sent << " retries=" << retries << " failed=" << failed
-    << " replies=" << replies << " stale_replies=" << stale_replies << " bad_replies=" << bad_replies
+    << " replies=" << replies << " refusals=" << refusals << " stale_replies=" << stale_replies << " bad_replies=" << bad_replies
     << " abandoned=" << abandoned << " rc_sent=" << rc_sent << " keepalives=" << keepalives
     << " filtered=" << filtered << " rejected=" << rejected << " send_errors=" << send_errors
     << " foreign_command_datagrams=" << foreign_command_datagrams
@@ -173,9 +178,17 @@ void SdkDriver::read_replies(TimeNs now) {
             std::to_string(d->bytes.size()) + " bytes");
       continue;
     }
-    if (!outstanding_) {
+    // Nothing outstanding, or a refused command waiting to be re-sent: no reply is expected.
+    if (!outstanding_ || outstanding_->resend_ns) {
       ++counters_.stale_replies;
       event(DriverEvent::Kind::StaleReply, "", text);
+      continue;
+    }
+    Pending& p = *outstanding_;
+    if (p.options.retry_unless_ok && !ok_reply(text) && p.attempt <= p.retries) {
+      ++counters_.refusals;
+      event(DriverEvent::Kind::Refused, p.text, text, p.attempt, p.options.tag);
+      p.resend_ns = now + config_.refusal_retry_ns;
       continue;
     }
     ++counters_.replies;
@@ -183,7 +196,6 @@ void SdkDriver::read_replies(TimeNs now) {
           outstanding_->options.tag);
     outstanding_.reset();
   }
-  (void)now;
 }
 
 void SdkDriver::read_states(TimeNs now) {
@@ -213,19 +225,30 @@ void SdkDriver::read_states(TimeNs now) {
   }
 }
 
+void SdkDriver::resend(TimeNs now) {
+  Pending& p = *outstanding_;
+  ++counters_.retries;
+  ++p.attempt;
+  p.resend_ns.reset();
+  event(DriverEvent::Kind::Retry, p.text, "", p.attempt, p.options.tag);
+  p.sent_ns = now;
+  last_command_ns_ = now;
+  if (transmit(now, p.text)) {
+    ++counters_.commands_sent;
+    event(DriverEvent::Kind::Sent, p.text, "", p.attempt, p.options.tag);
+  }
+}
+
 void SdkDriver::check_timeout(TimeNs now) {
-  if (!outstanding_ || now - outstanding_->sent_ns < outstanding_->timeout_ns) return;
+  if (!outstanding_) return;
+  if (outstanding_->resend_ns) {
+    if (now >= *outstanding_->resend_ns) resend(now);
+    return;
+  }
+  if (now - outstanding_->sent_ns < outstanding_->timeout_ns) return;
   Pending& p = *outstanding_;
   if (p.attempt <= p.retries) {
-    ++counters_.retries;
-    ++p.attempt;
-    event(DriverEvent::Kind::Retry, p.text, "", p.attempt, p.options.tag);
-    p.sent_ns = now;
-    if (transmit(now, p.text)) {
-      ++counters_.commands_sent;
-      last_command_ns_ = now;
-      event(DriverEvent::Kind::Sent, p.text, "", p.attempt, p.options.tag);
-    }
+    resend(now);
     return;
   }
   ++counters_.failed;

@@ -12,6 +12,13 @@
 //    at least command_gap_ns between two non-rc commands;
 //  - each non-rc command waits for its reply (ReplyTimeouts: 7 s, 20 s for takeoff) and is
 //    re-sent up to `retries` times when none comes; then it fails;
+//  - a refusal ("error", "error Not joystick", "error No valid imu", ...: any reply but "ok")
+//    completes the command (Reply event) unless CommandOptions::retry_unless_ok: then it is a
+//    failed attempt (Refused event) and the command is re-sent refusal_retry_ns later while
+//    retries remain (the last refusal is the Reply). The program's own `land` uses this: a
+//    real Tello refuses manoeuvres with these errors, and a land must not be given up on at
+//    the first refusal. Every refusal is a command the drone received: it counts for its 15 s
+//    watchdog like any other (the emulator does the same);
 //  - replies carry no tag, so a reply that arrives when nothing is outstanding is stale and
 //    dropped; pending replies are drained (dropped as stale) right before each non-rc send,
 //    and after a command timed out the next one waits stale_guard_ns more for its late reply;
@@ -52,6 +59,7 @@ struct DriverConfig {
   int retries = 3;                       ///< re-sends after the first attempt
   TimeNs command_gap_ns = 100 * kMs;
   TimeNs stale_guard_ns = 300 * kMs;
+  TimeNs refusal_retry_ns = 500 * kMs;   ///< re-send delay after a refusal (retry_unless_ok)
   TimeNs rc_period_ns = 100 * kMs;
   TimeNs rc_min_gap_ns = 20 * kMs;
   TimeNs rc_hold_ns = 1500 * kMs;
@@ -65,6 +73,7 @@ struct CommandOptions {
   std::optional<int> retries;
   int tag = 0;          ///< the submitter's mark, echoed in the command's events
   bool urgent = false;  ///< abandon the outstanding and queued commands, clear rc, go next
+  bool retry_unless_ok = false;  ///< a reply other than "ok" is a failed attempt (see above)
 };
 
 struct DriverEvent {
@@ -73,6 +82,7 @@ struct DriverEvent {
     RcSent,      ///< an rc went out (setpoint, repeat, hover fallback)
     KeepAlive,   ///< the keep-alive rc went out
     Reply,       ///< the outstanding command's reply (text in `reply`)
+    Refused,     ///< retry_unless_ok: refused (text in `reply`), re-sent after refusal_retry_ns
     Retry,       ///< no reply within the timeout: re-sent (attempt = the new attempt)
     Failed,      ///< no reply after the last attempt
     Abandoned,   ///< an urgent command displaced this one
@@ -100,6 +110,7 @@ struct DriverCounters {
   std::int64_t retries = 0;
   std::int64_t failed = 0;
   std::int64_t replies = 0;
+  std::int64_t refusals = 0;        ///< non-ok replies of retry_unless_ok commands, retried
   std::int64_t stale_replies = 0;
   std::int64_t bad_replies = 0;
   std::int64_t abandoned = 0;
@@ -150,12 +161,14 @@ class SdkDriver {
     int retries = 0;
     int attempt = 0;
     TimeNs sent_ns = 0;
+    std::optional<TimeNs> resend_ns;  ///< refused: re-send at this time
   };
   void event(DriverEvent::Kind kind, const std::string& command, const std::string& reply = "",
              int attempt = 0, int tag = 0);
   void read_replies(TimeNs now);
   void read_states(TimeNs now);
   void check_timeout(TimeNs now);
+  void resend(TimeNs now);
   void send_next(TimeNs now);
   void send_rc(TimeNs now);
   bool transmit(TimeNs now, const std::string& text);

@@ -17,8 +17,9 @@ std::string VideoStats::text() const {
   std::ostringstream s;
   s << "datagrams=" << datagrams << " bytes=" << bytes << " foreign_datagrams=" << foreign_datagrams
     << " frames_received=" << frames_received << " oversize_frames=" << oversize_frames
-    << " pictures=" << pictures << " damaged=" << damaged << " discarded=" << discarded
-    << " handed=" << handed << " replaced=" << replaced << " taken=" << taken;
+    << " pictures=" << pictures << " damaged=" << damaged << " truncated=" << truncated
+    << " discarded=" << discarded << " handed=" << handed << " handed_damaged=" << handed_damaged
+    << " replaced=" << replaced << " taken=" << taken;
   return s.str();
 }
 
@@ -62,6 +63,26 @@ bool only_parameter_sets(const std::string& s) {
     if (t != 6 && t != 7 && t != 8 && t != 9) return false;
   }
   return !types.empty();
+}
+
+// A datagram that begins an access unit: a start code, then an SPS, PPS, SEI or delimiter,
+// or a slice whose first_mb_in_slice is 0 (ue(v) 0 is the single bit 1 right after the
+// one-byte NAL header). The Tello starts each frame in a datagram of its own, and within a
+// frame only its first slice begins at macroblock 0.
+bool begins_access_unit(const std::string& s) {
+  size_t header = 0;
+  if (s.size() >= 4 && s[0] == 0 && s[1] == 0 && s[2] == 0 && s[3] == 1) {
+    header = 4;
+  } else if (s.size() >= 3 && s[0] == 0 && s[1] == 0 && s[2] == 1) {
+    header = 3;
+  } else {
+    return false;
+  }
+  if (s.size() <= header) return false;
+  const int type = static_cast<unsigned char>(s[header]) & 0x1f;
+  if (type == 6 || type == 7 || type == 8 || type == 9) return true;
+  if (type != 1 && type != 5) return false;
+  return s.size() > header + 1 && (static_cast<unsigned char>(s[header + 1]) & 0x80) != 0;
 }
 
 }  // namespace
@@ -109,6 +130,12 @@ void VideoReceiver::on_datagram(const Datagram& d) {
     ++stats_.datagrams;
     stats_.bytes += static_cast<std::int64_t>(d.bytes.size());
   }
+  // The next frame begins while one is gathered: that one lost its short last datagram.
+  if (begins_access_unit(d.bytes) &&
+      (frame_overflow_ || (!frame_bytes_.empty() && !only_parameter_sets(frame_bytes_)))) {
+    finish_frame(last_datagram_ns_, true);
+  }
+  last_datagram_ns_ = now;
   if (!frame_overflow_) {
     if (frame_bytes_.size() + d.bytes.size() > config_.max_frame_bytes) {
       frame_overflow_ = true;
@@ -118,12 +145,12 @@ void VideoReceiver::on_datagram(const Datagram& d) {
     }
   }
   if (d.bytes.size() < config_.datagram_size && (frame_overflow_ || !only_parameter_sets(frame_bytes_))) {
-    finish_frame(now);
+    finish_frame(now, false);
   }
 }
 
-void VideoReceiver::finish_frame(TimeNs t_ns) {
-  bool damaged = false;
+void VideoReceiver::finish_frame(TimeNs t_ns, bool lost_end) {
+  bool damaged = lost_end;
   bool oversize = false;
   DecodeResult r;
   if (frame_overflow_) {
@@ -138,17 +165,32 @@ void VideoReceiver::finish_frame(TimeNs t_ns) {
   frame_bytes_.clear();
   frame_overflow_ = false;
 
-  if (damaged) synced_ = false;
-  if (!damaged && r.pictures > 0 && r.clean && r.key_frame) synced_ = true;
-  const bool hand_over = !damaged && r.pictures > 0 && r.clean && synced_;
+  if (r.pictures > 0 && r.key_frame) {
+    ++key_frames_;
+    damage_events_ = 0;
+  }
+  if (damaged) ++damage_events_;
+  // A clean key frame ends the damage (and starts the stream); any sign of damage starts it.
+  // Conceal mode starts at the first key frame that gives a picture, damaged or not (at a few
+  // percent of loss a clean one may take many groups to come: a key frame is 20 to 40
+  // datagrams); its lost bands have no previous picture to come from and stay marked.
+  const bool key = r.pictures > 0 && r.key_frame;
+  if (!damaged && key && r.clean) {
+    synced_ = true;
+    damaged_since_key_ = false;
+  } else if (damaged) {
+    damaged_since_key_ = true;
+  }
+  if (key && config_.damaged == DamagedFrames::conceal) synced_ = true;
+  const bool hand_over = synced_ && r.pictures > 0 &&
+                         (config_.damaged == DamagedFrames::conceal || !damaged_since_key_);
 
   VideoFrame frame;
-  if (hand_over) {
-    if (!thread_state_->decoder.latest_bgr(frame.bgr)) damaged = true;
-  }
+  if (hand_over && !thread_state_->decoder.latest_bgr(frame.bgr)) frame.bgr.release();
   std::lock_guard lock(mutex_);
   ++stats_.frames_received;
   if (oversize) ++stats_.oversize_frames;
+  if (lost_end) ++stats_.truncated;
   if (damaged) ++stats_.damaged;
   stats_.pictures += r.pictures;
   if (!hand_over || frame.bgr.empty()) {
@@ -157,11 +199,15 @@ void VideoReceiver::finish_frame(TimeNs t_ns) {
   }
   frame.t_ns = t_ns;
   frame.index = next_index_++;
+  frame.damaged = damaged_since_key_;
+  frame.key_group = key_frames_;
+  frame.damage_events = damage_events_;
   frame.handed_ns = clock_.now_ns();
   if (mailbox_) ++stats_.replaced;
   mailbox_ = std::move(frame);
   last_frame_ns_ = mailbox_->handed_ns;
   ++stats_.handed;
+  if (damaged_since_key_) ++stats_.handed_damaged;
   signal_fd(notify_fd_);
 }
 

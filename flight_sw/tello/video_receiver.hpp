@@ -6,10 +6,23 @@
 // a newer frame replaces one not yet taken, so the taker always gets the newest frame and
 // never a backlog.
 //
-// Damage: a lost datagram corrupts pictures until the next key frame. The receiver hands
-// over nothing from the first sign of damage (a decoder error or damaged-picture flag, a
-// frame that does not begin with a start code, a frame of bytes that decodes to no picture,
-// an over-long frame) until a key frame decodes cleanly; nor before the first key frame.
+// Damage: a lost datagram corrupts pictures until the next key frame (PROTOCOL.md). Signs
+// of damage: a decoder error or concealment flag, a frame that does not begin with a start
+// code (its first datagram was lost), a frame that decodes to no picture, an over-long frame,
+// a frame whose short last datagram was lost (found when the next frame's first datagram
+// arrives: a start code and an SPS, PPS, SEI, delimiter or a slice beginning at macroblock 0;
+// the Tello starts every frame in a datagram of its own). What happens then depends on
+// VideoReceiverConfig::damaged:
+//   conceal (default): every picture the decoder outputs after the first clean key frame is
+//     handed over, damaged ones as libavcodec's error concealment filled them in (lost
+//     macroblocks copied from the previous picture along guessed motion; h264_codec.hpp), and
+//     marked: VideoFrame::damaged is true from the first sign of damage until a key frame
+//     decodes cleanly. What a real Tello user sees: smeared bands, not a frozen picture.
+//   discard: nothing is handed over from the first sign of damage until a key frame decodes
+//     cleanly (at a few percent of datagram loss almost nothing gets through: a 1 s group of
+//     pictures is ~100 datagrams).
+// Nothing is handed over before the first key frame (conceal: the first that gives a picture,
+// marked damaged if it is; discard: the first clean one).
 //
 // Datagrams from anyone but drone_ip (and source_port when set) are dropped and counted.
 // Times come from the Clock (its now_ns() is called from the receiver thread).
@@ -28,6 +41,8 @@
 
 namespace shelfcross::tello {
 
+enum class DamagedFrames { conceal, discard };
+
 struct VideoReceiverConfig {
   std::string drone_ip = "192.168.10.1";
   std::uint16_t source_port = 0;  ///< 0: any port of drone_ip
@@ -36,6 +51,7 @@ struct VideoReceiverConfig {
   size_t datagram_size = 1460;       ///< a datagram shorter than this ends a frame
   size_t max_frame_bytes = 1 << 20;  ///< a frame growing past this is dropped (lost frame end)
   int receive_buffer_bytes = 4 << 20;
+  DamagedFrames damaged = DamagedFrames::conceal;  ///< see the header comment
 };
 
 /// One decoded frame as handed over.
@@ -43,6 +59,15 @@ struct VideoFrame {
   TimeNs t_ns = 0;          ///< arrival of the frame's last datagram
   TimeNs handed_ns = 0;     ///< when it was put in the mailbox (decoded and converted)
   std::int64_t index = 0;   ///< 0, 1, 2, ... over handed-over frames; a gap = frames replaced
+  bool damaged = false;     ///< error-concealed: damage since the last clean key frame
+  /// Key frames decoded before and with this frame: frames of one group of pictures share
+  /// it (and their damage: it lasts until the next key frame), frames of two groups do not.
+  std::int64_t key_group = 0;
+  /// Frames with a sign of damage since the last key frame, this one and a damaged key frame
+  /// included: 0 for a clean frame of a clean group; each lost datagram adds a band (two
+  /// slices or so) concealed from the previous picture, and the bands add up until the next
+  /// key frame. A measure of how much of the picture is guesswork.
+  int damage_events = 0;
   cv::Mat bgr;              ///< CV_8UC3
 };
 
@@ -55,7 +80,9 @@ struct VideoStats {
   std::int64_t pictures = 0;          ///< pictures the decoder produced
   std::int64_t damaged = 0;           ///< frames with a sign of damage (see header comment)
   std::int64_t discarded = 0;         ///< pictures not handed over (damaged or awaiting a key frame)
+  std::int64_t truncated = 0;         ///< frames whose short last datagram was lost
   std::int64_t handed = 0;            ///< frames put in the mailbox
+  std::int64_t handed_damaged = 0;    ///< of which marked damaged (concealed)
   std::int64_t replaced = 0;          ///< frames replaced in the mailbox before being taken
   std::int64_t taken = 0;
   std::string text() const;           ///< "name=value ..." on one line
@@ -85,7 +112,7 @@ class VideoReceiver {
  private:
   void run();
   void on_datagram(const Datagram& d);
-  void finish_frame(TimeNs t_ns);
+  void finish_frame(TimeNs t_ns, bool lost_end);
 
   VideoReceiverConfig config_;
   const Clock& clock_;
@@ -98,7 +125,11 @@ class VideoReceiver {
   // Receiver thread only.
   std::string frame_bytes_;
   bool frame_overflow_ = false;
-  bool synced_ = false;
+  TimeNs last_datagram_ns_ = 0;     ///< arrival of the newest datagram of the frame gathered
+  bool synced_ = false;             ///< a key frame decoded since the start (discard: a clean one)
+  bool damaged_since_key_ = false;  ///< a sign of damage since the last clean key frame
+  std::int64_t key_frames_ = 0;     ///< key frames decoded (damaged or not)
+  int damage_events_ = 0;           ///< damaged frames since the last key frame (see VideoFrame)
   struct ThreadState;
   std::unique_ptr<ThreadState> thread_state_;
 

@@ -353,6 +353,49 @@ TEST_F(TelloEmulatorTest, InjectedCommandLossAndReplyFaults) {
   EXPECT_EQ(emu_->report().counters.injected_errors, 1);
 }
 
+// A refused manoeuvre ("error Not joystick") is still a command the drone received: it
+// counts for the 15 s no-command watchdog, as any command does (PROTOCOL.md). Refusals are
+// drawn (seeded, p = 0.9): the first seed of 1..10 whose draws give a takeoff and then more
+// than 15 s of nothing but refused commands is flown to the end.
+TEST_F(TelloEmulatorTest, RefusedCommandsCountForTheWatchdog) {
+  bool window = false;
+  for (std::uint64_t seed = 1; seed <= 10 && !window; ++seed) {
+    EmulatorConfig c;
+    c.seed = seed;
+    c.faults.not_joystick = 0.9;
+    t_ns_ = 0;
+    start(c);
+    enter_sdk_mode();
+    for (int attempt = 0; attempt < 200 && emu_->tello().mode() == plant::FlightMode::landed; ++attempt) {
+      send("takeoff");
+      if (reply(20'000 * kMs) == "ok") break;
+      step(200 * kMs);
+    }
+    ASSERT_EQ(emu_->tello().mode(), plant::FlightMode::flying);
+    TimeNs last_accepted_ns = t_ns_;
+    for (int k = 0; k < 8; ++k) {
+      step(2500 * kMs);
+      send("cw 1");
+      const std::string r = reply(5000 * kMs);
+      if (r == "ok") {
+        last_accepted_ns = t_ns_;
+      } else {
+        EXPECT_EQ(r, "error Not joystick");
+      }
+    }
+    step(1000 * kMs);
+    window = t_ns_ - last_accepted_ns >= 15'000 * kMs;
+    if (window) {
+      EXPECT_EQ(emu_->tello().mode(), plant::FlightMode::flying) << "the watchdog landed a drone that was commanded";
+      // Then silence: the watchdog lands it.
+      step(17'000 * kMs);
+      EXPECT_EQ(emu_->tello().mode(), plant::FlightMode::landed);
+    }
+    emu_.reset();
+  }
+  EXPECT_TRUE(window) << "no seed of 1..10 gave 15 s of refusals only";
+}
+
 TEST(TelloEmulatorConfig, BadSettingsAreRefused) {
   EmulatorConfig c;
   c.faults.video.loss = 1.5;
@@ -366,6 +409,11 @@ TEST(TelloEmulatorConfig, BadSettingsAreRefused) {
   EXPECT_THROW(validate_emulator_config(c), std::invalid_argument);
   c = {};
   c.bind_ip = "localhost:1";
+  EXPECT_THROW(validate_emulator_config(c), std::invalid_argument);
+  c = {};
+  c.slices_per_frame = 0;
+  EXPECT_THROW(validate_emulator_config(c), std::invalid_argument);
+  c.slices_per_frame = 46;
   EXPECT_THROW(validate_emulator_config(c), std::invalid_argument);
   EXPECT_NO_THROW(validate_emulator_config(EmulatorConfig{}));
 }

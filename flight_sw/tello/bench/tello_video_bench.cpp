@@ -1,7 +1,9 @@
 // Video receiver latency on loopback: from the arrival of a frame's last datagram (stamped by
 // the receiver thread) to the moment the decoded BGR frame is in the mailbox. The benchmark's
-// time per iteration IS that latency (manual time). A second benchmark times the decoder and
-// the conversion alone on the same frames.
+// time per iteration IS that latency (manual time). Arguments: slices per picture (1, or 45 as
+// tello-sim sends) and datagram loss in percent (0, or 5: damaged frames are concealed and
+// handed over; a frame whose last datagram is lost ends when the next frame's first arrives).
+// A second benchmark times the decoder and the conversion alone on the same frames.
 //
 //   build/release/flight_sw/tello/bench/tello_video_bench
 #include <poll.h>
@@ -21,7 +23,7 @@ namespace {
 constexpr int kWidth = 960, kHeight = 720, kFrames = 60, kKeyInterval = 30;
 
 // A Tello-like sequence: textured background, moving bright blocks; key frame every 30.
-std::vector<std::string> encoded_frames() {
+std::vector<std::string> encoded_frames(int slices = 1) {
   cv::Mat base(kHeight, kWidth, CV_8UC3);
   RandomStream rng(11, StreamId::render_noise);
   for (int y = 0; y < kHeight; ++y) {
@@ -30,7 +32,7 @@ std::vector<std::string> encoded_frames() {
       base.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uchar>(60 + n), static_cast<uchar>(80 + y / 8 + n), static_cast<uchar>(100 + x / 10));
     }
   }
-  H264Encoder encoder(kWidth, kHeight, 30, kKeyInterval);
+  H264Encoder encoder(kWidth, kHeight, 30, kKeyInterval, 23, slices);
   std::vector<std::string> out;
   for (int k = 0; k < kFrames; ++k) {
     cv::Mat f = base.clone();
@@ -42,7 +44,10 @@ std::vector<std::string> encoded_frames() {
 }
 
 void BM_ReceiverLastDatagramToHandOver(benchmark::State& state) {
-  static const std::vector<std::string> frames = encoded_frames();
+  const int slices = static_cast<int>(state.range(0));
+  const double loss = static_cast<double>(state.range(1)) / 100.0;
+  const std::vector<std::string> frames = encoded_frames(slices);
+  RandomStream drops(5, StreamId::link_faults);
   const SteadyClock clock;
   UdpSocket sender("127.0.0.1", 0);
   VideoReceiverConfig config;
@@ -56,17 +61,34 @@ void BM_ReceiverLastDatagramToHandOver(benchmark::State& state) {
   size_t k = 0;
   double total_s = 0.0, worst_s = 0.0;
   int64_t n = 0;
-  for (auto _ : state) {
-    for (const auto& d : datagrams[k % datagrams.size()]) sender.send_to(to, d);
+  int64_t missed = 0;
+  // Until the receiver has its first clean key frame (with loss, several groups may pass).
+  for (int warm = 0; warm < 100 * kKeyInterval && receiver.stats().handed == 0; ++warm) {
+    for (const auto& d : datagrams[k % datagrams.size()]) {
+      if (!drops.bernoulli(loss)) sender.send_to(to, d);
+    }
     ++k;
+    pollfd p{receiver.notify_fd(), POLLIN, 0};
+    ::poll(&p, 1, 5);
+  }
+  receiver.take_latest();
+  for (auto _ : state) {
     std::optional<VideoFrame> f;
-    for (int guard = 0; guard < 2000 && !f; ++guard) {
-      pollfd p{receiver.notify_fd(), POLLIN, 0};
-      ::poll(&p, 1, 5);
-      f = receiver.take_latest();
+    // Frames until one is handed over (with loss, a frame may give no picture or end late).
+    for (int tries = 0; tries < 8 && !f; ++tries) {
+      for (const auto& d : datagrams[k % datagrams.size()]) {
+        if (!drops.bernoulli(loss)) sender.send_to(to, d);
+      }
+      ++k;
+      for (int guard = 0; guard < (loss > 0.0 ? 4 : 2000) && !f; ++guard) {
+        pollfd p{receiver.notify_fd(), POLLIN, 0};
+        ::poll(&p, 1, 5);
+        f = receiver.take_latest();
+      }
+      if (!f) ++missed;
     }
     if (!f) {
-      state.SkipWithError("no frame handed over");
+      state.SkipWithError(("no frame handed over: " + receiver.stats().text()).c_str());
       break;
     }
     const double latency_s = ns_to_seconds(f->handed_ns - f->t_ns);
@@ -78,8 +100,18 @@ void BM_ReceiverLastDatagramToHandOver(benchmark::State& state) {
   state.counters["mean_ms"] = n ? 1e3 * total_s / static_cast<double>(n) : 0.0;
   state.counters["max_ms"] = 1e3 * worst_s;
   state.counters["bytes_per_frame"] = static_cast<double>(receiver.stats().bytes) / static_cast<double>(std::max<int64_t>(1, n));
+  state.counters["damaged_share"] =
+      static_cast<double>(receiver.stats().handed_damaged) / static_cast<double>(std::max<int64_t>(1, receiver.stats().handed));
+  state.counters["frames_without_hand_over"] = static_cast<double>(missed);
 }
-BENCHMARK(BM_ReceiverLastDatagramToHandOver)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(600);
+BENCHMARK(BM_ReceiverLastDatagramToHandOver)
+    ->ArgNames({"slices", "loss_pct"})
+    ->Args({1, 0})
+    ->Args({45, 0})
+    ->Args({45, 5})
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(600);
 
 void BM_DecodeAndConvert(benchmark::State& state) {
   static const std::vector<std::string> frames = encoded_frames();

@@ -3,7 +3,11 @@
 #include <poll.h>
 
 #include <algorithm>
+#include <cstdio>
+#include <filesystem>
 #include <fstream>
+
+#include <opencv2/imgcodecs.hpp>
 #include <iostream>
 #include <variant>
 
@@ -39,6 +43,7 @@ class Pilot {
   }
 
   int run() {
+    if (!o_.record_dir.empty()) std::filesystem::create_directories(o_.record_dir);
     start_ns_ = clock_.now_ns();
     log_.write(start_ns_, "start",
                {{"drone", o_.driver.drone_ip + ":" + std::to_string(o_.driver.drone_command_port)},
@@ -85,6 +90,7 @@ class Pilot {
       if (e.kind == K::State && e.state) {
         last_state_ns_ = e.t_ns;
         battery_pct_ = e.state->battery_pct;
+        last_height_m_ = e.state->height_m;
         inputs.emplace_back(*e.state);
       } else if (e.kind == K::Sent && e.command == "takeoff") {
         if (!airborne_) airborne_since_ns_ = e.t_ns;
@@ -92,6 +98,12 @@ class Pilot {
       } else if (e.kind == K::Reply || e.kind == K::Failed) {
         const bool ok = e.kind == K::Reply && flight_sw::is_ok_reply(e.reply);
         if (e.command == "land" && ok) airborne_ = false;
+        // A refused takeoff ("error No valid imu", ...) left the drone on the ground, unless
+        // the state stream says otherwise.
+        if (e.command == "takeoff" && e.kind == K::Reply && !ok &&
+            !(last_height_m_ && *last_height_m_ > kAirborneHeight_m)) {
+          airborne_ = false;
+        }
         if (e.tag == kTagFlightSoftware && e.kind == K::Reply) inputs.emplace_back(SdkReply{e.t_ns, e.reply});
         if (e.tag == kTagPilot && e.command == "land") {
           land_done_ = true;
@@ -99,11 +111,16 @@ class Pilot {
         }
       }
     }
-    if (auto f = video_->take_latest()) {
+    std::optional<VideoFrame> f = video_->take_latest();
+    if (f && withhold(*f)) f.reset();
+    if (f) {
       const TimeNs taken = clock_.now_ns();
       log_.write(taken, "frame", {{"index", f->index}, {"rx_ns", f->t_ns}, {"handed_ns", f->handed_ns},
+                                  {"damaged", f->damaged}, {"key_group", f->key_group},
+                                  {"damage_events", f->damage_events},
                                   {"rows", f->bgr.rows}, {"cols", f->bgr.cols}});
       last_frame_ns_ = f->handed_ns;
+      if (!o_.record_dir.empty()) record(*f);
       if (hover_override_) {
         hover_override_ = false;
         log_.write(taken, "failsafe", {{"event", "video back: control returned to the flight software"}});
@@ -130,6 +147,48 @@ class Pilot {
       last_fed_ns_ = stamp(in);
       submit_fsw(fsw_.step(in));
       log_telemetry();
+    }
+  }
+
+  // Damaged frames are what a Tello user flies on, but two phases need care:
+  //  - taking the inventory: a damaged band persists until the next key frame, so the
+  //    frames of one group of pictures miss the same marker, and the flight software would
+  //    count its cell empty after N such frames (it counts a cell empty when N frames saw no
+  //    marker there) and then fly into the box. Clean frames go through; of the damaged ones
+  //    only the first of each group of pictures (one a second or so: the flight software's
+  //    3 s video-lost limit is never reached), so its N observations see independent damage;
+  //  - the approach (centring on the cell before the open-loop crossing): frames with more
+  //    than damage_limit damaged frames since their key frame are withheld (the key frame of
+  //    each group always qualifies: its count starts again), so the flight software steers on
+  //    pictures that are mostly decoded, not guessed, and hovers in the gaps.
+  // Every other phase gets every frame.
+  bool withhold(const VideoFrame& f) {
+    if (!f.damaged) return false;
+    const flight_sw::Phase phase = fsw_.phase();
+    std::string why;
+    if (phase == flight_sw::Phase::TakeInventory) {
+      if (!inventory_group_ || *inventory_group_ != f.key_group) {
+        inventory_group_ = f.key_group;
+        return false;
+      }
+      why = "damaged; this group of pictures already gave the inventory a frame";
+    } else if (phase == flight_sw::Phase::Approach) {
+      if (f.damage_events <= o_.damage_limit) return false;
+      why = "damaged in " + std::to_string(f.damage_events) + " frames since the key frame; approaching";
+    } else {
+      return false;
+    }
+    ++withheld_;
+    log_.write(clock_.now_ns(), "frame_withheld",
+               {{"index", f.index}, {"key_group", f.key_group}, {"damage_events", f.damage_events}, {"why", why}});
+    return true;
+  }
+
+  void record(const VideoFrame& f) {
+    char name[64];
+    std::snprintf(name, sizeof name, "frame_%06lld%s.png", static_cast<long long>(f.index), f.damaged ? "_damaged" : "");
+    if (!cv::imwrite((std::filesystem::path(o_.record_dir) / name).string(), f.bgr, {cv::IMWRITE_PNG_COMPRESSION, 1})) {
+      log_.write(clock_.now_ns(), "failsafe", {{"event", "cannot record frame " + std::string(name)}});
     }
   }
 
@@ -206,6 +265,7 @@ class Pilot {
     opt.tag = kTagPilot;
     opt.urgent = true;
     opt.retries = 3;
+    opt.retry_unless_ok = true;  // "error Not joystick" to a land: ask again, never give up at once
     opt.timeout_ns = seconds_to_ns(o_.failsafes.land_reply_s);
     driver_->submit("land", opt);
   }
@@ -295,10 +355,12 @@ class Pilot {
                             {"phase", flight_sw::phase_name(fsw_.phase())},
                             {"driver", driver_counters},
                             {"video", video_counters},
+                            {"frames_withheld", withheld_},
                             {"fsw_stale_replies", fsw_.telemetry().stale_replies},
                             {"fsw_bad_frames", fsw_.telemetry().bad_frames}});
     std::cout << "tello_pilot: " << flight_sw::outcome_name(r.outcome) << (r.reason.empty() ? "" : ": ")
               << r.reason << "\n  driver: " << driver_counters << "\n  video: " << video_counters
+              << " withheld=" << withheld_
               << "\n  inventory: " << o_.inventory_path << "\n  log: " << o_.log_path << std::endl;
   }
 
@@ -316,7 +378,11 @@ class Pilot {
   static constexpr TimeNs kTickPeriodNs = kNsPerSecond / 20;
   std::optional<TimeNs> last_state_ns_;
   std::optional<TimeNs> last_frame_ns_;
+  std::optional<std::int64_t> inventory_group_;  ///< key group of the last damaged frame given in TakeInventory
+  std::int64_t withheld_ = 0;
   int battery_pct_ = -1;
+  std::optional<double> last_height_m_;
+  static constexpr double kAirborneHeight_m = 0.2;
   bool airborne_ = false;
   TimeNs airborne_since_ns_ = 0;
   bool hover_override_ = false;

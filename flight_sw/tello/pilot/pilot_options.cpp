@@ -29,6 +29,16 @@ std::string relative_to(const std::string& file, const std::string& path) {
   return (std::filesystem::path(file).parent_path() / path).string();
 }
 
+const char* damaged_name(DamagedFrames d) { return d == DamagedFrames::conceal ? "conceal" : "discard"; }
+
+template <class Fail>
+DamagedFrames parse_damaged(const std::string& text, Fail fail) {
+  if (text == "conceal") return DamagedFrames::conceal;
+  if (text == "discard") return DamagedFrames::discard;
+  fail("expected conceal or discard, got '" + text + "'");
+  return DamagedFrames::conceal;
+}
+
 // The pilot file: every key optional, see flight_sw/tello/README.md.
 void read_pilot_file(const std::string& path, PilotOptions& o) {
   const auto doc = config::Document::from_file(path);
@@ -57,6 +67,12 @@ void read_pilot_file(const std::string& path, PilotOptions& o) {
     s.land_reply_s = f->optional<double>("land_reply_s", s.land_reply_s, kPositive);
     if (s.video_land_s < s.video_hover_s) f->fail("video_land_s", "must not be shorter than video_hover_s");
     f->finish();
+  }
+  if (auto v = root.optional_map("video")) {
+    o.video.damaged = parse_damaged(v->optional<std::string>("damaged_frames", damaged_name(o.video.damaged)),
+                                    [&](const std::string& why) { v->fail("damaged_frames", why); });
+    o.damage_limit = v->optional<int>("damage_limit", o.damage_limit, within(0, 1000));
+    v->finish();
   }
   if (auto out = root.optional_map("output")) {
     o.log_path = relative_to(path, out->optional<std::string>("log", o.log_path));
@@ -137,6 +153,15 @@ std::optional<PilotOptions> parse_options(int argc, char** argv) {
   auto* o_vsport = app.add_option("--video-source-port", video_source_port, "accept video only from this drone port (default 0: any)")->check(CLI::Range(0, 65535));
   auto* o_log = app.add_option("--log", log_path, "flight log, JSON lines (default tello_flight_log.jsonl)");
   auto* o_inv = app.add_option("--inventory", inventory_path, "inventory JSON output (default tello_inventory.json)");
+  std::string damaged;
+  auto* o_damaged = app.add_option("--damaged-video", damaged,
+                                   "damaged frames (lost datagrams): conceal (hand over error-concealed pictures, default) or discard (until the next clean key frame)");
+  int damage_limit = 0;
+  auto* o_dlimit = app.add_option("--damage-limit", damage_limit,
+                                  "approach: withhold frames with more than this many damaged frames since their key frame (default 8)")
+                       ->check(CLI::Range(0, 1000));
+  app.add_option("--record-frames", o.record_dir,
+                 "write every frame handed to the flight software to this folder as frame_INDEX[_damaged].png (costs time)");
   auto* o_dry = app.add_flag("--dry-run", o.dry_run, "connect, stream and run perception; never send a motion command");
   auto* o_st = app.add_option("--state-timeout", fs.state_timeout_s, "airborne without state this long (s): land")->check(CLI::PositiveNumber);
   auto* o_sst = app.add_option("--state-start-timeout", fs.state_start_timeout_s, "no state at all this long after start (s): give up")->check(CLI::PositiveNumber);
@@ -177,6 +202,10 @@ std::optional<PilotOptions> parse_options(int argc, char** argv) {
   if (o_vsport->count()) o.video.source_port = port(video_source_port);
   if (o_log->count()) o.log_path = log_path;
   if (o_inv->count()) o.inventory_path = inventory_path;
+  if (o_dlimit->count()) o.damage_limit = damage_limit;
+  if (o_damaged->count()) {
+    o.video.damaged = parse_damaged(damaged, [](const std::string& why) -> void { throw UsageError("--damaged-video: " + why); });
+  }
   if (o_st->count()) o.failsafes.state_timeout_s = fs.state_timeout_s;
   if (o_sst->count()) o.failsafes.state_start_timeout_s = fs.state_start_timeout_s;
   if (o_vh->count()) o.failsafes.video_hover_s = fs.video_hover_s;

@@ -420,3 +420,93 @@ TEST(SdkDriver, RenewingTheSameSticksKeepsTheSteadyRate) {
 
 }  // namespace
 }  // namespace shelfcross::tello
+
+namespace shelfcross::tello {
+namespace {
+
+using Kind = DriverEvent::Kind;
+using testing::pump_until;
+constexpr TimeNs kSec = kNsPerSecond;
+
+// A real Tello refuses manoeuvres with "error Not joystick" or "error No valid imu". By
+// default a refusal is the command's reply (the submitter decides: the flight software
+// retries a refused takeoff itself); with retry_unless_ok the driver re-sends after
+// refusal_retry_ns while retries remain, and reports each refusal.
+TEST(SdkDriver, ARefusalIsTheReplyUnlessRetryUnlessOk) {
+  DriverConfig config;
+  config.keepalive_ns = 0;
+  Rig rig(config);
+  ASSERT_TRUE(rig.driver->submit("takeoff"));
+  rig.service();
+  EXPECT_EQ(rig.drone.expect_command(), "takeoff");
+  rig.drone.reply("error No valid imu\r\n");
+  ASSERT_TRUE(rig.pump_until_event(Kind::Reply));
+  EXPECT_EQ(rig.last(Kind::Reply)->reply, "error No valid imu");
+  EXPECT_EQ(rig.count(Kind::Refused), 0);
+  EXPECT_FALSE(rig.driver->outstanding());
+  rig.clock.advance(kSec);
+  rig.service();
+  EXPECT_TRUE(rig.drone.nothing_sent());  // not re-sent by the driver
+}
+
+TEST(SdkDriver, RetriesARefusedLandAfterTheRefusalDelayUntilOk) {
+  DriverConfig config;
+  config.keepalive_ns = 0;
+  Rig rig(config);
+  ASSERT_TRUE(rig.driver->submit("land", {.retries = 3, .tag = 2, .urgent = true, .retry_unless_ok = true}));
+  rig.service();
+  EXPECT_EQ(rig.drone.expect_command(), "land");
+  for (int refusal = 1; refusal <= 2; ++refusal) {
+    rig.drone.reply(refusal == 1 ? "error Not joystick\r\n" : "error No valid imu\r\n");
+    ASSERT_TRUE(rig.pump_until_event(Kind::Refused, refusal));
+    EXPECT_EQ(rig.last(Kind::Refused)->attempt, refusal);
+    EXPECT_EQ(rig.count(Kind::Reply), 0);
+    // A duplicate of the refusal while waiting to re-send answers nothing: stale.
+    rig.drone.reply("error Not joystick");
+    ASSERT_TRUE(rig.pump_until_event(Kind::StaleReply, refusal));
+    rig.clock.advance(config.refusal_retry_ns - 1);
+    rig.service();
+    EXPECT_TRUE(rig.drone.nothing_sent());
+    rig.clock.advance(1);
+    rig.service();
+    EXPECT_EQ(rig.drone.expect_command(), "land");
+    EXPECT_EQ(rig.last(Kind::Sent)->attempt, refusal + 1);
+  }
+  rig.drone.reply("ok");
+  ASSERT_TRUE(rig.pump_until_event(Kind::Reply));
+  EXPECT_EQ(rig.last(Kind::Reply)->reply, "ok");
+  EXPECT_EQ(rig.last(Kind::Reply)->attempt, 3);
+  EXPECT_EQ(rig.last(Kind::Reply)->tag, 2);
+  EXPECT_EQ(rig.driver->counters().refusals, 2);
+  EXPECT_EQ(rig.count(Kind::Failed), 0);
+}
+
+TEST(SdkDriver, GivesTheLastRefusalAsTheReplyWhenRetriesRunOut) {
+  DriverConfig config;
+  config.keepalive_ns = 0;
+  Rig rig(config);
+  ASSERT_TRUE(rig.driver->submit("land", {.retries = 2, .retry_unless_ok = true}));
+  rig.service();
+  for (int attempt = 1; attempt <= 3; ++attempt) {
+    ASSERT_EQ(rig.drone.expect_command(), "land") << attempt;
+    rig.drone.reply("error Not joystick");
+    if (attempt < 3) {
+      ASSERT_TRUE(rig.pump_until_event(Kind::Refused, attempt));
+      rig.clock.advance(config.refusal_retry_ns);
+      rig.service();
+    }
+  }
+  ASSERT_TRUE(rig.pump_until_event(Kind::Reply));
+  EXPECT_EQ(rig.last(Kind::Reply)->reply, "error Not joystick");
+  EXPECT_EQ(rig.last(Kind::Reply)->attempt, 3);
+  EXPECT_FALSE(rig.driver->outstanding());
+  // Nothing but the three lands went out, and nothing is refused as out of range.
+  rig.clock.advance(10 * kSec);
+  rig.service();
+  EXPECT_TRUE(rig.drone.nothing_sent());
+  EXPECT_EQ(rig.driver->counters().rejected, 0);
+  EXPECT_EQ(rig.driver->counters().commands_sent, 3);
+}
+
+}  // namespace
+}  // namespace shelfcross::tello

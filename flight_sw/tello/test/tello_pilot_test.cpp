@@ -21,6 +21,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "flight_sw/tello/h264_codec.hpp"
+#include "flight_sw/tello/sdk_command.hpp"
 #include "flight_sw/tello/test/loopback.hpp"
 
 extern char** environ;
@@ -128,8 +129,11 @@ struct FakeTello {
   std::uint16_t pilot_video_port = free_port();
   H264Encoder encoder{960, 720, 30, 10};
   std::vector<std::string> received;
+  /// The reply to a non-rc command ("ok" unless a test scripts refusals).
+  std::function<std::string(const std::string&)> answer = [](const std::string&) { return std::string("ok"); };
   bool streaming = false;
   bool send_state = true;
+  std::string state_text = kState;
   int frame = 0;
   std::function<cv::Mat(int)> picture = [](int k) {
     cv::Mat img(720, 960, CV_8UC3, cv::Scalar(90, 90, 90));
@@ -150,11 +154,11 @@ struct FakeTello {
     if (command.wait_readable(10)) {
       while (auto d = command.receive()) {
         received.push_back(d->bytes);
-        if (d->bytes.rfind("rc ", 0) != 0) command.send_to(d->from, "ok\r\n");
+        if (d->bytes.rfind("rc ", 0) != 0) command.send_to(d->from, answer(d->bytes) + "\r\n");
         if (d->bytes == "streamon") streaming = true;
       }
     }
-    if (send_state) state.send_to({"127.0.0.1", pilot_state_port}, kState);
+    if (send_state) state.send_to({"127.0.0.1", pilot_state_port}, state_text);
     if (streaming) {
       for (const auto& d : tello_datagrams(encoder.encode(picture(frame)))) video.send_to({"127.0.0.1", pilot_video_port}, d);
       ++frame;
@@ -168,6 +172,14 @@ struct FakeTello {
   }
   size_t index_of(const std::string& c) const {
     return static_cast<size_t>(std::find(received.begin(), received.end(), c) - received.begin());
+  }
+  int count(const std::string& c) const { return static_cast<int>(std::count(received.begin(), received.end(), c)); }
+  /// Every datagram received is a valid SDK command within its ranges.
+  void expect_all_valid() const {
+    for (const auto& c : received) {
+      std::string why;
+      EXPECT_TRUE(classify_command(c, &why)) << "'" << c << "': " << why;
+    }
   }
 };
 
@@ -191,6 +203,12 @@ TEST(TelloPilot, BadCommandLineOrConfigExitsWith2) {
   EXPECT_EQ(run_to_exit({"--config", kConfig, "--pilot", (dir / "pilot.yaml").string()}, &err), 2);
   EXPECT_NE(err.find("pilot.yaml:3"), std::string::npos) << err;
   EXPECT_EQ(run_to_exit({"--config", kConfig, "--log", (dir / "no" / "such" / "dir.jsonl").string()}, &err), 2);
+  EXPECT_EQ(run_to_exit({"--config", kConfig, "--damaged-video", "blurry"}, &err), 2);
+  EXPECT_NE(err.find("--damaged-video"), std::string::npos) << err;
+  EXPECT_EQ(run_to_exit({"--config", kConfig, "--damage-limit", "-1"}, &err), 2);
+  std::ofstream(dir / "video.yaml") << "video:\n  damage_limit: 3\n  damaged_frames: maybe\n";
+  EXPECT_EQ(run_to_exit({"--config", kConfig, "--pilot", (dir / "video.yaml").string()}, &err), 2);
+  EXPECT_NE(err.find("video.yaml:3"), std::string::npos) << err;
   if (!HasFailure()) fs::remove_all(dir);
 }
 
@@ -379,6 +397,62 @@ TEST(TelloPilot, VideoStallHoversThenLands) {
   const size_t land = drone.index_of("land");
   ASSERT_GT(land, 0u);
   EXPECT_EQ(drone.received[land - 1], "rc 0 0 0 0");
+  if (!HasFailure()) fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace shelfcross::tello
+
+namespace shelfcross::tello {
+namespace {
+
+// "error No valid imu" (a real Tello in dim light) to every takeoff: the flight software
+// asks again (its command_retries, 3), then gives up on the ground. The drone never left the
+// ground, so the program sends no land, and exits 1.
+TEST(TelloPilot, RefusedTakeoffIsRetriedThenGivesUpOnTheGround) {
+  const fs::path dir = temp_dir("refused_takeoff");
+  FakeTello drone;
+  drone.answer = [](const std::string& c) { return std::string(c == "takeoff" ? "error No valid imu" : "ok"); };
+  drone.state_text = "mid:-1;x:-100;y:-100;z:-100;mpry:-1,-1,-1;pitch:0;roll:0;yaw:0;vgx:0;vgy:0;vgz:0;templ:55;"
+                     "temph:57;tof:10;h:0;bat:83;baro:118.26;time:0;agx:-4.00;agy:1.00;agz:-997.00;\r\n";
+  Child pilot(drone.args(dir), dir);
+  ASSERT_TRUE(drone.step_until("takeoff")) << read_file(pilot.err);
+  for (int i = 0; i < 1500 && !pilot.poll_exit(); ++i) drone.step();
+  EXPECT_EQ(pilot.exit_code, 1) << read_file(pilot.out);
+  EXPECT_EQ(drone.count("takeoff"), 4);
+  EXPECT_EQ(drone.count("land"), 0);
+  drone.expect_all_valid();
+  const fs::path log = dir / "log.jsonl";
+  EXPECT_EQ(log_lines(log, "reply", "reply", "error No valid imu"), 4);
+  EXPECT_EQ(log_lines(log, "rejected"), 0);
+  EXPECT_NE(read_file(pilot.out).find("takeoff failed: error No valid imu"), std::string::npos) << read_file(pilot.out);
+  if (!HasFailure()) fs::remove_all(dir);
+}
+
+// "error Not joystick" to the program's own land (Ctrl-C): it asks again every 0.5 s until
+// the drone accepts, and exits 0 once landed; nothing but land goes out meanwhile.
+TEST(TelloPilot, RefusedLandIsAskedAgainUntilAccepted) {
+  const fs::path dir = temp_dir("refused_land");
+  FakeTello drone;
+  int lands = 0;
+  drone.answer = [&](const std::string& c) {
+    if (c == "land" && ++lands <= 2) return std::string("error Not joystick");
+    return std::string("ok");
+  };
+  Child pilot(drone.args(dir), dir);
+  ASSERT_TRUE(drone.step_until("takeoff")) << read_file(pilot.err);
+  for (int i = 0; i < 20; ++i) drone.step();
+  ::kill(pilot.pid, SIGINT);
+  for (int i = 0; i < 1500 && !pilot.poll_exit(); ++i) drone.step();
+  EXPECT_EQ(pilot.exit_code, 0) << read_file(pilot.err);
+  EXPECT_EQ(drone.count("land"), 3);
+  for (size_t i = drone.index_of("land"); i < drone.received.size(); ++i) {
+    EXPECT_TRUE(drone.received[i] == "land" || drone.received[i] == "rc 0 0 0 0") << drone.received[i];
+  }
+  drone.expect_all_valid();
+  const fs::path log = dir / "log.jsonl";
+  EXPECT_EQ(log_lines(log, "refused", "reply", "error Not joystick"), 2);
+  EXPECT_EQ(log_lines(log, "reply", "command", "land"), 1);
   if (!HasFailure()) fs::remove_all(dir);
 }
 
