@@ -83,10 +83,10 @@ struct PerceptionParams {
   HsvRange tag_hsv;
   PerceptionPipeline pipeline = PerceptionPipeline::fast;
   /// Fast pipeline, whole frames: tag seeds are looked for every this many pixels along rows
-  /// and columns (each blob found is then measured at full resolution). Exact for every tag of
-  /// at least stride + 1 pixels a side (a solid square that size always covers a sample):
-  /// 2 keeps tags 3 px wide, far smaller than a 6 cm tag at the 5 m the search looks.
-  int tag_seed_stride_px = 2;
+  /// and columns (each blob found is then measured at full resolution). Exact for every blob
+  /// holding a solid stride x stride square (any such square covers a sample): 4 keeps tags of
+  /// 4 px and more, what a 6 cm tag is at 13 m, beyond any arena.
+  int tag_seed_stride_px = 4;
   double min_tag_area_px = 12.0;     ///< smaller blobs are noise
   double min_fill_ratio = 0.40;      ///< blob area / bounding-box area (a 45 deg square: 0.5)
   double max_aspect_ratio = 3.0;     ///< bounding-box long side / short side

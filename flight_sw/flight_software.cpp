@@ -434,7 +434,8 @@ void FlightSoftware::take_inventory(const cv::Mat& bgr) {
     // Markers only where boxes can be: the cells, i.e. inside the front tags' bounding box.
     cv::Rect grid = view_.tags.front().bbox_px;
     for (const TagBlob& t : view_.tags) grid |= t.bbox_px;
-    marker_detector_.detect_in(bgr, grid, config_.shelf.marker_size_m * view_.px_per_m, markers_);
+    marker_detector_.detect_in(bgr, grid, config_.shelf.marker_size_m * view_.px_per_m,
+                               config_.perception.marker_area_ratio_threshold, markers_);
   } else {
     marker_detector_.detect(bgr, markers_);
   }

@@ -94,11 +94,8 @@ void TagDetector::detect_fast(const cv::Mat& bgr, cv::Rect roi, std::vector<TagB
   for (int y0 = 0; y0 < H; y0 += stride) {
     std::uint8_t* seen_row = seen.ptr<std::uint8_t>(y0);
     for (int x0 = 0; x0 < W; x0 += stride) {
-      if (seen_row[x0]) continue;
-      if (!is_tag_colour(pixel(x0, y0))) {
-        seen_row[x0] = 1;
-        continue;
-      }
+      // A sample already filled is skipped; one that fails is not marked (nothing returns to it).
+      if (seen_row[x0] == 2 || !is_tag_colour(pixel(x0, y0))) continue;
       // 8-connected flood fill of the blob at full resolution (window coordinates).
       seen_row[x0] = 2;
       stack_.clear();
@@ -363,18 +360,37 @@ MarkerDetector::MarkerDetector(const std::string& dictionary_name) {
   fast_parameters_->cornerRefinementMethod = cv::aruco::CORNER_REFINE_NONE;
 }
 
-void MarkerDetector::collect(double scale, cv::Point2d offset, std::vector<MarkerSighting>& out) {
+void MarkerDetector::collect(double scale, cv::Point2d offset, double grow_px, std::vector<MarkerSighting>& out) {
   // Pixel u of an image decimated by `scale` (block average) covers full-resolution pixels
   // scale u .. scale u + scale - 1: its centre is scale u + (scale - 1) / 2.
   const double shift = 0.5 * (scale - 1.0);
   for (size_t i = 0; i < ids_.size(); ++i) {
     MarkerSighting m;
     m.id = ids_[i];
+    std::array<cv::Point2d, 4> q;
     cv::Point2d c(0, 0);
     for (size_t k = 0; k < 4; ++k) {
-      const cv::Point2f& q = corners_[i][k];
-      m.corners_px[k] = cv::Point2f(static_cast<float>(scale * q.x + shift + offset.x),
-                                    static_cast<float>(scale * q.y + shift + offset.y));
+      q[k] = cv::Point2d(scale * corners_[i][k].x + shift + offset.x, scale * corners_[i][k].y + shift + offset.y);
+      c += 0.25 * q[k];
+    }
+    // Unrefined corners lie on the centres of the border's outermost dark pixels, half a pixel
+    // inside its edge: every side moved out by grow_px (miter: corner + d (n1 + n2) / (1 + n1.n2)
+    // with n1, n2 the outward unit normals of its two sides).
+    c = cv::Point2d(0, 0);
+    for (size_t k = 0; k < 4; ++k) {
+      cv::Point2d p = q[k];
+      if (grow_px > 0.0) {
+        const auto outward = [&](const cv::Point2d& a, const cv::Point2d& b) {
+          const cv::Point2d e = b - a;
+          cv::Point2d n(-e.y, e.x);
+          n *= 1.0 / std::max(1e-9, cv::norm(n));
+          const cv::Point2d centre = 0.25 * (q[0] + q[1] + q[2] + q[3]);
+          return n.dot(0.5 * (a + b) - centre) >= 0.0 ? n : -n;
+        };
+        const cv::Point2d n1 = outward(q[(k + 3) % 4], q[k]), n2 = outward(q[k], q[(k + 1) % 4]);
+        p += grow_px * (n1 + n2) * (1.0 / std::max(0.1, 1.0 + n1.dot(n2)));
+      }
+      m.corners_px[k] = cv::Point2f(p);
       c += cv::Point2d(m.corners_px[k]);
     }
     m.centre_px = c * 0.25;
@@ -388,11 +404,11 @@ void MarkerDetector::detect(const cv::Mat& bgr, std::vector<MarkerSighting>& out
   corners_.clear();
   ids_.clear();
   cv::aruco::detectMarkers(gray_, dictionary_, corners_, ids_, parameters_, rejected_);
-  collect(1.0, {0.0, 0.0}, out);
+  collect(1.0, {0.0, 0.0}, 0.0, out);  // sub-pixel refined
 }
 
 void MarkerDetector::detect_in(const cv::Mat& bgr, cv::Rect region, double expected_side_px,
-                               std::vector<MarkerSighting>& out) {
+                               double min_area_ratio, std::vector<MarkerSighting>& out) {
   region &= cv::Rect(0, 0, bgr.cols, bgr.rows);
   if (region.width < 8 || region.height < 8 || !(expected_side_px > 0.0)) return;
   cv::cvtColor(bgr(region), gray_, cv::COLOR_BGR2GRAY);
@@ -406,7 +422,10 @@ void MarkerDetector::detect_in(const cv::Mat& bgr, cv::Rect region, double expec
   const double side = expected_side_px / scale;
   const double longest = std::max(image->cols, image->rows);
   cv::aruco::DetectorParameters& p = *fast_parameters_;
-  p.minMarkerPerimeterRate = std::min(4.0, 0.4 * 4.0 * side / longest);
+  // A quadrilateral of perimeter P has at most the area (P/4)^2 (the square's), so one with
+  // P < 4 sqrt(marker_area_ratio) side can never pass eq. 1 on marker area (area >= ratio
+  // side^2): such candidates (the colour tags, markers of shelves behind) are not even decoded.
+  p.minMarkerPerimeterRate = std::min(4.0, 0.98 * std::sqrt(min_area_ratio) * 4.0 * side / longest);
   p.maxMarkerPerimeterRate = std::min(4.0, 2.5 * 4.0 * side / longest);
   // One threshold window about half a marker wide (the defaults try 3, 13 and 23 px): a
   // marker's black border and white bits both fall inside it.
@@ -417,7 +436,7 @@ void MarkerDetector::detect_in(const cv::Mat& bgr, cv::Rect region, double expec
   corners_.clear();
   ids_.clear();
   cv::aruco::detectMarkers(*image, dictionary_, corners_, ids_, fast_parameters_, rejected_);
-  collect(scale, cv::Point2d(region.x, region.y), out);
+  collect(scale, cv::Point2d(region.x, region.y), 0.5 * scale, out);
 }
 
 // ---- Tracking ----

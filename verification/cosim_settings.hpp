@@ -21,17 +21,19 @@ struct StepLatencyQuantile {
 /// The flight software's whole per-frame step (FlightSoftware::step on a camera frame, fast
 /// perception pipeline) during the approach, the phase that flies most frames, measured on
 /// one core at 960 x 720 by the perception benchmark on its frame set: BM_Step/nominal/approach
-/// (bench/README.md has the command, the machine and the other phases). Quantiles in seconds.
+/// (bench/README.md has the command, the machine and the other phases): thread CPU time per
+/// step, 400 steps over the 100 approach frames, 2026-11-21 on the 2-core AMD EPYC VM the
+/// project is built on (shared, loaded: an idle core is faster). Quantiles in seconds.
 /// Re-measure and update these when the flight software's perception changes.
 inline constexpr std::array<StepLatencyQuantile, 8> kMeasuredStepLatency{{
-    {0.00, 0.00040},
-    {0.10, 0.00050},
-    {0.25, 0.00055},
-    {0.50, 0.00060},
-    {0.75, 0.00070},
-    {0.90, 0.00080},
-    {0.99, 0.00120},
-    {1.00, 0.00200},
+    {0.00, 0.000229},
+    {0.10, 0.000262},
+    {0.25, 0.000306},
+    {0.50, 0.000427},
+    {0.75, 0.000690},
+    {0.90, 0.001099},
+    {0.99, 0.001420},
+    {1.00, 0.001453},
 }};
 
 /// The step time at quantile q in [0, 1] of the measured distribution: its inverse CDF,

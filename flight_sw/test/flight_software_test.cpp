@@ -456,10 +456,11 @@ TEST(FlightSoftware, SameInputsGiveTheSameCommands) {
 
 
 // Issue 7: the fast perception decides exactly as the reference pipeline (full-frame OpenCV
-// composition, Median Flow, ArUco over the whole frame): whole closed-loop missions, with and
-// without latency and lag, send the very same commands and end with the same inventory.
+// composition, Median Flow, ArUco over the whole frame): a whole closed-loop mission with
+// video latency, velocity lag and a start off the centre line sends the very same commands and
+// ends with the same inventory. (The rendered benchmark frames: app test CmdFrames.)
 TEST(FlightSoftware, FastAndReferencePipelinesFlyTheSameMission) {
-  for (const double latency_s : {0.0, 0.25}) {
+  for (const double latency_s : {0.25}) {
     Options o;
     o.video_latency_s = latency_s;
     o.velocity_time_constant_s = latency_s > 0.0 ? 0.5 : 0.0;
