@@ -28,12 +28,12 @@ const CommandRegistration kFrames{
                    "fly the flight software over each sequence with the fast and the reference pipeline and "
                    "compare their decisions; exit 1 if they differ");
       return [o]() -> int {
-        const verification::Scenario sc = verification::load_scenario(o->scenario);
         if (!o->condition.empty()) {
           bool known = false;
           for (const bench::Condition& c : bench::frame_conditions()) known = known || o->condition == c.name;
           if (!known) throw UsageError("--condition: unknown condition '" + o->condition + "'");
         }
+        const verification::Scenario sc = verification::load_scenario(o->scenario);
         if (sc.warehouse.shelves.empty()) throw UsageError(o->scenario + ": the frame set needs a shelf");
         const int n = bench::generate_frame_set(sc, o->out, o->condition);
         std::cout << "wrote " << n << " frames and manifest.csv to " << o->out << " (frame set version "
@@ -41,7 +41,9 @@ const CommandRegistration kFrames{
         if (!o->check) return 0;
         const bench::FrameSet set = bench::load_frame_set(o->out, sc);
         const flight_sw::FlightConfig config = verification::flight_config_for(sc, sc.camera);
-        bool all_same = true;
+        const bench::TagComparison tags = bench::compare_tag_detection(set, config);
+        std::cout << tags.summary;
+        bool all_same = tags.same;
         for (const bench::Condition& c : bench::frame_conditions()) {
           if (set.sequence(c.name).empty()) continue;
           const bench::PipelineComparison cmp = bench::compare_pipelines(set, c.name, config);

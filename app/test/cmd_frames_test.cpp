@@ -32,7 +32,8 @@ TEST_F(CmdFrames, UnknownConditionIsBadInput) {
   EXPECT_NE(r.output.find("unknown condition 'foggy'"), std::string::npos) << r.output;
 }
 
-// The nominal sequence and the far stills: every frame written with its manifest line, and the
+// The nominal sequence and the far stills: every frame written with its manifest line; the
+// fast tag detector finds exactly the reference's front tags on every whole frame; and the
 // flight software, fed the sequence, takes the inventory and approaches the target with both
 // pipelines, deciding the same at every frame.
 TEST_F(CmdFrames, NominalSequenceRendersAndBothPipelinesDecideTheSame) {
@@ -45,6 +46,8 @@ TEST_F(CmdFrames, NominalSequenceRendersAndBothPipelinesDecideTheSame) {
   EXPECT_NE(r.output.find("take_inventory@"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("approach@"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("same decisions"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("whole-frame tags after eq. 1: 110 frames"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("front tags: identical"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("decisions: fast == reference"), std::string::npos) << r.output;
   std::ifstream manifest(dir_ / "manifest.csv");
   std::string line;
