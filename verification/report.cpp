@@ -58,6 +58,7 @@ std::string latency_sweep_section(const Scenario& scenario, const std::vector<Ru
         "|---|---|---|---|---|\n";
   std::vector<double> centre_ms, rate;
   std::optional<double> last_90_ms, first_below_50_ms;
+  bool all_90 = true;  // every bin so far at 90 % or more
   for (const auto& [bin, counts] : bins) {
     const auto [n, ok] = counts;
     const double lo = bin * kBin_s * 1e3, hi = (bin + 1) * kBin_s * 1e3;
@@ -66,7 +67,8 @@ std::string latency_sweep_section(const Scenario& scenario, const std::vector<Ru
        << fixed(clopper_pearson_lower(ok, n), 3) << " |\n";
     centre_ms.push_back(0.5 * (lo + hi));
     rate.push_back(p);
-    if (p >= 0.9 && !first_below_50_ms) last_90_ms = hi;
+    all_90 = all_90 && p >= 0.9;
+    if (all_90) last_90_ms = hi;
     if (p < 0.5 && !first_below_50_ms) first_below_50_ms = lo;
   }
   md << "\n";
