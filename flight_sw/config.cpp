@@ -97,6 +97,13 @@ void read_perception(const Map& m, PerceptionParams& p) {
     if (p.tag_hsv.val_min > p.tag_hsv.val_max) hsv->fail("val_min", "val_min > val_max");
     hsv->finish();
   }
+  if (m.has("pipeline")) {
+    const std::string name = m.required<std::string>("pipeline");
+    if (name == "fast") p.pipeline = PerceptionPipeline::fast;
+    else if (name == "reference") p.pipeline = PerceptionPipeline::reference;
+    else m.fail("pipeline", "unknown pipeline '" + name + "' (fast or reference)");
+  }
+  opt(m, "tag_seed_stride_px", p.tag_seed_stride_px, within(1, 16));
   opt(m, "min_tag_area_px", p.min_tag_area_px, kNonNegative);
   opt(m, "min_fill_ratio", p.min_fill_ratio, kFraction);
   opt(m, "max_aspect_ratio", p.max_aspect_ratio, at_least(1.0));
@@ -250,6 +257,8 @@ void validate_flight_config(const FlightConfig& c) {
   require(c.perception.marker_min_agreeing_frames >= 1 &&
               c.perception.inventory_frames >= c.perception.marker_min_agreeing_frames,
           "inventory_frames must be >= marker_min_agreeing_frames >= 1");
+  require(c.perception.tag_seed_stride_px >= 1 && c.perception.tag_seed_stride_px <= 16,
+          "tag_seed_stride_px outside 1..16");
   require(c.timeouts.video_land_s > c.timeouts.video_hover_s,
           "video_land_s must exceed video_hover_s");
   require(c.rc.rc_per_mps_horizontal > 0.0 && c.rc.rc_per_mps_vertical > 0.0 &&

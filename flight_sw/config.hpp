@@ -15,7 +15,8 @@
 //   perception: tag_hsv {hue_min hue_max sat_min sat_max val_min val_max}, min_tag_area_px,
 //               min_fill_ratio, max_aspect_ratio, area_ratio_threshold,
 //               grid_orthogonality_tolerance_rad, marker_area_ratio_threshold,
-//               marker_min_agreeing_frames, inventory_frames, roi_expand, corner_gate
+//               marker_min_agreeing_frames, inventory_frames, roi_expand, corner_gate,
+//               pipeline (fast | reference), tag_seed_stride_px
 //   control:    forward_speed_mps kp_z ki_z z_integral_limit_m_s z_speed_max_mps kp_psi ki_psi
 //               psi_integral_limit_rad_s yaw_rate_max_radps lateral_speed_mps
 //               psi_lateral_threshold_rad viewpoint_kp viewpoint_speed_max_mps viewpoint_yaw_kp
@@ -71,8 +72,21 @@ struct HsvRange {
   int val_max = 255;
 };
 
+/// Two implementations of the same perception (perception.hpp). `fast` is flown; `reference`
+/// is the straightforward full-frame composition of OpenCV calls it replaced (HSV conversion
+/// and connected components on every frame, Median Flow, ArUco over the whole image), kept as
+/// the oracle that tests and `shelfcross frames --check` compare the fast one against: both
+/// must decide the same (inventory, target, commands; poses within tolerance).
+enum class PerceptionPipeline { fast, reference };
+
 struct PerceptionParams {
   HsvRange tag_hsv;
+  PerceptionPipeline pipeline = PerceptionPipeline::fast;
+  /// Fast pipeline, whole frames: tag seeds are looked for every this many pixels along rows
+  /// and columns (each blob found is then measured at full resolution). Exact for every blob
+  /// holding a solid stride x stride square (any such square covers a sample): 4 keeps tags of
+  /// 4 px and more, what a 6 cm tag is at 13 m, beyond any arena.
+  int tag_seed_stride_px = 4;
   double min_tag_area_px = 12.0;     ///< smaller blobs are noise
   double min_fill_ratio = 0.40;      ///< blob area / bounding-box area (a 45 deg square: 0.5)
   double max_aspect_ratio = 3.0;     ///< bounding-box long side / short side

@@ -47,6 +47,16 @@ std::string cell_text(CellIndex c) {
 
 cv::Point2d centre_of(const cv::Rect2d& r) { return {r.x + 0.5 * r.width, r.y + 0.5 * r.height}; }
 
+/// The tracked box: the bounding box of the corner tags' centres grown by half a tag side
+/// on every side. (cv::boundingRect of the centres as float points: the smallest integer
+/// rectangle holding them, right and bottom edges exclusive.)
+cv::Rect2d corner_box(const std::array<cv::Point2d, 4>& q, double side) {
+  std::array<cv::Point2f, 4> f;
+  for (size_t k = 0; k < 4; ++k) f[k] = cv::Point2f(q[k]);
+  const cv::Rect centres = cv::boundingRect(f);
+  return {centres.x - 0.5 * side, centres.y - 0.5 * side, centres.width + side, centres.height + side};
+}
+
 }  // namespace
 
 FlightSoftware::FlightSoftware(FlightConfig config)
@@ -420,7 +430,15 @@ void FlightSoftware::take_inventory(const cv::Mat& bgr) {
   update_view_telemetry();
   if (!view_.full) return;
   markers_.clear();
-  marker_detector_.detect(bgr, markers_);
+  if (fast()) {
+    // Markers only where boxes can be: the cells, i.e. inside the front tags' bounding box.
+    cv::Rect grid = view_.tags.front().bbox_px;
+    for (const TagBlob& t : view_.tags) grid |= t.bbox_px;
+    marker_detector_.detect_in(bgr, grid, config_.shelf.marker_size_m * view_.px_per_m,
+                               config_.perception.marker_area_ratio_threshold, markers_);
+  } else {
+    marker_detector_.detect(bgr, markers_);
+  }
   telemetry_.markers_seen = static_cast<int>(markers_.size());
   inventory_.observe(assign_markers(view_, markers_, config_));
   if (inventory_.frames() < config_.perception.inventory_frames) return;
@@ -463,16 +481,19 @@ bool FlightSoftware::select_target(const cv::Mat& bgr) {
     corner_px_[k] = q[k];
     side += std::sqrt(view_.tags[static_cast<size_t>((*idx)[k])].area_px) * 0.25;
   }
-  const cv::Rect2d centres = cv::boundingRect(std::vector<cv::Point2f>(q.begin(), q.end()));
-  box_px_ = cv::Rect2d(centres.x - 0.5 * side, centres.y - 0.5 * side, centres.width + side,
-                       centres.height + side);
+  box_px_ = corner_box(q, side);
+  tag_side_px_ = side;
   start_tracker(bgr, box_px_);
   return true;
 }
 
 void FlightSoftware::start_tracker(const cv::Mat& bgr, const cv::Rect2d& box) {
-  tracker_ = cv::legacy::TrackerMedianFlow::create();
-  tracker_->init(bgr, box);
+  if (fast()) {
+    box_tracker_.init(box, now_ns_);
+  } else {
+    tracker_ = cv::legacy::TrackerMedianFlow::create();
+    tracker_->init(bgr, box);
+  }
   telemetry_.tracked_box_px = box;
 }
 
@@ -486,7 +507,10 @@ bool FlightSoftware::measure_target(const cv::Mat& bgr, const cv::Rect2d& predic
                      cv::Point(static_cast<int>(std::ceil(predicted.br().x + grow_x)),
                                static_cast<int>(std::ceil(predicted.br().y + grow_y))));
   roi_tags_.clear();
-  tag_detector_.detect(bgr, roi, roi_tags_);
+  // Fast pipeline: seeds every 0.4 tag sides (at least every 2 px, at most every 8), which
+  // still puts a sample on every corner tag (exact for tags wider than the stride).
+  const int stride = std::clamp(static_cast<int>(0.4 * tag_side_px_), 2, 8);
+  tag_detector_.detect(bgr, roi, roi_tags_, stride);
   keep_front_shelf(roi_tags_, p.area_ratio_threshold);
   // Where the box puts each corner: the old corners moved and scaled with the box.
   const cv::Point2d old_c = centre_of(box_px_), new_c = centre_of(predicted);
@@ -510,15 +534,16 @@ bool FlightSoftware::measure_target(const cv::Mat& bgr, const cv::Rect2d& predic
     }
   }
   const auto obj = cell_corner_tags_K(config_.shelf, *target_);
-  std::vector<cv::Point3d> obj_v(obj.begin(), obj.end());
-  std::vector<cv::Point2d> img;
+  pose_obj_.assign(obj.begin(), obj.end());
+  pose_img_.clear();
   double side = 0.0;
   for (size_t k = 0; k < 4; ++k) {
     const TagBlob& t = roi_tags_[static_cast<size_t>(pick[k])];
-    img.push_back(t.centre_px);
+    pose_img_.push_back(t.centre_px);
     side += 0.25 * std::sqrt(t.area_px);
   }
-  const auto pose = estimate_pose(obj_v, img, config_.camera, config_.mount);
+  const std::vector<cv::Point2d>& img = pose_img_;
+  const auto pose = estimate_pose(pose_obj_, img, config_.camera, config_.mount);
   if (!pose) return false;
   // Plausibility: between frames the vehicle moves centimetres, so a pose that jumps further
   // than pose_jump_m (+ 1 m/s of the time since the last one) or turns more than pose_jump_rad
@@ -539,9 +564,8 @@ bool FlightSoftware::measure_target(const cv::Mat& bgr, const cv::Rect2d& predic
   for (size_t k = 0; k < 4; ++k) corner_px_[k] = img[k];
   pose_K_ = pose;
   pose_t_ns_ = now_ns_;
-  const cv::Rect2d centres = cv::boundingRect(std::vector<cv::Point2f>(img.begin(), img.end()));
-  box_px_ = cv::Rect2d(centres.x - 0.5 * side, centres.y - 0.5 * side, centres.width + side,
-                       centres.height + side);
+  box_px_ = corner_box(corner_px_, side);
+  tag_side_px_ = side;
   // About to leave the view: a corner tag within a tag side (plus margin) of the border.
   const double m = config_.mission.edge_margin_px + side;
   near_edge_ = false;
@@ -626,18 +650,28 @@ void FlightSoftware::approach(const cv::Mat& bgr) {
   const ControlGains& g = config_.control;
   const CameraIntrinsics& k = config_.camera;
   cv::Rect2d predicted = box_px_;
-  telemetry_.tracker_ok = tracker_ && tracker_->update(bgr, predicted);
-  if (!telemetry_.tracker_ok) predicted = box_px_;
+  if (fast()) {
+    const std::optional<cv::Rect2d> p = box_tracker_.predict(now_ns_);
+    telemetry_.tracker_ok = p.has_value();
+    if (p) predicted = *p;
+  } else {
+    telemetry_.tracker_ok = tracker_ && tracker_->update(bgr, predicted);
+    if (!telemetry_.tracker_ok) predicted = box_px_;
+  }
   const bool found = measure_target(bgr, predicted);
   telemetry_.tracked_box_px = box_px_;
   const double dt = control_dt_s();
   if (found) {
     lost_since_ns_.reset();
     back_off_since_ns_.reset();
-    // Re-seed the tracker when it failed or drifted off the tags.
-    const cv::Rect2d overlap = predicted & box_px_;
-    const double iou = overlap.area() / (predicted.area() + box_px_.area() - overlap.area());
-    if (!telemetry_.tracker_ok || iou < 0.7) start_tracker(bgr, box_px_);
+    if (fast()) {
+      box_tracker_.correct(box_px_, now_ns_);
+    } else {
+      // Re-seed the tracker when it failed or drifted off the tags.
+      const cv::Rect2d overlap = predicted & box_px_;
+      const double iou = overlap.area() / (predicted.area() + box_px_.area() - overlap.area());
+      if (!telemetry_.tracker_ok || iou < 0.7) start_tracker(bgr, box_px_);
+    }
     const PoseEstimate& pose = *pose_K_;
     telemetry_.pose = pose;
     telemetry_.pose_in_cell_frame = true;

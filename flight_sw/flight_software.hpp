@@ -210,6 +210,7 @@ class FlightSoftware {
   double control_dt_s();
   bool airborne_phase() const;
   bool vision_phase() const;
+  bool fast() const { return config_.perception.pipeline == PerceptionPipeline::fast; }
 
   FlightConfig config_;
   SdkLink link_;
@@ -242,7 +243,11 @@ class FlightSoftware {
   std::optional<TimeNs> last_full_view_ns_;
   // Target
   std::optional<CellIndex> target_;
-  cv::Ptr<cv::legacy::Tracker> tracker_;
+  cv::Ptr<cv::legacy::Tracker> tracker_;  ///< reference pipeline: Median Flow
+  BoxTracker box_tracker_;                ///< fast pipeline: constant image velocity
+  double tag_side_px_ = 0.0;              ///< mean side of the target's corner tags, last seen
+  std::vector<cv::Point3d> pose_obj_;     ///< PnP buffers, reused
+  std::vector<cv::Point2d> pose_img_;
   cv::Rect2d box_px_;                   ///< tracked box: corner tag centres +- half a tag
   std::array<cv::Point2d, 4> corner_px_;  ///< last measured corner tag centres
   std::optional<PoseEstimate> pose_K_;  ///< last pose in the cell frame

@@ -19,12 +19,27 @@ std::optional<int> aruco_dictionary_id(const std::string& name) {
 
 // ---- Tags ----
 
-TagDetector::TagDetector(const PerceptionParams& params) : params_(params) {}
+TagDetector::TagDetector(const PerceptionParams& params) : params_(params) {
+  // OpenCV's 8-bit BGR->HSV tables (color_hsv: hsv_shift = 12, H range 180):
+  // sdiv[v] = round(255 * 2^12 / v), hdiv[d] = round(180 * 2^12 / (6 d)).
+  for (int i = 1; i < 256; ++i) {
+    sdiv_[static_cast<size_t>(i)] = cvRound((255 << 12) / (1.0 * i));
+    hdiv_[static_cast<size_t>(i)] = cvRound((180 << 12) / (6.0 * i));
+  }
+}
 
-void TagDetector::detect(const cv::Mat& bgr, cv::Rect roi, std::vector<TagBlob>& out) {
+void TagDetector::detect(const cv::Mat& bgr, cv::Rect roi, std::vector<TagBlob>& out, int stride) {
   assert(bgr.type() == CV_8UC3);
   roi &= cv::Rect(0, 0, bgr.cols, bgr.rows);
   if (roi.empty()) return;
+  if (params_.pipeline == PerceptionPipeline::reference) {
+    detect_reference(bgr, roi, out);
+  } else {
+    detect_fast(bgr, roi, out, stride > 0 ? stride : params_.tag_seed_stride_px);
+  }
+}
+
+void TagDetector::detect_reference(const cv::Mat& bgr, cv::Rect roi, std::vector<TagBlob>& out) {
   cv::cvtColor(bgr(roi), hsv_, cv::COLOR_BGR2HSV);
   const HsvRange& r = params_.tag_hsv;
   if (r.hue_min <= r.hue_max) {
@@ -49,6 +64,86 @@ void TagDetector::detect(const cv::Mat& bgr, cv::Rect roi, std::vector<TagBlob>&
     out.push_back({cv::Point2d(c[0] + roi.x, c[1] + roi.y), area,
                    cv::Rect(s[cv::CC_STAT_LEFT] + roi.x, s[cv::CC_STAT_TOP] + roi.y, w, h)});
   }
+}
+
+// OpenCV's RGB2HSV_b for one pixel, then inRange: V = max; S = round(255 (V - min) / V) by
+// the table; H by sector (V == R first, then V == G), scaled by the table, + 180 if negative.
+bool TagDetector::is_tag_colour(const std::uint8_t* p) const {
+  const int b = p[0], g = p[1], r = p[2];
+  const HsvRange& rg = params_.tag_hsv;
+  const int v = std::max(b, std::max(g, r));
+  if (v < rg.val_min || v > rg.val_max) return false;
+  const int diff = v - std::min(b, std::min(g, r));
+  const int s = (diff * sdiv_[static_cast<size_t>(v)] + (1 << 11)) >> 12;
+  if (s < rg.sat_min || s > rg.sat_max) return false;
+  int h = v == r ? g - b : v == g ? b - r + 2 * diff : r - g + 4 * diff;
+  h = (h * hdiv_[static_cast<size_t>(diff)] + (1 << 11)) >> 12;
+  if (h < 0) h += 180;
+  if (rg.hue_min <= rg.hue_max) return h >= rg.hue_min && h <= rg.hue_max;
+  return (h >= rg.hue_min && h <= 179) || h <= rg.hue_max;
+}
+
+void TagDetector::detect_fast(const cv::Mat& bgr, cv::Rect roi, std::vector<TagBlob>& out, int stride) {
+  assert(stride >= 1);
+  if (seen_.rows < bgr.rows || seen_.cols < bgr.cols) seen_.create(bgr.rows, bgr.cols);  // once
+  cv::Mat1b seen = seen_(roi);
+  seen.setTo(0);
+  found_.clear();
+  const int W = roi.width, H = roi.height;
+  const auto pixel = [&](int x, int y) { return bgr.ptr<std::uint8_t>(roi.y + y) + 3 * (roi.x + x); };
+  for (int y0 = 0; y0 < H; y0 += stride) {
+    std::uint8_t* seen_row = seen.ptr<std::uint8_t>(y0);
+    for (int x0 = 0; x0 < W; x0 += stride) {
+      // A sample already filled is skipped; one that fails is not marked (nothing returns to it).
+      if (seen_row[x0] == 2 || !is_tag_colour(pixel(x0, y0))) continue;
+      // 8-connected flood fill of the blob at full resolution (window coordinates).
+      seen_row[x0] = 2;
+      stack_.clear();
+      stack_.emplace_back(x0, y0);
+      std::int64_t sum_x = 0, sum_y = 0;
+      int area = 0, left = x0, right = x0, top = y0, bottom = y0;
+      int first_block_row = y0 >> 1, first_block_col = x0 >> 1;
+      while (!stack_.empty()) {
+        const cv::Point q = stack_.back();
+        stack_.pop_back();
+        ++area;
+        sum_x += q.x;
+        sum_y += q.y;
+        left = std::min(left, q.x);
+        right = std::max(right, q.x);
+        top = std::min(top, q.y);
+        bottom = std::max(bottom, q.y);
+        const int br = q.y >> 1, bc = q.x >> 1;
+        if (br < first_block_row || (br == first_block_row && bc < first_block_col)) {
+          first_block_row = br;
+          first_block_col = bc;
+        }
+        for (int ny = std::max(0, q.y - 1); ny <= std::min(H - 1, q.y + 1); ++ny) {
+          std::uint8_t* row = seen.ptr<std::uint8_t>(ny);
+          for (int nx = std::max(0, q.x - 1); nx <= std::min(W - 1, q.x + 1); ++nx) {
+            if (row[nx]) continue;
+            if (is_tag_colour(pixel(nx, ny))) {
+              row[nx] = 2;
+              stack_.emplace_back(nx, ny);
+            } else {
+              row[nx] = 1;
+            }
+          }
+        }
+      }
+      const int w = right - left + 1, h = bottom - top + 1;
+      if (area < params_.min_tag_area_px) continue;
+      if (area < params_.min_fill_ratio * w * h) continue;
+      if (std::max(w, h) > params_.max_aspect_ratio * std::min(w, h)) continue;
+      const double a = area;
+      const std::int64_t key = (static_cast<std::int64_t>(first_block_row) << 32) | first_block_col;
+      found_.push_back({key, TagBlob{cv::Point2d(static_cast<double>(sum_x) / a + roi.x,
+                                                 static_cast<double>(sum_y) / a + roi.y),
+                                     a, cv::Rect(left + roi.x, top + roi.y, w, h)}});
+    }
+  }
+  std::sort(found_.begin(), found_.end(), [](const auto& p, const auto& q) { return p.first < q.first; });
+  for (const auto& f : found_) out.push_back(f.second);
 }
 
 double keep_front_shelf(std::vector<TagBlob>& blobs, double threshold) {
@@ -261,6 +356,47 @@ MarkerDetector::MarkerDetector(const std::string& dictionary_name) {
   dictionary_ = cv::aruco::getPredefinedDictionary(*id);
   parameters_ = cv::aruco::DetectorParameters::create();
   parameters_->cornerRefinementMethod = cv::aruco::CORNER_REFINE_SUBPIX;
+  fast_parameters_ = cv::aruco::DetectorParameters::create();
+  fast_parameters_->cornerRefinementMethod = cv::aruco::CORNER_REFINE_NONE;
+}
+
+void MarkerDetector::collect(double scale, cv::Point2d offset, double grow_px, std::vector<MarkerSighting>& out) {
+  // Pixel u of an image decimated by `scale` (block average) covers full-resolution pixels
+  // scale u .. scale u + scale - 1: its centre is scale u + (scale - 1) / 2.
+  const double shift = 0.5 * (scale - 1.0);
+  for (size_t i = 0; i < ids_.size(); ++i) {
+    MarkerSighting m;
+    m.id = ids_[i];
+    std::array<cv::Point2d, 4> q;
+    cv::Point2d c(0, 0);
+    for (size_t k = 0; k < 4; ++k) {
+      q[k] = cv::Point2d(scale * corners_[i][k].x + shift + offset.x, scale * corners_[i][k].y + shift + offset.y);
+      c += 0.25 * q[k];
+    }
+    // Unrefined corners lie on the centres of the border's outermost dark pixels, half a pixel
+    // inside its edge: every side moved out by grow_px (miter: corner + d (n1 + n2) / (1 + n1.n2)
+    // with n1, n2 the outward unit normals of its two sides).
+    c = cv::Point2d(0, 0);
+    for (size_t k = 0; k < 4; ++k) {
+      cv::Point2d p = q[k];
+      if (grow_px > 0.0) {
+        const auto outward = [&](const cv::Point2d& a, const cv::Point2d& b) {
+          const cv::Point2d e = b - a;
+          cv::Point2d n(-e.y, e.x);
+          n *= 1.0 / std::max(1e-9, cv::norm(n));
+          const cv::Point2d centre = 0.25 * (q[0] + q[1] + q[2] + q[3]);
+          return n.dot(0.5 * (a + b) - centre) >= 0.0 ? n : -n;
+        };
+        const cv::Point2d n1 = outward(q[(k + 3) % 4], q[k]), n2 = outward(q[k], q[(k + 1) % 4]);
+        p += grow_px * (n1 + n2) * (1.0 / std::max(0.1, 1.0 + n1.dot(n2)));
+      }
+      m.corners_px[k] = cv::Point2f(p);
+      c += cv::Point2d(m.corners_px[k]);
+    }
+    m.centre_px = c * 0.25;
+    m.area_px = std::abs(cv::contourArea(m.corners_px));
+    out.push_back(m);
+  }
 }
 
 void MarkerDetector::detect(const cv::Mat& bgr, std::vector<MarkerSighting>& out) {
@@ -268,18 +404,72 @@ void MarkerDetector::detect(const cv::Mat& bgr, std::vector<MarkerSighting>& out
   corners_.clear();
   ids_.clear();
   cv::aruco::detectMarkers(gray_, dictionary_, corners_, ids_, parameters_, rejected_);
-  for (size_t i = 0; i < ids_.size(); ++i) {
-    MarkerSighting m;
-    m.id = ids_[i];
-    cv::Point2d c(0, 0);
-    for (size_t k = 0; k < 4; ++k) {
-      m.corners_px[k] = corners_[i][k];
-      c += cv::Point2d(corners_[i][k]);
-    }
-    m.centre_px = c * 0.25;
-    m.area_px = std::abs(cv::contourArea(corners_[i]));
-    out.push_back(m);
+  collect(1.0, {0.0, 0.0}, 0.0, out);  // sub-pixel refined
+}
+
+void MarkerDetector::detect_in(const cv::Mat& bgr, cv::Rect region, double expected_side_px,
+                               double min_area_ratio, std::vector<MarkerSighting>& out) {
+  region &= cv::Rect(0, 0, bgr.cols, bgr.rows);
+  if (region.width < 8 || region.height < 8 || !(expected_side_px > 0.0)) return;
+  cv::cvtColor(bgr(region), gray_, cv::COLOR_BGR2GRAY);
+  double scale = 1.0;
+  const cv::Mat* image = &gray_;
+  if (expected_side_px >= 2.0 * kMinDecimatedSide_px) {
+    cv::resize(gray_, small_, cv::Size(gray_.cols / 2, gray_.rows / 2), 0, 0, cv::INTER_AREA);
+    scale = 2.0;
+    image = &small_;
   }
+  const double side = expected_side_px / scale;
+  const double longest = std::max(image->cols, image->rows);
+  cv::aruco::DetectorParameters& p = *fast_parameters_;
+  // A quadrilateral of perimeter P has at most the area (P/4)^2 (the square's), so one with
+  // P < 4 sqrt(marker_area_ratio) side can never pass eq. 1 on marker area (area >= ratio
+  // side^2): such candidates (the colour tags, markers of shelves behind) are not even decoded.
+  p.minMarkerPerimeterRate = std::min(4.0, 0.98 * std::sqrt(min_area_ratio) * 4.0 * side / longest);
+  p.maxMarkerPerimeterRate = std::min(4.0, 2.5 * 4.0 * side / longest);
+  // One threshold window about half a marker wide (the defaults try 3, 13 and 23 px): a
+  // marker's black border and white bits both fall inside it.
+  const int window = std::clamp(2 * static_cast<int>(std::lround(0.25 * side)) + 1, 5, 31);
+  p.adaptiveThreshWinSizeMin = window;
+  p.adaptiveThreshWinSizeMax = window;
+  p.adaptiveThreshWinSizeStep = 10;
+  corners_.clear();
+  ids_.clear();
+  cv::aruco::detectMarkers(*image, dictionary_, corners_, ids_, fast_parameters_, rejected_);
+  collect(scale, cv::Point2d(region.x, region.y), 0.5 * scale, out);
+}
+
+// ---- Tracking ----
+
+void BoxTracker::init(const cv::Rect2d& box, TimeNs t_ns) {
+  box_ = box;
+  t_ns_ = t_ns;
+  rate_per_s_ = {0, 0, 0, 0};
+}
+
+void BoxTracker::correct(const cv::Rect2d& box, TimeNs t_ns) {
+  const double dt = box_ ? ns_to_seconds(t_ns - t_ns_) : 0.0;
+  if (!box_ || dt <= 0.0 || dt > kCoast_s) {
+    init(box, t_ns);
+    return;
+  }
+  rate_per_s_ = cv::Vec4d((box.x + 0.5 * box.width) - (box_->x + 0.5 * box_->width),
+                          (box.y + 0.5 * box.height) - (box_->y + 0.5 * box_->height),
+                          box.width - box_->width, box.height - box_->height) *
+                (1.0 / dt);
+  box_ = box;
+  t_ns_ = t_ns;
+}
+
+std::optional<cv::Rect2d> BoxTracker::predict(TimeNs t_ns) const {
+  if (!box_) return std::nullopt;
+  const double dt = ns_to_seconds(t_ns - t_ns_);
+  if (dt <= 0.0 || dt > kCoast_s) return box_;
+  const double w = std::max(1.0, box_->width + rate_per_s_[2] * dt);
+  const double h = std::max(1.0, box_->height + rate_per_s_[3] * dt);
+  const double cx = box_->x + 0.5 * box_->width + rate_per_s_[0] * dt;
+  const double cy = box_->y + 0.5 * box_->height + rate_per_s_[1] * dt;
+  return cv::Rect2d(cx - 0.5 * w, cy - 0.5 * h, w, h);
 }
 
 // ---- The front shelf in one frame ----

@@ -11,6 +11,7 @@
 // from 1, lies between tag rows L-1, L and tag columns C-1, C.
 
 #include <array>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -19,6 +20,7 @@
 #include <opencv2/core.hpp>
 
 #include "flight_sw/config.hpp"
+#include "shelfcross/time.hpp"
 
 namespace shelfcross::flight_sw {
 
@@ -35,16 +37,43 @@ struct TagBlob {
 /// Paper section 3 item 2: keep the tag colour (HSV range, hue may wrap through red), split
 /// the mask into 8-connected blobs, reject blobs by area and shape (fill ratio, aspect).
 /// Keeps its buffers between calls so that a steady stream of frames allocates nothing.
+///
+/// Two implementations, chosen by params.pipeline, giving the same blobs:
+///  - reference: cv::cvtColor to HSV, cv::inRange, cv::connectedComponentsWithStats over the
+///    whole window.
+///  - fast: no HSV image and no full mask. The window is sampled every `stride` pixels
+///    (rows and columns) with the exact colour test; each sample that passes seeds an
+///    8-connected flood fill at full resolution with the same test, so a blob found is
+///    measured exactly as connected components would (same pixels: same area, bounding box and
+///    centroid, the latter from integer coordinate sums as OpenCV computes it). The colour
+///    test is OpenCV's 8-bit BGR->HSV arithmetic (its division tables, rounding, hue sectors)
+///    fused with the range test, bit-exact with cvtColor + inRange (checked on all 2^24
+///    colours by the tests). A blob is missed only if no sample falls on it: never for a
+///    solid tag of stride + 1 pixels a side or more.
+///    Blobs come out in the order connected components numbers them (raster order of the
+///    first 2 x 2 block, OpenCV's block-based 8-connected labelling).
 class TagDetector {
  public:
   explicit TagDetector(const PerceptionParams& params);
   /// Appends to `out` the tags found inside `roi` of `bgr` (clipped to the image), in image
-  /// coordinates. Blob order is OpenCV's label order (raster order of first pixels).
-  void detect(const cv::Mat& bgr, cv::Rect roi, std::vector<TagBlob>& out);
+  /// coordinates. `stride` (fast pipeline only; 0: params.tag_seed_stride_px) is the seed
+  /// sampling step.
+  void detect(const cv::Mat& bgr, cv::Rect roi, std::vector<TagBlob>& out, int stride = 0);
+  /// The fused colour test of one BGR pixel (fast pipeline's; exposed for tests).
+  bool is_tag_colour(const std::uint8_t* bgr) const;
 
  private:
+  void detect_reference(const cv::Mat& bgr, cv::Rect roi, std::vector<TagBlob>& out);
+  void detect_fast(const cv::Mat& bgr, cv::Rect roi, std::vector<TagBlob>& out, int stride);
+
   PerceptionParams params_;
   cv::Mat hsv_, mask_, mask_wrap_, labels_, stats_, centroids_;
+  // Fast pipeline: per-pixel state of the window (0 unseen, 1 not tag, 2 tag), the fill
+  // stack, blobs with their label-order keys, and OpenCV's HSV division tables.
+  cv::Mat1b seen_;
+  std::vector<cv::Point> stack_;
+  std::vector<std::pair<std::int64_t, TagBlob>> found_;
+  std::array<int, 256> sdiv_{}, hdiv_{};
 };
 
 /// Eq. 1: R_A = S_T / L_T with S_T a tag's area and L_T the largest tag area in `blobs`; tags
@@ -121,14 +150,46 @@ struct MarkerSighting {
 class MarkerDetector {
  public:
   explicit MarkerDetector(const std::string& dictionary_name);
+  /// Reference pipeline: the whole frame at full resolution, OpenCV's default thresholds,
+  /// sub-pixel corner refinement.
   void detect(const cv::Mat& bgr, std::vector<MarkerSighting>& out);
+  /// Fast pipeline: only inside `region` (the shelf's cells), with thresholds sized for
+  /// markers of about `expected_side_px`: one adaptive-threshold window instead of three,
+  /// candidate perimeters limited to at most 2.5 times the expected one, no corner refinement
+  /// (only a marker's cell and its area against the 45 % threshold of eq. 1 are used: corners
+  /// a pixel off change neither; the contour's half-pixel inset is undone), and, when the
+  /// marker is at least 2 x kMinDecimatedSide_px wide, on a half-resolution image (corners
+  /// mapped back).
+  /// Candidates whose perimeter is too short for their area to reach `min_area_ratio` of the
+  /// expected one (eq. 1 on markers, which assign_markers applies) are skipped.
+  void detect_in(const cv::Mat& bgr, cv::Rect region, double expected_side_px, double min_area_ratio,
+                 std::vector<MarkerSighting>& out);
+  static constexpr double kMinDecimatedSide_px = 18.0;
 
  private:
+  void collect(double scale, cv::Point2d offset, double grow_px, std::vector<MarkerSighting>& out);
   cv::Ptr<cv::aruco::Dictionary> dictionary_;
-  cv::Ptr<cv::aruco::DetectorParameters> parameters_;
-  cv::Mat gray_;
+  cv::Ptr<cv::aruco::DetectorParameters> parameters_, fast_parameters_;
+  cv::Mat gray_, small_;
   std::vector<std::vector<cv::Point2f>> corners_, rejected_;
   std::vector<int> ids_;
+};
+
+/// The fast pipeline's tracker of the target's box (the box of its four corner tags):
+/// between measurements the box moves at the image velocity, and grows at the rate, of its
+/// last two measurements (constant velocity in the image, per second of input stamps), from
+/// the last measurement on; after `coast_s` without one it stays where it was last measured.
+class BoxTracker {
+ public:
+  void init(const cv::Rect2d& box, TimeNs t_ns);
+  void correct(const cv::Rect2d& box, TimeNs t_ns);
+  std::optional<cv::Rect2d> predict(TimeNs t_ns) const;
+  static constexpr double kCoast_s = 0.5;
+
+ private:
+  std::optional<cv::Rect2d> box_;
+  TimeNs t_ns_ = 0;
+  cv::Vec4d rate_per_s_{0, 0, 0, 0};  ///< d/dt of (centre x, centre y, width, height)
 };
 
 /// A cell by its shelf numbering: level from the floor, column from the left, both from 1.

@@ -46,6 +46,7 @@ const std::vector<DispersionParameter>& dispersion_parameters() {
       {"command_latency_mean_s", 0.0, 2.0},
       {"command_loss_probability", 0.0, 0.9},
       {"compute_latency_s", 0.0, 1.0},
+      {"compute_latency_quantile", 0.0, 1.0},
   };
   return table;
 }
@@ -120,6 +121,7 @@ RunSetup disperse(const Scenario& nominal, std::uint64_t run_seed) {
   if (has("command_latency_mean_s")) link.command_latency_mean_s = value("command_latency_mean_s");
   if (has("command_loss_probability")) link.command_loss_probability = value("command_loss_probability");
   if (has("compute_latency_s")) link.compute_latency_s = value("compute_latency_s");
+  if (has("compute_latency_quantile")) link.compute_latency_s = measured_step_latency_s(value("compute_latency_quantile"));
   setup.scenario = std::move(s);
   return setup;
 }

@@ -27,6 +27,10 @@
 //   command_latency_mean_s  link: mean command latency                           [0, 2]
 //   command_loss_probability link: lost commands                                 [0, 0.9]
 //   compute_latency_s       flight software step time                            [0, 1]
+//   compute_latency_quantile  flight software step time drawn from its measured  [0, 1]
+//                           distribution (cosim_settings.hpp, kMeasuredStepLatency): the
+//                           draw is a quantile q, the step time its inverse CDF at q; so
+//                           {uniform: {min: 0, max: 1}} draws from the measured distribution
 // Values outside a distribution's support cannot be drawn; a distribution whose support
 // leaves the allowed range (a normal on a bounded parameter, say) is refused at load time.
 

@@ -3,12 +3,16 @@
 #include <cmath>
 #include <fstream>
 #include <iomanip>
+#include <map>
+#include <optional>
 #include <sstream>
 
 #include "verification/campaign.hpp"
+#include "verification/dispersion.hpp"
 #include "verification/plot.hpp"
 #include "verification/results_store.hpp"
 #include "verification/scenario.hpp"
+#include "verification/statistics.hpp"
 
 namespace shelfcross::verification {
 namespace {
@@ -27,6 +31,62 @@ std::string fixed(double v, int decimals) {
   std::ostringstream s;
   s << std::fixed << std::setprecision(decimals) << v;
   return s.str();
+}
+
+/// Latency in the loop: when the campaign disperses the video latency, the success rate
+/// against each run's total latency from capture to command (its link's mean video latency
+/// plus the flight software's compute latency, both as drawn for that run: disperse() is
+/// re-run from the run's seed), in 50 ms bins: a markdown section and latency_sweep.png.
+/// Empty when the video latency is not dispersed.
+std::string latency_sweep_section(const Scenario& scenario, const std::vector<RunRecord>& runs,
+                                  const std::filesystem::path& dir) {
+  if (!scenario.dispersions.count("video_latency_mean_s") || runs.empty()) return "";
+  constexpr double kBin_s = 0.05;
+  std::map<long, std::pair<std::int64_t, std::int64_t>> bins;  // bin -> (runs, successes)
+  for (const RunRecord& r : runs) {
+    const RunSetup setup = disperse(scenario, r.seed);
+    const LinkSettings& l = setup.scenario->cosim.link;
+    const long bin = static_cast<long>(std::floor((l.video_latency_mean_s + l.compute_latency_s) / kBin_s));
+    auto& [n, ok] = bins[bin];
+    ++n;
+    ok += r.outcome == "success";
+  }
+  std::ostringstream md;
+  md << "## Success rate against latency\n\nTotal latency = the run's mean video latency + the flight software's "
+        "compute latency (as drawn), in "
+     << kBin_s * 1e3 << " ms bins.\n\n| total latency (ms) | runs | successes | success rate | 95 % lower bound |\n"
+        "|---|---|---|---|---|\n";
+  std::vector<double> centre_ms, rate;
+  std::optional<double> last_90_ms, first_below_50_ms;
+  bool all_90 = true;  // every bin so far at 90 % or more
+  for (const auto& [bin, counts] : bins) {
+    const auto [n, ok] = counts;
+    const double lo = bin * kBin_s * 1e3, hi = (bin + 1) * kBin_s * 1e3;
+    const double p = static_cast<double>(ok) / static_cast<double>(n);
+    md << "| " << fixed(lo, 0) << "-" << fixed(hi, 0) << " | " << n << " | " << ok << " | " << fixed(p, 3) << " | "
+       << fixed(clopper_pearson_lower(ok, n), 3) << " |\n";
+    centre_ms.push_back(0.5 * (lo + hi));
+    rate.push_back(p);
+    all_90 = all_90 && p >= 0.9;
+    if (all_90) last_90_ms = hi;
+    if (p < 0.5 && !first_below_50_ms) first_below_50_ms = lo;
+  }
+  md << "\n";
+  if (last_90_ms) md << "Success rate at least 90 % in every bin up to " << fixed(*last_90_ms, 0) << " ms. ";
+  if (first_below_50_ms) {
+    md << "It falls below 50 % from " << fixed(*first_below_50_ms, 0) << " ms on.\n\n";
+  } else {
+    md << "It never falls below 50 % in the swept range.\n\n";
+  }
+  Chart chart("Success rate against total latency (video link + compute)", "total latency (ms)", "success rate");
+  chart.set_y_limits(0.0, 1.05);
+  chart.add_line(centre_ms, rate, kGood, 2);
+  chart.add_points(centre_ms, rate, kGood, 4);
+  chart.add_hline(0.9, cv::Scalar(120, 120, 120), "90 %");
+  chart.add_hline(0.5, kBad, "50 %");
+  chart.save_png((dir / "latency_sweep.png").string());
+  md << "![success rate against latency](latency_sweep.png)\n\n";
+  return md.str();
 }
 
 }  // namespace
@@ -147,6 +207,7 @@ json write_campaign_report(const std::filesystem::path& dir) {
         "![lateral](lateral_response.png)\n\n";
   md << "## Distributions\n\n![altitude settling](settling_altitude.png)\n\n![heading settling](settling_heading.png)\n\n"
         "![lateral entry offset](entry_offset_y.png)\n\n![vertical entry offset](entry_offset_z.png)\n\n";
+  md << latency_sweep_section(scenario, runs, dir);
   md << "## Failed runs (" << failures << ")\n\n";
   if (failures) {
     md << "| run | outcome | detail | replay |\n|---|---|---|---|\n" << failed.str();

@@ -21,6 +21,8 @@ TEST(FlightConfigYaml, SampleFileReadsToTheDocumentedDefaults) {
   EXPECT_DOUBLE_EQ(c.rc.rc_per_radps_yaw, d.rc.rc_per_radps_yaw);
   EXPECT_DOUBLE_EQ(c.timeouts.video_land_s, d.timeouts.video_land_s);
   EXPECT_EQ(c.mission.vehicle_size_m, d.mission.vehicle_size_m);
+  EXPECT_EQ(c.perception.pipeline, PerceptionPipeline::fast);
+  EXPECT_EQ(c.perception.tag_seed_stride_px, d.perception.tag_seed_stride_px);
   FlightSoftware fsw(c);  // valid for the entry point
 }
 
@@ -43,6 +45,10 @@ TEST(FlightConfigYaml, BadInputIsRefusedWithFileAndLine) {
   expect_refused(shelf + "control:\n  kp_zz: 1.0\n", 5, "kp_zz");
   expect_refused(shelf + "timeouts:\n  video_hover_s: 4.0\n", 5, "video_land_s");
   expect_refused(shelf + "perception:\n  tag_hsv: {hue_min: 200}\n", 5, "hue_min");
+  expect_refused(shelf + "perception:\n  pipeline: quick\n", 5, "unknown pipeline 'quick'");
+  expect_refused(shelf + "perception:\n  tag_seed_stride_px: 0\n", 5, "tag_seed_stride_px");
+  EXPECT_EQ(parse_flight_config(shelf + "perception:\n  pipeline: reference\n", "test.yaml").perception.pipeline,
+            PerceptionPipeline::reference);
   expect_refused("shelf:\n  column_pitch_m: [0.34, -1]\n  row_pitch_m: [0.34]\n", 2, "column_pitch_m");
   expect_refused("shelf:\n  row_pitch_m: [0.34]\n", 2, "column_pitch_m");  // the mapping's line
 }

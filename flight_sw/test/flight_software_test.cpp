@@ -454,5 +454,32 @@ TEST(FlightSoftware, SameInputsGiveTheSameCommands) {
   EXPECT_EQ(a.commands(), b.commands());
 }
 
+
+// Issue 7: the fast perception decides exactly as the reference pipeline (full-frame OpenCV
+// composition, Median Flow, ArUco over the whole frame): a whole closed-loop mission with
+// video latency, velocity lag and a start off the centre line sends the very same commands and
+// ends with the same inventory. (The rendered benchmark frames: app test CmdFrames.)
+TEST(FlightSoftware, FastAndReferencePipelinesFlyTheSameMission) {
+  for (const double latency_s : {0.25}) {
+    Options o;
+    o.video_latency_s = latency_s;
+    o.velocity_time_constant_s = latency_s > 0.0 ? 0.5 : 0.0;
+    o.start_W_m = Eigen::Vector3d(0.3, latency_s > 0.0 ? -0.2 : 0.0, 0.0);
+    FlightConfig fast, reference;
+    fast.perception.pipeline = PerceptionPipeline::fast;
+    reference.perception.pipeline = PerceptionPipeline::reference;
+    Harness a(o, fast), b(o, reference);
+    a.run(60.0);
+    b.run(60.0);
+    ASSERT_TRUE(a.fsw().finished()) << phase_name(a.fsw().phase());
+    EXPECT_EQ(a.fsw().result().outcome, Outcome::Crossed) << a.fsw().result().reason;
+    EXPECT_TRUE(a.saw_phase(Phase::Approach));
+    EXPECT_EQ(a.commands(), b.commands()) << "latency " << latency_s;
+    EXPECT_EQ(a.fsw().inventory_json(), b.fsw().inventory_json());
+    EXPECT_EQ(a.fsw().telemetry().target, b.fsw().telemetry().target);
+    EXPECT_EQ(a.fsw().result().reason, b.fsw().result().reason);
+  }
+}
+
 }  // namespace
 }  // namespace shelfcross::flight_sw

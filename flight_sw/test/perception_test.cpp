@@ -2,6 +2,9 @@
 // lighting changes, on synthetic drawn images.
 
 #include <cmath>
+#include <sstream>
+
+#include <opencv2/imgproc.hpp>
 
 #include <gtest/gtest.h>
 
@@ -215,6 +218,151 @@ TEST(StairClassification, DrawnShelfRolledUnderAndPastTheLimit) {
   EXPECT_EQ(view.tags.size(), 25u);
   EXPECT_FALSE(view.grid.valid);
   EXPECT_FALSE(view.full);
+}
+
+
+// ---- The fast pipeline against the reference (issue 7) ----
+
+PerceptionParams with_pipeline(PerceptionParams p, PerceptionPipeline pipeline) {
+  p.pipeline = pipeline;
+  return p;
+}
+
+// The fused colour test is OpenCV's BGR->HSV + inRange, bit for bit, on every 24-bit colour,
+// for the default green window and a window wrapping through red.
+TEST(FastTags, ColourTestEqualsCvtColorAndInRangeOnEveryColour) {
+  cv::Mat bgr(4096, 4096, CV_8UC3);
+  for (int i = 0; i < 1 << 24; ++i) {
+    cv::Vec3b& p = bgr.at<cv::Vec3b>(i >> 12, i & 4095);
+    p = cv::Vec3b(static_cast<uchar>(i >> 16), static_cast<uchar>(i >> 8), static_cast<uchar>(i));
+  }
+  cv::Mat hsv;
+  cv::cvtColor(bgr, hsv, cv::COLOR_BGR2HSV);
+  PerceptionParams red;
+  red.tag_hsv = {170, 8, 60, 250, 20, 240};
+  for (const PerceptionParams& params : {PerceptionParams{}, red}) {
+    const HsvRange& r = params.tag_hsv;
+    cv::Mat mask, wrap;
+    if (r.hue_min <= r.hue_max) {
+      cv::inRange(hsv, cv::Scalar(r.hue_min, r.sat_min, r.val_min), cv::Scalar(r.hue_max, r.sat_max, r.val_max), mask);
+    } else {
+      cv::inRange(hsv, cv::Scalar(r.hue_min, r.sat_min, r.val_min), cv::Scalar(179, r.sat_max, r.val_max), mask);
+      cv::inRange(hsv, cv::Scalar(0, r.sat_min, r.val_min), cv::Scalar(r.hue_max, r.sat_max, r.val_max), wrap);
+      mask |= wrap;
+    }
+    const TagDetector det(params);
+    int differ = 0, tag_colours = 0;
+    for (int y = 0; y < bgr.rows; ++y) {
+      const uchar* m = mask.ptr<uchar>(y);
+      const uchar* p = bgr.ptr<uchar>(y);
+      for (int x = 0; x < bgr.cols; ++x) {
+        const bool fast = det.is_tag_colour(p + 3 * x);
+        differ += fast != (m[x] != 0);
+        tag_colours += fast;
+      }
+    }
+    EXPECT_EQ(differ, 0) << "hue " << r.hue_min << ".." << r.hue_max;
+    EXPECT_GT(tag_colours, 100000);
+  }
+}
+
+void expect_same_blobs(const std::vector<TagBlob>& a, const std::vector<TagBlob>& b, const std::string& what) {
+  ASSERT_EQ(a.size(), b.size()) << what;
+  for (size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].centre_px, b[i].centre_px) << what << " blob " << i;  // bit-exact, same order
+    EXPECT_EQ(a[i].area_px, b[i].area_px) << what << " blob " << i;
+    EXPECT_EQ(a[i].bbox_px, b[i].bbox_px) << what << " blob " << i;
+  }
+}
+
+// Same blobs (centroids bit-exact, same order) as cvtColor + inRange + connected components,
+// on whole frames with sensor-like noise, a shelf behind, dim light, and in windows cut
+// through tags, at the seed strides the flight software uses.
+TEST(FastTags, SameBlobsAsTheReferenceDetector) {
+  testing::Scene scene;
+  scene.shelves = {testing::paper_shelf({3.0, 0.0, 0.0}), testing::paper_shelf({5.5, 0.2, 0.0})};
+  const CameraIntrinsics k;
+  const testing::Drawer drawer(k, true);
+  cv::RNG rng(7);
+  TagDetector ref(with_pipeline({}, PerceptionPipeline::reference));
+  TagDetector fast(with_pipeline({}, PerceptionPipeline::fast));
+  int compared = 0;
+  for (double brightness : {1.0, 0.5}) {
+    scene.brightness = brightness;
+    for (const Eigen::Vector3d& p : {Eigen::Vector3d(0.3, 0.05, 0.98), Eigen::Vector3d(1.6, -0.1, 0.9),
+                                     Eigen::Vector3d(2.3, -0.15, 0.8)}) {
+      cv::Mat img = drawer.draw(scene, testing::camera_pose_W(p, 0.04, 0.02, 0.05));
+      cv::Mat noise(img.size(), CV_16SC3);
+      rng.fill(noise, cv::RNG::NORMAL, 0, 3);
+      img.convertTo(img, CV_16SC3);
+      img += noise;
+      img.convertTo(img, CV_8UC3);
+      for (const cv::Rect& roi : {cv::Rect(0, 0, img.cols, img.rows), cv::Rect(301, 147, 333, 281), cv::Rect(-20, 400, 500, 500)}) {
+        for (int stride : {1, 2, 3, 4}) {
+          std::vector<TagBlob> a, b;
+          ref.detect(img, roi, a);
+          fast.detect(img, roi, b, stride);
+          std::ostringstream what;
+          what << "brightness " << brightness << " x " << p.x() << " roi " << roi << " stride " << stride;
+          expect_same_blobs(a, b, what.str());
+          compared += static_cast<int>(a.size());
+        }
+      }
+    }
+  }
+  EXPECT_GT(compared, 500);
+}
+
+// Markers read in the cells on a half-resolution image without corner refinement: the same
+// IDs, centres within 1.5 px and areas within 8 % of the reference's full-frame detection
+// (corners from the half-resolution contour); what decides is unchanged: the same cells, and
+// areas far from eq. 1's 45 % threshold.
+TEST(FastMarkers, SameMarkersInTheCellsAsTheWholeFrameReference) {
+  testing::Scene scene;
+  testing::DrawnShelf front = testing::paper_shelf({3.0, 0.0, 0.0});
+  front.boxes = {{2, 2, 4}, {3, 2, 9}, {3, 3, 17}, {1, 1, 21}, {4, 4, 30}};
+  scene.shelves = {front};
+  const CameraIntrinsics k;
+  const testing::Drawer drawer(k, true);
+  FlightConfig config;
+  for (const Eigen::Vector3d& p : {Eigen::Vector3d(0.8, 0.0, 0.98), Eigen::Vector3d(0.5, 0.1, 0.95)}) {
+    const cv::Mat img = drawer.draw(scene, testing::camera_pose_W(p, 0.0));
+    TagDetector det(config.perception);
+    ShelfView view;
+    analyse_shelf(img, det, config, view);
+    ASSERT_TRUE(view.full) << view.grid.refusal;
+    cv::Rect grid = view.tags.front().bbox_px;
+    for (const TagBlob& t : view.tags) grid |= t.bbox_px;
+    MarkerDetector markers(config.shelf.aruco_dictionary);
+    std::vector<MarkerSighting> a, b;
+    markers.detect(img, a);
+    markers.detect_in(img, grid, config.shelf.marker_size_m * view.px_per_m, config.perception.marker_area_ratio_threshold, b);
+    ASSERT_EQ(a.size(), 5u);
+    ASSERT_EQ(b.size(), a.size());
+    for (const MarkerSighting& m : a) {
+      const auto same = std::find_if(b.begin(), b.end(), [&](const MarkerSighting& n) { return n.id == m.id; });
+      ASSERT_NE(same, b.end()) << "marker " << m.id;
+      EXPECT_LT(cv::norm(same->centre_px - m.centre_px), 1.5) << "marker " << m.id;
+      EXPECT_NEAR(same->area_px, m.area_px, 0.08 * m.area_px) << "marker " << m.id;
+    }
+    EXPECT_EQ(assign_markers(view, a, config), assign_markers(view, b, config));
+  }
+}
+
+TEST(BoxTracker, MovesAtTheMeasuredImageVelocityThenCoasts) {
+  BoxTracker t;
+  EXPECT_FALSE(t.predict(0));
+  const TimeNs ms = 1'000'000;
+  t.init({100, 100, 50, 40}, 0);
+  EXPECT_EQ(*t.predict(33 * ms), cv::Rect2d(100, 100, 50, 40));  // one measurement: stays
+  t.correct({110, 95, 60, 40}, 100 * ms);  // centre +15, -5 px; width +10 px in 0.1 s
+  const cv::Rect2d p = *t.predict(200 * ms);
+  EXPECT_NEAR(p.x + 0.5 * p.width, 140 + 15, 1e-9);
+  EXPECT_NEAR(p.y + 0.5 * p.height, 115 - 5, 1e-9);
+  EXPECT_NEAR(p.width, 70, 1e-9);
+  EXPECT_NEAR(p.height, 40, 1e-9);
+  // Longer than kCoast_s without a measurement: where it was last seen.
+  EXPECT_EQ(*t.predict(100 * ms + seconds_to_ns(BoxTracker::kCoast_s + 0.1)), cv::Rect2d(110, 95, 60, 40));
 }
 
 }  // namespace
