@@ -292,7 +292,10 @@ void FlightSoftware::command_takeoff() {
 }
 
 void FlightSoftware::land(Outcome outcome, const std::string& reason) {
+  // Sticks to zero before "land": no rc goes out while a command is outstanding, so if "land"
+  // is lost the Tello would keep the last sticks (the crossing speed, say) until the retry.
   hover();
+  emit_rc(true);
   pending_outcome_ = outcome;
   result_.reason = reason;
   enter(Phase::Land, "landing: " + reason);

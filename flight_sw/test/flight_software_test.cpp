@@ -413,6 +413,14 @@ TEST(FlightSoftware, WholeMissionInventoriesAndCrossesTheEmptyCell) {
   EXPECT_TRUE(inside) << "never reached the shelf";
   EXPECT_GT(h.position().x(), 3.34 + 0.4) << "landed beyond the shelf";
   EXPECT_EQ(fsw.inventory_json().rfind("{\"shelf\":0,\"levels\":4,\"columns\":4,", 0), 0u);
+  // Sticks to zero right before "land": were "land" lost, the Tello would otherwise keep the
+  // crossing speed until the retry (into whatever is behind the shelf).
+  const auto& cmds = h.commands();
+  const auto land = std::find_if(cmds.begin(), cmds.end(), [](const SdkCommand& c) { return c.text == "land"; });
+  ASSERT_NE(land, cmds.end());
+  ASSERT_NE(land, cmds.begin());
+  EXPECT_EQ(std::prev(land)->text, "rc 0 0 0 0");
+  EXPECT_EQ(std::prev(land)->t_ns, land->t_ns);
 }
 
 // The crossing must not depend on a fresh view: with 0.35 s of video latency, a 0.7 s
