@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <SQLiteCpp/SQLiteCpp.h>
 
 #include "run_shelfcross.hpp"
 
@@ -47,13 +48,22 @@ TEST(CompareCommand, WritesTableAndPlotsForThreeStrategiesWithTheSameDraws) {
     EXPECT_EQ(row["success_lower_95"], 0.0);
   }
   // Same campaign seed: the same dispersion draws run by run in every strategy's store.
+  std::vector<std::string> draws;
   for (int k = 0; k < 3; ++k) {
     const std::string s = j["rows"][k]["strategy"];
-    EXPECT_TRUE(fs::exists(dir / "out" / s / "results.sqlite"));
+    ASSERT_TRUE(fs::exists(dir / "out" / s / "results.sqlite"));
+    SQLite::Database db((dir / "out" / s / "results.sqlite").string(), SQLite::OPEN_READONLY);
+    SQLite::Statement q(db, "SELECT dispersion_json FROM runs ORDER BY run_index");
+    std::string all;
+    while (q.executeStep()) all += q.getColumn(0).getString() + "\n";
+    draws.push_back(all);
     EXPECT_TRUE(fs::exists(dir / "out" / s / "report.md"));
     std::ifstream summary(dir / "out" / s / "summary.json");
     EXPECT_TRUE(summary.good());
   }
+  EXPECT_FALSE(draws[0].empty());
+  EXPECT_EQ(draws[0], draws[1]);
+  EXPECT_EQ(draws[0], draws[2]);
   std::stringstream md;
   md << std::ifstream(dir / "out" / "compare.md").rdbuf();
   EXPECT_NE(md.str().find("| over the shelf tops | 2 |"), std::string::npos) << md.str();
