@@ -59,7 +59,7 @@ TEST(StrategyConfig, BadInputRefusedWithLine) {
   expect_refused(kShelf + "layout:\n  shelf_count: 3\n", 5, "shelf_spacing_m");
   expect_refused(kShelf + "layout:\n  shelf_count: 3\n  shelf_spacing_m: 0.3\n", 1, "shelf_spacing_m");  // <= depth
   expect_refused(kShelf + "strategy:\n  transfer_speed_mps: -1\n", 5, "transfer_speed_mps");
-  expect_refused(kShelf + "layout:\n  shelf_count: 2\n  spacing: 3\n", 6, "spacing");
+  expect_refused(kShelf + "layout:\n  shelf_count: 2\n  shelf_spacing_m: 3\n  spacing: 3\n", 7, "spacing");
 }
 
 }  // namespace
