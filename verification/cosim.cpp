@@ -205,6 +205,7 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
   monitors.reserve(static_cast<size_t>(shelf_count));
   for (int i = 0; i < shelf_count; ++i) monitors.emplace_back(sc.warehouse.shelves[static_cast<size_t>(i)], X_prev.translation());
   ShelfCrossingMonitor& crossing = monitors.front();
+  std::vector<std::optional<CellIndex>> targets(static_cast<size_t>(shelf_count));  // the chosen cell per shelf
   flight_sw::Phase last_phase = fsw.phase();
   std::optional<TimeNs> approach_start_ns;
   std::vector<double> approach_t, err_z, err_yaw, err_y;
@@ -244,6 +245,7 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
       if (last_phase == flight_sw::Phase::Cross && !result.cross_start_s) result.cross_start_s = ns_to_seconds(t);
     }
     if (tm.target && fsw.shelf_index() == 0) m.target = tm.target;
+    if (tm.target && fsw.shelf_index() < shelf_count) targets[static_cast<size_t>(fsw.shelf_index())] = tm.target;
   };
 
   while (!outcome) {
@@ -425,7 +427,11 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
   // Metrics and the verdict.
   m.mission_time_s = ns_to_seconds(t_now);
   m.crossed_target = m.crossed && m.target && *m.crossed == *m.target;
-  for (const ShelfCrossingMonitor& mon : monitors) m.shelves_crossed += mon.crossed() ? 1 : 0;
+  for (size_t i = 0; i < monitors.size(); ++i) {
+    const auto& crossed = monitors[i].crossed();
+    m.shelves_crossed += crossed ? 1 : 0;
+    m.shelves_crossed_target += crossed && targets[i] && *crossed == *targets[i] ? 1 : 0;
+  }
   const bool through_cells = sc.cosim.strategy == "through_cells";
   const flight_sw::MissionResult fsw_result = fsw.result();
   m.flight_software_result = std::string(flight_sw::outcome_name(fsw_result.outcome)) +
@@ -443,7 +449,7 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
     if (fsw_result.outcome == flight_sw::Outcome::Aborted) {
       outcome = RunOutcome::mission_aborted;
       result.detail = fsw_result.reason;
-    } else if (through_cells ? !m.crossed_target || m.shelves_crossed < shelf_count
+    } else if (through_cells ? !m.crossed_target || m.shelves_crossed_target < shelf_count
                              : fsw_result.outcome != flight_sw::Outcome::Completed) {
       outcome = RunOutcome::no_crossing;
       result.detail = m.flight_software_result;
@@ -481,6 +487,7 @@ std::string run_metrics_json(const RunMetrics& m) {
          {"strategy", m.strategy},
          {"shelves", m.shelves},
          {"shelves_crossed", m.shelves_crossed},
+         {"shelves_crossed_target", m.shelves_crossed_target},
          {"path_length_m", m.path_length_m},
          {"floor_touches", m.floor_touches},
          {"target", cell(m.target)},

@@ -67,6 +67,7 @@ struct RunMetrics {
   std::string strategy = "through_cells";
   int shelves = 1;
   int shelves_crossed = 0;                      ///< shelves crossed face to face through a cell
+  int shelves_crossed_target = 0;               ///< ... through the cell the flight software chose there
   // Crossing, in shelf 0's frame S
   std::optional<flight_sw::CellIndex> target;   ///< the flight software's chosen cell
   std::optional<flight_sw::CellIndex> crossed;  ///< the cell entered and left face to face

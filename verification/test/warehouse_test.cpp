@@ -80,6 +80,7 @@ TEST(Warehouse, EveryStrategyInventoriesFiveShelvesAndThroughTheCellsIsShortest)
       EXPECT_EQ(r.metrics.inventory.recall, 1.0);
       EXPECT_GE(r.metrics.inventory.truth, 5 * 7);  // box_fill_ratio >= 0.45 of 16 cells per shelf
       EXPECT_EQ(r.metrics.shelves_crossed, k == 0 ? 5 : 0);
+      EXPECT_EQ(r.metrics.shelves_crossed_target, k == 0 ? 5 : 0);
       std::cout << "seed " << seed << " " << strategies[k] << ": " << outcome_name(r.outcome) << ", "
                 << r.metrics.path_length_m << " m, " << r.metrics.mission_time_s << " s\n";
     }
