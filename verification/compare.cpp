@@ -167,7 +167,9 @@ json run_comparison(const Scenario& nominal, std::int64_t runs, std::uint64_t se
     ResultsStore store = ResultsStore::open_or_create(dir / "results.sqlite", meta);
     std::shared_ptr<const Scenario> shared = scenario;
     const auto factory = [shared](int) { return std::make_unique<CampaignWorker>(shared); };
-    PoolOptions pool{.jobs = options.jobs, .on_progress = {}, .stop = options.stop};
+    PoolOptions pool;  // fields assigned one by one: the struct may grow (sharding) without touching this
+    pool.jobs = options.jobs;
+    pool.stop = options.stop;
     if (options.on_progress) {
       pool.on_progress = [&, strategy](const CampaignProgress& p) { options.on_progress(strategy, p); };
     }
