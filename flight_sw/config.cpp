@@ -203,6 +203,33 @@ void read_mission(const Map& m, MissionParams& p) {
   m.finish();
 }
 
+void read_layout(const Map& m, WarehouseLayout& l) {
+  opt(m, "shelf_count", l.shelf_count, within(1, 64));
+  opt(m, "shelf_spacing_m", l.shelf_spacing_m, kNonNegative);
+  if (l.shelf_count > 1 && l.shelf_spacing_m <= 0.0) {
+    m.fail("shelf_count", "more than one shelf needs shelf_spacing_m (front face to front face)");
+  }
+  m.finish();
+}
+
+void read_strategy(const Map& m, StrategyParams& p) {
+  std::string mode = strategy_name(p.mode);
+  opt(m, "mode", mode);
+  if (const auto s = parse_strategy(mode)) {
+    p.mode = *s;
+  } else {
+    m.fail("mode", "unknown strategy '" + mode + "' (through_cells, over_tops or around_ends)");
+  }
+  opt(m, "top_clearance_m", p.top_clearance_m, kNonNegative);
+  opt(m, "end_clearance_m", p.end_clearance_m, kNonNegative);
+  opt(m, "transfer_speed_mps", p.transfer_speed_mps, kPositive);
+  opt(m, "transfer_kp", p.transfer_kp, kPositive);
+  opt(m, "transfer_yaw_kp", p.transfer_yaw_kp, kNonNegative);
+  opt(m, "waypoint_tolerance_m", p.waypoint_tolerance_m, kPositive);
+  opt(m, "transfer_leg_s", p.transfer_leg_s, kPositive);
+  m.finish();
+}
+
 FlightConfig read(const config::Document& doc) {
   FlightConfig c;
   const Map root = doc.root();
@@ -214,6 +241,8 @@ FlightConfig read(const config::Document& doc) {
   if (auto m = root.optional_map("rc")) read_rc(*m, c.rc);
   if (auto m = root.optional_map("timeouts")) read_timeouts(*m, c.timeouts);
   if (auto m = root.optional_map("mission")) read_mission(*m, c.mission);
+  if (auto m = root.optional_map("layout")) read_layout(*m, c.layout);
+  if (auto m = root.optional_map("strategy")) read_strategy(*m, c.strategy);
   root.finish();
   try {
     validate_flight_config(c);  // the cross-field checks not tied to one key
@@ -228,6 +257,22 @@ void require(bool ok, const std::string& what) {
 }
 
 }  // namespace
+
+const char* strategy_name(Strategy s) {
+  switch (s) {
+    case Strategy::through_cells: return "through_cells";
+    case Strategy::over_tops: return "over_tops";
+    case Strategy::around_ends: return "around_ends";
+  }
+  return "?";
+}
+
+std::optional<Strategy> parse_strategy(const std::string& name) {
+  for (Strategy s : {Strategy::through_cells, Strategy::over_tops, Strategy::around_ends}) {
+    if (name == strategy_name(s)) return s;
+  }
+  return std::nullopt;
+}
 
 FlightConfig load_flight_config(const std::string& path) {
   return read(config::Document::from_file(path));
@@ -267,6 +312,14 @@ void validate_flight_config(const FlightConfig& c) {
   require(c.control.crossing_speed_mps > 0.0 && c.control.forward_speed_mps > 0.0,
           "forward and crossing speeds must be positive");
   require(c.mission.vehicle_size_m.minCoeff() > 0.0, "vehicle size must be positive");
+  require(c.layout.shelf_count >= 1 && c.layout.shelf_count <= 64, "layout.shelf_count must be 1..64");
+  require(c.layout.shelf_count == 1 || c.layout.shelf_spacing_m > s.depth_m + c.mission.vehicle_size_m.x(),
+          "layout.shelf_spacing_m must exceed the shelf depth plus the vehicle length");
+  const StrategyParams& st = c.strategy;
+  require(st.transfer_speed_mps > 0.0 && st.transfer_kp > 0.0 && st.waypoint_tolerance_m > 0.0 &&
+              st.transfer_leg_s > 0.0 && st.top_clearance_m >= 0.0 && st.end_clearance_m >= 0.0 &&
+              st.transfer_yaw_kp >= 0.0,
+          "strategy: speeds, gains, tolerance and leg time positive, clearances >= 0");
 }
 
 }  // namespace shelfcross::flight_sw

@@ -33,7 +33,11 @@
 //               crossing_margin_m crossing_yaw_tolerance_rad crossing_attempts cross_range_max_m
 //               beyond_distance_m edge_margin_px settle_s settle_z_m settle_psi_rad
 //               settle_hold_s pose_fresh_s pose_jump_m pose_jump_rad pose_jump_window_s
+//   layout:     shelf_count shelf_spacing_m (required when shelf_count > 1)
+//   strategy:   mode (through_cells | over_tops | around_ends) top_clearance_m end_clearance_m
+//               transfer_speed_mps transfer_kp transfer_yaw_kp waypoint_tolerance_m transfer_leg_s
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -188,6 +192,38 @@ struct MissionParams {
   double pose_jump_window_s = 0.5;
 };
 
+/// The warehouse as the operator describes it: shelf_count shelves of the known geometry in a
+/// row, parallel, facing the same way, one behind the other along the approach direction
+/// (METHOD.md section 1). Their absolute positions stay unknown: each is found visually.
+struct WarehouseLayout {
+  int shelf_count = 1;
+  double shelf_spacing_m = 0.0;  ///< front face to front face along the normal (> depth)
+};
+
+/// How the vehicle gets from one shelf's inventory to the next shelf (and past the last).
+enum class Strategy {
+  through_cells,  ///< the paper's method: approach an empty cell visually and cross it
+  over_tops,      ///< climb above the shelf top (state height), fly over, descend
+  around_ends,    ///< sideways past the shelf's nearer end, forward, back to the centre line
+};
+const char* strategy_name(Strategy strategy);
+/// "through_cells", "over_tops", "around_ends"; empty for anything else.
+std::optional<Strategy> parse_strategy(const std::string& name);
+
+/// The conventional strategies' transfer: waypoints planned in the grid frame G from the last
+/// visual pose at the viewpoint, flown on the Tello's own odometry (its state record's
+/// velocities integrated, its height), then the next shelf re-acquired visually.
+struct StrategyParams {
+  Strategy mode = Strategy::through_cells;
+  double top_clearance_m = 0.4;    ///< over_tops: vehicle bottom above the shelf's top tags
+  double end_clearance_m = 0.5;    ///< around_ends: vehicle side beyond the grid's side edge
+  double transfer_speed_mps = 0.4;
+  double transfer_kp = 1.0;        ///< (m/s) per m toward the current waypoint
+  double transfer_yaw_kp = 1.0;    ///< (rad/s) per rad: heading held on the shelf normal
+  double waypoint_tolerance_m = 0.08;
+  double transfer_leg_s = 40.0;    ///< a waypoint not reached in this time: land (aborted)
+};
+
 struct FlightConfig {
   KnownShelf shelf;
   CameraIntrinsics camera;
@@ -197,6 +233,8 @@ struct FlightConfig {
   RcConversion rc;
   Timeouts timeouts;
   MissionParams mission;
+  WarehouseLayout layout;
+  StrategyParams strategy;
 };
 
 /// Reads a configuration file; throws config::ConfigError ("file:line: reason").

@@ -18,6 +18,7 @@ const char* phase_name(Phase p) {
     case Phase::TakeInventory: return "take_inventory";
     case Phase::Approach: return "approach";
     case Phase::Cross: return "cross";
+    case Phase::Transfer: return "transfer";
     case Phase::Land: return "land";
     case Phase::Done: return "done";
   }
@@ -28,6 +29,7 @@ const char* outcome_name(Outcome o) {
   switch (o) {
     case Outcome::Running: return "running";
     case Outcome::Crossed: return "crossed";
+    case Outcome::Completed: return "completed";
     case Outcome::NoEmptyCell: return "no_empty_cell";
     case Outcome::Aborted: return "aborted";
   }
@@ -121,9 +123,19 @@ void FlightSoftware::on_reply(const SdkReply& reply) {
 }
 
 void FlightSoftware::on_state(const StateRecord& s) {
+  // Odometry: p_O += R_z(yaw) v_H dt (rectangle rule on the newer record), z = height.
+  if (odometry_t_ns_ && s.t_ns > *odometry_t_ns_) {
+    const double dt = std::min(ns_to_seconds(s.t_ns - *odometry_t_ns_), 1.0);
+    const double c = std::cos(s.yaw_rad), sn = std::sin(s.yaw_rad);
+    p_O_m_.x() += (c * s.vx_H_mps - sn * s.vy_H_mps) * dt;
+    p_O_m_.y() += (sn * s.vx_H_mps + c * s.vy_H_mps) * dt;
+  }
+  odometry_t_ns_ = std::max(odometry_t_ns_.value_or(s.t_ns), s.t_ns);
+  p_O_m_.z() = s.height_m;
   state_ = s;
   telemetry_.battery_pct = s.battery_pct;
   telemetry_.height_m = s.height_m;
+  if (phase_ == Phase::Transfer) transfer();
 }
 
 void FlightSoftware::on_frame(const CameraFrame& f) {
@@ -238,7 +250,18 @@ void FlightSoftware::supervise() {
       break;
     case Phase::Cross:
       if (now_ns_ - phase_start_ns_ >= cross_duration_ns_) {
-        return land(Outcome::Crossed, "crossed cell " + cell_text(*target_));
+        if (!last_shelf()) {
+          hover();
+          return next_shelf("crossed cell " + cell_text(*target_) + " of shelf " + std::to_string(shelf_) +
+                            ": finding the next shelf");
+        }
+        return land(Outcome::Crossed, "crossed cell " + cell_text(*target_) +
+                                          (shelf_ > 0 ? " of the last shelf" : ""));
+      }
+      break;
+    case Phase::Transfer:
+      if (ns_to_seconds(now_ns_ - leg_start_ns_) > config_.strategy.transfer_leg_s) {
+        return land(Outcome::Aborted, "transfer waypoint not reached");
       }
       break;
     default:
@@ -266,10 +289,14 @@ void FlightSoftware::supervise() {
 
 bool FlightSoftware::airborne_phase() const {
   return phase_ == Phase::FindShelf || phase_ == Phase::GoToViewpoint ||
-         phase_ == Phase::TakeInventory || phase_ == Phase::Approach || phase_ == Phase::Cross;
+         phase_ == Phase::TakeInventory || phase_ == Phase::Approach || phase_ == Phase::Cross ||
+         phase_ == Phase::Transfer;
 }
 
-bool FlightSoftware::vision_phase() const { return airborne_phase() && phase_ != Phase::Cross; }
+// The crossing (open loop) and the transfer (odometry) need no frames.
+bool FlightSoftware::vision_phase() const {
+  return airborne_phase() && phase_ != Phase::Cross && phase_ != Phase::Transfer;
+}
 
 // ---- Actions ----
 
@@ -405,6 +432,7 @@ void FlightSoftware::go_to_viewpoint(const cv::Mat& bgr, bool view_fresh) {
   }
   telemetry_.pose = pose;
   telemetry_.pose_in_cell_frame = false;
+  pose_G_ = pose;
   // e1: from the current position to the optimal viewpoint, in G; flown in the body frame.
   const Eigen::Vector3d e1 = viewpoint_G_m_ - pose->p_FB_m();
   telemetry_.e1_G_m = e1;
@@ -445,6 +473,10 @@ void FlightSoftware::take_inventory(const cv::Mat& bgr) {
   telemetry_.markers_seen = static_cast<int>(markers_.size());
   inventory_.observe(assign_markers(view_, markers_, config_));
   if (inventory_.frames() < config_.perception.inventory_frames) return;
+  if (config_.strategy.mode != Strategy::through_cells) {
+    start_transfer();
+    return;
+  }
   if (!select_target(bgr)) {
     land(Outcome::NoEmptyCell, "inventory taken; no crossable empty cell");
     return;
@@ -456,6 +488,11 @@ void FlightSoftware::take_inventory(const cv::Mat& bgr) {
 
 bool FlightSoftware::select_target(const cv::Mat& bgr) {
   const cv::Point2d centre(config_.camera.cx_px, config_.camera.cy_px);
+  // With a shelf after this one: the cell nearest the next shelf's optimal viewpoint. The
+  // shelves are parallel and aligned, so that viewpoint is this one moved shelf_spacing_m along
+  // x_G; the crossing flies along x_G, so only the (y, z) distance in G counts.
+  const Eigen::Vector3d next_viewpoint_G =
+      viewpoint_G_m_ + Eigen::Vector3d(config_.layout.shelf_spacing_m, 0.0, 0.0);
   std::optional<CellIndex> best;
   double best_d = 0.0;
   for (const CellIndex& cell : inventory_.empty_cells()) {
@@ -466,9 +503,15 @@ bool FlightSoftware::select_target(const cv::Mat& bgr) {
         opening.y() - size.z() - 2.0 * config_.mission.crossing_margin_m <= 0.0) {
       continue;
     }
-    const auto q = cell_quad(view_, cell);
-    const cv::Point2d c = 0.25 * (q[0] + q[1] + q[2] + q[3]);
-    const double d = cv::norm(c - centre);
+    double d = 0.0;
+    if (last_shelf()) {  // the last (or only) shelf: nearest the image centre
+      const auto q = cell_quad(view_, cell);
+      const cv::Point2d c = 0.25 * (q[0] + q[1] + q[2] + q[3]);
+      d = cv::norm(c - centre);
+    } else {
+      const Eigen::Vector3d c_G = cell_centre_G(config_.shelf, cell);
+      d = std::hypot(c_G.y() - next_viewpoint_G.y(), c_G.z() - next_viewpoint_G.z());
+    }
     if (!best || d < best_d) {
       best = cell;
       best_d = d;
@@ -763,6 +806,124 @@ void FlightSoftware::approach(const cv::Mat& bgr) {
     lost_since_ns_.reset();
     telemetry_.event = "target re-acquired";
   }
+}
+
+}  // namespace shelfcross::flight_sw
+
+namespace shelfcross::flight_sw {
+
+// ---- Several shelves and the conventional strategies ----
+
+std::vector<BoxEntry> FlightSoftware::all_boxes() const {
+  std::vector<BoxEntry> all;
+  for (const Inventory& inv : finished_) {
+    const auto b = inv.boxes();
+    all.insert(all.end(), b.begin(), b.end());
+  }
+  const auto b = inventory_.boxes();
+  all.insert(all.end(), b.begin(), b.end());
+  return all;
+}
+
+std::string FlightSoftware::inventory_json() const {
+  if (config_.layout.shelf_count == 1) return inventory_.to_json();
+  std::string j = "{\"shelves\":[";
+  for (const Inventory& inv : finished_) j += inv.to_json() + ",";
+  return j + inventory_.to_json() + "]}";
+}
+
+void FlightSoftware::next_shelf(const std::string& event) {
+  finished_.push_back(inventory_);
+  ++shelf_;
+  inventory_ = Inventory(shelf_, config_.shelf.levels(), config_.shelf.columns(),
+                         config_.perception.marker_min_agreeing_frames);
+  target_.reset();
+  tracker_.release();
+  pose_K_.reset();
+  pose_G_.reset();
+  near_edge_ = false;
+  crossing_refusals_ = 0;
+  hold_since_ns_.reset();
+  last_full_view_ns_.reset();
+  telemetry_.target.reset();
+  telemetry_.tracked_box_px.reset();
+  telemetry_.shelf = shelf_;
+  enter(Phase::FindShelf, event);
+}
+
+// Waypoints in the grid frame G of the shelf just read (x_G into the shelf, grid centre at the
+// origin), from the vehicle's visual pose p at the viewpoint; the last one is the next shelf's
+// optimal viewpoint (moved shelf_spacing_m along x_G), or past the last shelf as far as a
+// crossing ends. They are turned into the odometry frame about the vehicle's position, G's
+// x axis lying at heading (state yaw - visual yaw) in O; heights are offsets from the state's.
+void FlightSoftware::start_transfer() {
+  if (!pose_G_ || !state_) return land(Outcome::Aborted, "no pose or state for the transfer");
+  const KnownShelf& sh = config_.shelf;
+  const StrategyParams& st = config_.strategy;
+  const Eigen::Vector3d half = 0.5 * config_.mission.vehicle_size_m;
+  const Eigen::Vector3d p = pose_G_->p_FB_m();
+  const double half_tag = 0.5 * sh.tag_size_m;
+  const cv::Point3d top_left = grid_tag_G(sh, 0, sh.levels()), bottom_right = grid_tag_G(sh, sh.columns(), 0);
+  const double x_end = last_shelf() ? sh.depth_m + half.x() + config_.mission.beyond_distance_m
+                                    : config_.layout.shelf_spacing_m + viewpoint_G_m_.x();
+  const Eigen::Vector3d end(x_end, viewpoint_G_m_.y(), viewpoint_G_m_.z());
+  std::vector<Eigen::Vector3d> w_G;
+  if (st.mode == Strategy::over_tops) {
+    // Bottom of the vehicle top_clearance_m above the top tags' upper edge.
+    const double z = std::max(top_left.z, bottom_right.z) + half_tag + half.z() + st.top_clearance_m;
+    w_G = {{p.x(), p.y(), z}, {x_end, p.y(), z}, end};
+  } else {
+    // Past the nearer end: the vehicle's widest half (any heading) beyond the grid's side
+    // edge (tags included) by end_clearance_m.
+    const double y_edge = std::max(std::abs(top_left.y), std::abs(bottom_right.y)) + half_tag;
+    const double y = (p.y() >= 0.0 ? 1.0 : -1.0) * (y_edge + half.head<2>().norm() + st.end_clearance_m);
+    w_G = {{p.x(), y, p.z()}, {x_end, y, p.z()}, end};
+  }
+  const double yaw_G_in_O = state_->yaw_rad - pose_G_->yaw_rad;
+  const Eigen::Rotation2Dd R(yaw_G_in_O);
+  waypoints_O_m_.clear();
+  for (const Eigen::Vector3d& w : w_G) {
+    const Eigen::Vector2d d = R * (w - p).head<2>();
+    waypoints_O_m_.push_back({p_O_m_.x() + d.x(), p_O_m_.y() + d.y(), p_O_m_.z() + (w.z() - p.z())});
+  }
+  hold_yaw_O_rad_ = yaw_G_in_O;
+  waypoint_ = 0;
+  leg_start_ns_ = now_ns_;
+  enter(Phase::Transfer, std::string("inventory taken; ") +
+                             (st.mode == Strategy::over_tops ? "over the top" : "around the end") +
+                             (last_shelf() ? " of the last shelf" : " to the next shelf"));
+}
+
+// On each state record: a P law toward the current waypoint, capped at transfer_speed_mps,
+// turned into the body frame by the state's heading; the heading held on the shelf normal.
+void FlightSoftware::transfer() {
+  const StrategyParams& st = config_.strategy;
+  Eigen::Vector3d e = waypoints_O_m_[waypoint_] - p_O_m_;
+  if (e.norm() < st.waypoint_tolerance_m) {
+    ++waypoint_;
+    leg_start_ns_ = now_ns_;
+    if (waypoint_ == waypoints_O_m_.size()) {
+      hover();
+      if (last_shelf()) {
+        return land(Outcome::Completed, std::string("passed the last shelf ") +
+                                            (st.mode == Strategy::over_tops ? "over the top" : "around the end"));
+      }
+      return next_shelf("transfer done: finding shelf " + std::to_string(shelf_ + 1));
+    }
+    telemetry_.event = "transfer waypoint " + std::to_string(waypoint_);
+    e = waypoints_O_m_[waypoint_] - p_O_m_;
+  }
+  Eigen::Vector3d v_O = st.transfer_kp * e;
+  if (v_O.norm() > st.transfer_speed_mps) v_O *= st.transfer_speed_mps / v_O.norm();
+  const double yaw = state_->yaw_rad, c = std::cos(yaw), sn = std::sin(yaw);
+  VelocityCommand v;
+  v.vx_B_mps = c * v_O.x() + sn * v_O.y();  // R_z(-yaw) v_O
+  v.vy_B_mps = -sn * v_O.x() + c * v_O.y();
+  v.vz_mps = v_O.z();
+  v.yaw_rate_radps = std::clamp(st.transfer_yaw_kp * std::remainder(hold_yaw_O_rad_ - yaw, 2.0 * std::numbers::pi),
+                                -config_.control.yaw_rate_max_radps, config_.control.yaw_rate_max_radps);
+  set_velocity(v);
+  emit_rc(false);
 }
 
 }  // namespace shelfcross::flight_sw

@@ -19,6 +19,18 @@
 //   the image centre; forward only near the normal and, close in, once settled)
 //   --corner tags leave the view, centred within tolerance on a fresh still pose--> Cross
 //   --distance past the back face flown (timed)--> Land --ok--> Done
+// Several shelves (config.layout.shelf_count > 1, a row at shelf_spacing_m): after each
+// inventory but the last, the target is the empty cell nearest the next shelf's optimal
+// viewpoint (METHOD.md section 1); the crossing's end hands over to FindShelf for the next shelf
+// (the spacing lets it see that shelf whole from there), and only the last crossing lands.
+// Conventional strategies (config.strategy.mode over_tops / around_ends): TakeInventory
+// --inventory full--> Transfer: waypoints planned in the grid frame G from the last visual pose
+// at the viewpoint (over the tops: straight up until the vehicle's bottom clears the top tags by
+// top_clearance_m, forward to the next shelf's viewpoint distance, down to the viewpoint height;
+// around the ends: sideways past the nearer grid end by end_clearance_m, forward, back to the
+// centre line), flown on odometry (the state record's heading-frame velocities integrated, its
+// height for z; heading held) with the same rc velocity commands, then FindShelf for the next
+// shelf (visual re-acquisition), or Land past the last shelf (Outcome::Completed).
 // Failsafes: no frame for video_hover_s: hover (rc 0 0 0 0); for video_land_s: land (not while
 // crossing: the crossing is open loop and stopping inside the shelf is worse). Target lost:
 // hover and re-acquire from the tags, give up after target_lost_s and land. Battery below
@@ -93,6 +105,7 @@ enum class Phase {
   TakeInventory,
   Approach,
   Cross,
+  Transfer,  ///< over_tops / around_ends: flying the planned waypoints on odometry
   Land,
   Done
 };
@@ -100,7 +113,8 @@ const char* phase_name(Phase phase);
 
 enum class Outcome {
   Running,
-  Crossed,      ///< inventory taken, an empty cell crossed, landed beyond the shelf
+  Crossed,      ///< inventory taken, an empty cell crossed, landed beyond the shelf (every shelf)
+  Completed,    ///< over_tops / around_ends: every shelf inventoried and passed, landed beyond
   NoEmptyCell,  ///< inventory taken, no crossable empty cell: landed in front of the shelf
   Aborted       ///< gave up (reason says why); landed if it had taken off
 };
@@ -124,6 +138,7 @@ struct TagTelemetry {
 struct Telemetry {
   TimeNs t_ns = 0;
   Phase phase = Phase::Idle;
+  int shelf = 0;      ///< index of the shelf being worked on (layout order, from 0)
   std::string event;  ///< the last notable event (phase change, failsafe, refusal)
   // Perception
   std::vector<TagTelemetry> tags;
@@ -175,8 +190,15 @@ class FlightSoftware {
   Phase phase() const { return phase_; }
   bool finished() const { return phase_ == Phase::Done; }
   MissionResult result() const { return result_; }
+  /// The inventory of the current shelf (the only one with a single-shelf layout).
   const Inventory& inventory() const { return inventory_; }
-  std::string inventory_json() const { return inventory_.to_json(); }
+  /// Inventories of the shelves finished before the current one.
+  const std::vector<Inventory>& finished_inventories() const { return finished_; }
+  /// Every decided box of every shelf so far, labelled with its shelf index.
+  std::vector<BoxEntry> all_boxes() const;
+  /// One shelf: Inventory::to_json. Several: {"shelves":[<Inventory::to_json>, ...]}.
+  std::string inventory_json() const;
+  int shelf_index() const { return shelf_; }
   const FlightConfig& config() const { return config_; }
 
  private:
@@ -211,6 +233,11 @@ class FlightSoftware {
   bool airborne_phase() const;
   bool vision_phase() const;
   bool fast() const { return config_.perception.pipeline == PerceptionPipeline::fast; }
+  // Several shelves and the conventional strategies
+  bool last_shelf() const { return shelf_ + 1 >= config_.layout.shelf_count; }
+  void next_shelf(const std::string& event);
+  void start_transfer();
+  void transfer();
 
   FlightConfig config_;
   SdkLink link_;
@@ -260,6 +287,19 @@ class FlightSoftware {
   int crossing_refusals_ = 0;           ///< off-centre arrivals at the cell so far
   // Crossing
   TimeNs cross_duration_ns_ = 0;
+  // Shelves
+  int shelf_ = 0;
+  std::vector<Inventory> finished_;
+  std::optional<PoseEstimate> pose_G_;  ///< last pose in the grid frame (at the viewpoint)
+  // Odometry frame O: fixed, x and y the integral of the state's velocities turned by its yaw
+  // (from where the first record came), z the state's height above the floor.
+  std::optional<TimeNs> odometry_t_ns_;
+  Eigen::Vector3d p_O_m_ = Eigen::Vector3d::Zero();
+  // Transfer
+  std::vector<Eigen::Vector3d> waypoints_O_m_;
+  size_t waypoint_ = 0;
+  double hold_yaw_O_rad_ = 0.0;
+  TimeNs leg_start_ns_ = 0;
 
   Telemetry telemetry_;
   std::vector<SdkCommand> out_;  ///< the commands of the input being handled

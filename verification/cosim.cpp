@@ -63,6 +63,37 @@ const char* outcome_name(RunOutcome outcome) {
   return "unknown";
 }
 
+namespace {
+/// The row's spacing when every shelf has shelf 0's geometry and heading and stands the same
+/// distance behind the previous one along shelf 0's normal (1 mm tolerance); nullopt otherwise.
+std::optional<double> row_spacing_m(const Scenario& sc) {
+  const auto& shelves = sc.warehouse.shelves;
+  if (shelves.size() < 2) return std::nullopt;
+  const ShelfSpec& s0 = shelves[0];
+  const Eigen::Isometry3d X_SW = shelf_pose_W(s0).inverse();
+  const double spacing = (X_SW * shelves[1].origin_W_m).x();
+  if (!(spacing > s0.depth_m)) return std::nullopt;
+  for (size_t i = 1; i < shelves.size(); ++i) {
+    const ShelfSpec& s = shelves[i];
+    const Eigen::Vector3d p_S = X_SW * s.origin_W_m;
+    if (s.column_pitch_m != s0.column_pitch_m || s.row_pitch_m != s0.row_pitch_m ||
+        s.post_thickness_m != s0.post_thickness_m || s.beam_thickness_m != s0.beam_thickness_m ||
+        s.depth_m != s0.depth_m || s.base_height_m != s0.base_height_m ||
+        std::abs(wrap_pi(s.yaw_rad - s0.yaw_rad)) > 1e-9 || std::abs(p_S.x() - spacing * static_cast<double>(i)) > 1e-3 ||
+        std::abs(p_S.y()) > 1e-3) {
+      return std::nullopt;
+    }
+  }
+  return spacing;
+}
+}  // namespace
+
+int mission_shelf_count(const Scenario& sc) {
+  return row_spacing_m(sc) ? static_cast<int>(sc.warehouse.shelves.size()) : 1;
+}
+
+double mission_shelf_spacing_m(const Scenario& sc) { return row_spacing_m(sc).value_or(0.0); }
+
 flight_sw::FlightConfig flight_config_for(const Scenario& sc, const CameraIntrinsics& believed_camera) {
   const ShelfSpec& shelf = sc.warehouse.shelves.at(0);
   flight_sw::FlightConfig c;
@@ -80,6 +111,13 @@ flight_sw::FlightConfig flight_config_for(const Scenario& sc, const CameraIntrin
   c.camera = believed_camera;
   c.mount = sc.camera_mount;
   c.mission.vehicle_size_m = sc.vehicle.size_m;
+  c.layout.shelf_count = mission_shelf_count(sc);
+  c.layout.shelf_spacing_m = mission_shelf_spacing_m(sc);
+  if (const auto strategy = flight_sw::parse_strategy(sc.cosim.strategy)) {
+    c.strategy.mode = *strategy;
+  } else {
+    throw std::invalid_argument("unknown strategy '" + sc.cosim.strategy + "'");
+  }
   // The operator sets the tag hue window around the tags' colour (OpenCV hue: 0..180).
   const Rgb& tag = sc.warehouse.tag_colour;
   const double mx = std::max({tag.r, tag.g, tag.b}), mn = std::min({tag.r, tag.g, tag.b});
@@ -98,7 +136,11 @@ flight_sw::FlightConfig flight_config_for(const Scenario& sc, const CameraIntrin
 
 std::set<InventoryEntry> true_inventory(const Scenario& sc) {
   std::set<InventoryEntry> truth;
-  for (const BoxPlacement& b : sc.warehouse.shelves.at(0).boxes) truth.insert({b.marker_id, 0, b.level, b.column});
+  for (int i = 0; i < mission_shelf_count(sc); ++i) {
+    for (const BoxPlacement& b : sc.warehouse.shelves.at(static_cast<size_t>(i)).boxes) {
+      truth.insert({b.marker_id, i, b.level, b.column});
+    }
+  }
   return truth;
 }
 
@@ -156,7 +198,14 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
   Eigen::Isometry3d X_WC_prev_frame = render::camera_pose_W(X_prev, sc.camera_mount);
   bool sdk_on = false, video_on = false, touching_floor = true;
   double motor_time_s = 0.0;
-  ShelfCrossingMonitor crossing(shelf, X_prev.translation());
+  const int shelf_count = mission_shelf_count(sc);
+  m.shelves = shelf_count;
+  m.strategy = sc.cosim.strategy;
+  std::vector<ShelfCrossingMonitor> monitors;  // one per mission shelf; [0] is shelf 0's
+  monitors.reserve(static_cast<size_t>(shelf_count));
+  for (int i = 0; i < shelf_count; ++i) monitors.emplace_back(sc.warehouse.shelves[static_cast<size_t>(i)], X_prev.translation());
+  ShelfCrossingMonitor& crossing = monitors.front();
+  std::vector<std::optional<CellIndex>> targets(static_cast<size_t>(shelf_count));  // the chosen cell per shelf
   flight_sw::Phase last_phase = fsw.phase();
   std::optional<TimeNs> approach_start_ns;
   std::vector<double> approach_t, err_z, err_yaw, err_y;
@@ -195,7 +244,8 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
       }
       if (last_phase == flight_sw::Phase::Cross && !result.cross_start_s) result.cross_start_s = ns_to_seconds(t);
     }
-    if (tm.target) m.target = tm.target;
+    if (tm.target && fsw.shelf_index() == 0) m.target = tm.target;
+    if (tm.target && fsw.shelf_index() < shelf_count) targets[static_cast<size_t>(fsw.shelf_index())] = tm.target;
   };
 
   while (!outcome) {
@@ -249,15 +299,21 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
       const bool on_floor = p.z() - ground_z_m < 1e-4;
       if (on_floor && !touching_floor) ++m.floor_touches;
       touching_floor = on_floor;
-      // Crossing shelf 0, judged on the body origin in the shelf frame.
-      const ShelfCrossingMonitor::Faces faces = crossing.update(p);
+      // Crossing each shelf, judged on the body origin in the shelf's frame.
+      bool near_a_shelf = false;
+      for (size_t i = 0; i < monitors.size(); ++i) {
+        const ShelfCrossingMonitor::Faces faces = monitors[i].update(p);
+        const std::string which = shelf_count > 1 ? "shelf " + std::to_string(i) + " " : "";
+        if (faces.front) log_event(t, which + "front face crossed");
+        if (faces.back) log_event(t, which + "back face crossed");
+        const Eigen::Vector3d& p_S = monitors[i].p_S_m();
+        near_a_shelf = near_a_shelf ||
+                       (p_S.x() > -half_length_m - 0.05 && p_S.x() < shelf.depth_m + half_length_m + 0.05);
+      }
       m.entry_offset_y_m = crossing.entry_offset_y_m();
       m.entry_offset_z_m = crossing.entry_offset_z_m();
       m.crossed = crossing.crossed();
-      if (faces.front) log_event(t, "front face crossed");
-      if (faces.back) log_event(t, "back face crossed");
-      const Eigen::Vector3d& p_S = crossing.p_S_m();
-      if (p_S.x() > -half_length_m - 0.05 && p_S.x() < shelf.depth_m + half_length_m + 0.05) {
+      if (near_a_shelf) {
         const double clearance = world.clearance_to_shelves(X).distance_m;
         m.min_clearance_m = std::min(m.min_clearance_m.value_or(clearance), clearance);
       }
@@ -355,7 +411,7 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
       if (fsw.telemetry().pose) sample.p_est_m = fsw.telemetry().pose->p_FB_m();
       result.trajectory.push_back(sample);
       // Approach responses against the target cell (truth), until the crossing starts.
-      if (approach_start_ns && m.target && fsw.phase() == flight_sw::Phase::Approach) {
+      if (approach_start_ns && m.target && fsw.phase() == flight_sw::Phase::Approach && fsw.shelf_index() == 0) {
         const Eigen::Vector3d c = cell_centre_S_m(shelf, m.target->level, m.target->column);
         const Eigen::Vector3d p_S = X_SW * s.p_WB_m;
         approach_t.push_back(ns_to_seconds(t - *approach_start_ns));
@@ -371,11 +427,17 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
   // Metrics and the verdict.
   m.mission_time_s = ns_to_seconds(t_now);
   m.crossed_target = m.crossed && m.target && *m.crossed == *m.target;
+  for (size_t i = 0; i < monitors.size(); ++i) {
+    const auto& crossed = monitors[i].crossed();
+    m.shelves_crossed += crossed ? 1 : 0;
+    m.shelves_crossed_target += crossed && targets[i] && *crossed == *targets[i] ? 1 : 0;
+  }
+  const bool through_cells = sc.cosim.strategy == "through_cells";
   const flight_sw::MissionResult fsw_result = fsw.result();
   m.flight_software_result = std::string(flight_sw::outcome_name(fsw_result.outcome)) +
                              (fsw_result.reason.empty() ? "" : ": " + fsw_result.reason);
   std::set<InventoryEntry> reported;
-  for (const flight_sw::BoxEntry& b : fsw.inventory().boxes()) reported.insert({b.id, b.shelf, b.level, b.column});
+  for (const flight_sw::BoxEntry& b : fsw.all_boxes()) reported.insert({b.id, b.shelf, b.level, b.column});
   m.inventory = score_inventory(reported, true_inventory(sc));
   result.inventory_json = fsw.inventory_json();
   if (!approach_t.empty()) {
@@ -387,9 +449,13 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
     if (fsw_result.outcome == flight_sw::Outcome::Aborted) {
       outcome = RunOutcome::mission_aborted;
       result.detail = fsw_result.reason;
-    } else if (!m.crossed_target) {
+    } else if (through_cells ? !m.crossed_target || m.shelves_crossed_target < shelf_count
+                             : fsw_result.outcome != flight_sw::Outcome::Completed) {
       outcome = RunOutcome::no_crossing;
       result.detail = m.flight_software_result;
+      if (through_cells && shelf_count > 1) {
+        result.detail += " (" + std::to_string(m.shelves_crossed) + " of " + std::to_string(shelf_count) + " shelves crossed)";
+      }
     } else if (!m.inventory.exact()) {
       outcome = RunOutcome::inventory_mismatch;
       result.detail = std::to_string(m.inventory.correct) + " of " + std::to_string(m.inventory.truth) +
@@ -419,6 +485,10 @@ std::string run_metrics_json(const RunMetrics& m) {
                 {"peak_abs_error", r->peak_abs_error}};
   };
   json j{{"mission_time_s", m.mission_time_s},
+         {"strategy", m.strategy},
+         {"shelves", m.shelves},
+         {"shelves_crossed", m.shelves_crossed},
+         {"shelves_crossed_target", m.shelves_crossed_target},
          {"path_length_m", m.path_length_m},
          {"floor_touches", m.floor_touches},
          {"target", cell(m.target)},

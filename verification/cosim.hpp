@@ -42,14 +42,16 @@
 namespace shelfcross::verification {
 
 enum class RunOutcome {
-  success,                    ///< crossed the target cell face to face, no contact, exact inventory, landed
+  success,                    ///< mission done, no contact, exact inventory of every shelf, landed
+                              ///< (through_cells: every shelf crossed face to face, shelf 0 at its target)
   collision,                  ///< touched a shelf part
   left_arena,                 ///< touched a wall or the ceiling, or left the arena box
   timeout,
   numerical_failure,          ///< the plant diverged (CVODE error, NaN)
   flight_software_exception,  ///< the flight software threw
   mission_aborted,            ///< the flight software gave up (its reason is the detail)
-  no_crossing,                ///< landed without crossing a cell face to face
+  no_crossing,                ///< landed without crossing every shelf face to face (through_cells),
+                              ///< or without passing the last shelf (over_tops, around_ends)
   inventory_mismatch,         ///< crossed cleanly but the box list was wrong
 };
 const char* outcome_name(RunOutcome outcome);
@@ -61,6 +63,11 @@ struct RunMetrics {
   int floor_touches = 0;           ///< airborne-to-floor contacts (landings included)
   // First contact (collision or wall)
   std::optional<plant::Contact> contact;
+  // The mission: its shelves (the scenario's row, mission_shelf_count) and strategy
+  std::string strategy = "through_cells";
+  int shelves = 1;
+  int shelves_crossed = 0;                      ///< shelves crossed face to face through a cell
+  int shelves_crossed_target = 0;               ///< ... through the cell the flight software chose there
   // Crossing, in shelf 0's frame S
   std::optional<flight_sw::CellIndex> target;   ///< the flight software's chosen cell
   std::optional<flight_sw::CellIndex> crossed;  ///< the cell entered and left face to face
@@ -102,11 +109,19 @@ struct RunResult {
 /// Called with each frame the flight software received, after it handled it (for --video).
 using FrameObserver = std::function<void(const CameraFrame&, const flight_sw::FlightSoftware&)>;
 
+/// The shelves the mission covers: all of the scenario's when they form a row (the geometry of
+/// shelf 0, the same heading, each origin shelf_spacing_m behind the previous one along shelf
+/// 0's normal, the same spacing throughout, > depth), else 1 (shelf 0 only, as before).
+int mission_shelf_count(const Scenario& scenario);
+/// Front face to front face along the normal in that row (0 for a single shelf).
+double mission_shelf_spacing_m(const Scenario& scenario);
+
 /// The flight software's configuration for a scenario: the known geometry of shelf 0, the
+/// layout (mission_shelf_count shelves at their spacing), the strategy (cosim.strategy), the
 /// camera it believes (calibration error included), the mount; tunables at their defaults.
 flight_sw::FlightConfig flight_config_for(const Scenario& scenario, const CameraIntrinsics& believed_camera);
 
-/// The true box list of shelf 0 as the flight software should report it.
+/// The true box list of the mission's shelves as the flight software should report it.
 std::set<InventoryEntry> true_inventory(const Scenario& scenario);
 
 /// Runs one dispersed run. `renderer` must have been made for (or re-targeted at) the run's

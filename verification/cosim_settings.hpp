@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <string>
 
 #include "verification/link_model.hpp"
 
@@ -79,6 +80,9 @@ struct CosimSettings {
   /// Fault injection, for verifying the harness and campaigns: from this simulated time on
   /// the flight software's next step raises an exception (as a bug in it would). < 0: off.
   double inject_flight_software_exception_s = -1.0;
+  /// The flight software's guidance strategy between shelves (flight_sw::Strategy by name):
+  /// through_cells (the paper's), over_tops or around_ends.
+  std::string strategy = "through_cells";
   bool operator==(const CosimSettings&) const = default;
 };
 

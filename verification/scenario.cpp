@@ -18,6 +18,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "config/strict_yaml.hpp"
+#include "flight_sw/config.hpp"
 #include "plant/collision.hpp"
 
 namespace shelfcross::verification {
@@ -584,6 +585,9 @@ void visit_cosim(V& v, CosimSettings& c) {
   v.field("settling_floor_y_m", c.settling_floor_y_m, kNonNegative);
   v.section("link", [&](auto& l) { visit_link(l, c.link); });
   v.field("inject_flight_software_exception_s", c.inject_flight_software_exception_s, between(-1.0, 3600.0));
+  v.field("strategy", c.strategy);
+  v.check("strategy", flight_sw::parse_strategy(c.strategy).has_value(),
+          "unknown strategy '" + c.strategy + "' (through_cells, over_tops or around_ends)");
 }
 
 bool valid_id(const std::string& name) {

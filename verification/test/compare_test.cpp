@@ -1,0 +1,50 @@
+// The strategy comparison's table: means over successful runs, recall over every run, the
+// success rate's Clopper-Pearson bound, the paper's numbers beside them.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "verification/compare.hpp"
+#include "verification/statistics.hpp"
+
+namespace shelfcross::verification {
+namespace {
+
+RunRecord record(std::int64_t index, const std::string& outcome, double distance_m, double time_s, double recall) {
+  RunRecord r;
+  r.index = index;
+  r.outcome = outcome;
+  r.metrics_json = nlohmann::json{{"path_length_m", distance_m},
+                                  {"mission_time_s", time_s},
+                                  {"inventory", {{"recall", recall}}}}
+                       .dump();
+  return r;
+}
+
+TEST(CompareTable, RowFromRuns) {
+  const std::vector<RunRecord> runs{record(0, "success", 20.0, 80.0, 1.0), record(1, "success", 24.0, 90.0, 1.0),
+                                    record(2, "collision", 3.0, 10.0, 0.25), record(3, "success", 99.0, 99.0, 1.0)};
+  const StrategyRow row = summarize_strategy("over_tops", runs, 3);  // run 3 is beyond the request
+  EXPECT_EQ(row.runs, 3);
+  EXPECT_EQ(row.successes, 2);
+  EXPECT_DOUBLE_EQ(row.success_rate, 2.0 / 3.0);
+  EXPECT_DOUBLE_EQ(row.success_lower_95, clopper_pearson_lower(2, 3, 0.95));
+  EXPECT_DOUBLE_EQ(*row.mean_distance_m, 22.0);
+  EXPECT_DOUBLE_EQ(*row.mean_time_s, 85.0);
+  EXPECT_DOUBLE_EQ(*row.mean_recall, 0.75);
+  EXPECT_EQ(row.paper_distance_m, 22.0);
+  EXPECT_EQ(row.paper_time_s, 300.0);
+  const std::string md = comparison_table_markdown({row});
+  EXPECT_NE(md.find("| over the shelf tops | 3 | 22.00 | 22 | 85.0 | 300 | 2/3 = 0.667 |"), std::string::npos) << md;
+  EXPECT_THROW(summarize_strategy("sideways", runs, 3), std::invalid_argument);
+}
+
+TEST(CompareTable, NoSuccessLeavesMeansEmpty) {
+  const StrategyRow row = summarize_strategy("around_ends", {record(0, "timeout", 5.0, 900.0, 0.0)}, 1);
+  EXPECT_FALSE(row.mean_distance_m.has_value());
+  EXPECT_EQ(row.success_lower_95, 0.0);
+  EXPECT_NE(comparison_table_markdown({row}).find("| around the shelf sides | 1 | - | 28 | - | 360 | 0/1"), std::string::npos);
+  EXPECT_EQ(compared_strategies().size(), 3u);
+}
+
+}  // namespace
+}  // namespace shelfcross::verification
