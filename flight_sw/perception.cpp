@@ -412,15 +412,8 @@ void MarkerDetector::detect_in(const cv::Mat& bgr, cv::Rect region, double expec
   region &= cv::Rect(0, 0, bgr.cols, bgr.rows);
   if (region.width < 8 || region.height < 8 || !(expected_side_px > 0.0)) return;
   cv::cvtColor(bgr(region), gray_, cv::COLOR_BGR2GRAY);
-  double scale = 1.0;
-  const cv::Mat* image = &gray_;
-  if (expected_side_px >= 2.0 * kMinDecimatedSide_px) {
-    cv::resize(gray_, small_, cv::Size(gray_.cols / 2, gray_.rows / 2), 0, 0, cv::INTER_AREA);
-    scale = 2.0;
-    image = &small_;
-  }
-  const double side = expected_side_px / scale;
-  const double longest = std::max(image->cols, image->rows);
+  const double side = expected_side_px;
+  const double longest = std::max(gray_.cols, gray_.rows);
   cv::aruco::DetectorParameters& p = *fast_parameters_;
   // A quadrilateral of perimeter P has at most the area (P/4)^2 (the square's), so one with
   // P < 4 sqrt(marker_area_ratio) side can never pass eq. 1 on marker area (area >= ratio
@@ -435,8 +428,8 @@ void MarkerDetector::detect_in(const cv::Mat& bgr, cv::Rect region, double expec
   p.adaptiveThreshWinSizeStep = 10;
   corners_.clear();
   ids_.clear();
-  cv::aruco::detectMarkers(*image, dictionary_, corners_, ids_, fast_parameters_, rejected_);
-  collect(scale, cv::Point2d(region.x, region.y), 0.5 * scale, out);
+  cv::aruco::detectMarkers(gray_, dictionary_, corners_, ids_, fast_parameters_, rejected_);
+  collect(1.0, cv::Point2d(region.x, region.y), 0.5, out);
 }
 
 // ---- Tracking ----

@@ -313,9 +313,8 @@ TEST(FastTags, SameBlobsAsTheReferenceDetector) {
   EXPECT_GT(compared, 500);
 }
 
-// Markers read in the cells on a half-resolution image without corner refinement: the same
-// IDs, centres within 1.5 px and areas within 8 % of the reference's full-frame detection
-// (corners from the half-resolution contour); what decides is unchanged: the same cells, and
+// Markers read in the cells without corner refinement: the same IDs, centres within 1.5 px
+// and areas within 8 % of the reference's full-frame detection; what decides is unchanged: the same cells, and
 // areas far from eq. 1's 45 % threshold.
 TEST(FastMarkers, SameMarkersInTheCellsAsTheWholeFrameReference) {
   testing::Scene scene;
