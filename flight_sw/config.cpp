@@ -113,6 +113,11 @@ void read_perception(const Map& m, PerceptionParams& p) {
   opt(m, "marker_area_ratio_threshold", p.marker_area_ratio_threshold, kFraction);
   opt(m, "marker_min_agreeing_frames", p.marker_min_agreeing_frames, at_least(1));
   opt(m, "inventory_frames", p.inventory_frames, at_least(1));
+  opt(m, "decide_max_damage_events", p.decide_max_damage_events, within(0, 1000));
+  opt(m, "steer_max_damage_events", p.steer_max_damage_events, within(0, 1000));
+  if (p.steer_max_damage_events < p.decide_max_damage_events) {
+    m.fail("steer_max_damage_events", "must be >= decide_max_damage_events");
+  }
   opt(m, "roi_expand", p.roi_expand, within(0.0, 5.0));
   opt(m, "corner_gate", p.corner_gate, {.min = 0.0, .max = 1.0, .min_exclusive = true, .max_exclusive = false});
   if (p.inventory_frames < p.marker_min_agreeing_frames) {
@@ -302,6 +307,9 @@ void validate_flight_config(const FlightConfig& c) {
   require(c.perception.marker_min_agreeing_frames >= 1 &&
               c.perception.inventory_frames >= c.perception.marker_min_agreeing_frames,
           "inventory_frames must be >= marker_min_agreeing_frames >= 1");
+  require(c.perception.decide_max_damage_events >= 0 &&
+              c.perception.steer_max_damage_events >= c.perception.decide_max_damage_events,
+          "steer_max_damage_events must be >= decide_max_damage_events >= 0");
   require(c.perception.tag_seed_stride_px >= 1 && c.perception.tag_seed_stride_px <= 16,
           "tag_seed_stride_px outside 1..16");
   require(c.timeouts.video_land_s > c.timeouts.video_hover_s,

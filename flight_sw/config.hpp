@@ -15,7 +15,8 @@
 //   perception: tag_hsv {hue_min hue_max sat_min sat_max val_min val_max}, min_tag_area_px,
 //               min_fill_ratio, max_aspect_ratio, area_ratio_threshold,
 //               grid_orthogonality_tolerance_rad, marker_area_ratio_threshold,
-//               marker_min_agreeing_frames, inventory_frames, roi_expand, corner_gate,
+//               marker_min_agreeing_frames, inventory_frames, decide_max_damage_events,
+//               steer_max_damage_events, roi_expand, corner_gate,
 //               pipeline (fast | reference), tag_seed_stride_px
 //   control:    forward_speed_mps kp_z ki_z z_integral_limit_m_s z_speed_max_mps kp_psi ki_psi
 //               psi_integral_limit_rad_s yaw_rate_max_radps lateral_speed_mps
@@ -101,6 +102,14 @@ struct PerceptionParams {
   double marker_area_ratio_threshold = 0.45;
   int marker_min_agreeing_frames = 3;  ///< N: frames that must agree on a cell's marker ID
   int inventory_frames = 5;            ///< full-view frames read before the inventory closes
+  /// Damaged (error-concealed) pictures, by their lost bands since the key frame
+  /// (CameraFrame::damage_events). Up to decide_max_damage_events a picture counts as whole
+  /// enough to decide: reach the viewpoint, read the inventory (only whole pictures vouch for
+  /// an empty cell), choose or re-acquire the target, commit to the crossing (on a pose from
+  /// such a picture), fly the last centimetres before the tags leave the view. Up to
+  /// steer_max_damage_events it only steers the loops; beyond, the vehicle hovers on it.
+  int decide_max_damage_events = 1;
+  int steer_max_damage_events = 8;
   double roi_expand = 0.6;   ///< approach search window: box grown by this fraction per side
   double corner_gate = 0.35;  ///< corner tag must lie within this fraction of the box size
 };

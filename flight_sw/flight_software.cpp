@@ -149,18 +149,31 @@ void FlightSoftware::on_frame(const CameraFrame& f) {
     video_stalled_ = false;
     telemetry_.event = "video back";
   }
+  // Damaged pictures (error-concealed bands, see CameraFrame): the guessed bands last until
+  // the next key frame, so such frames come in runs and can show a tag where it is not, or
+  // lose it. Decisions (viewpoint reached, inventory read and closed, target chosen or
+  // re-acquired, crossing committed, the last centimetres before it) are taken only on
+  // pictures with at most decide_max_damage_events lost bands; up to steer_max_damage_events a
+  // picture steers the loops; beyond, it is video but not a view: the vehicle hovers on it.
+  const int damage = f.damaged || f.damage_events > 0 ? std::max(1, f.damage_events) : 0;
+  if (damage > 0) ++telemetry_.damaged_frames;
+  decision_frame_ = damage <= config_.perception.decide_max_damage_events;
+  if (damage > config_.perception.steer_max_damage_events) {
+    ++telemetry_.unflown_frames;
+    if (airborne_phase() && phase_ != Phase::Cross && phase_ != Phase::Transfer) {
+      velocity_ = {};  // hover; the PI states are kept for the next usable frame
+    }
+    if (phase_ == Phase::WaitVideo) command_takeoff_if_ready();
+    else emit_rc(false);
+    return;
+  }
   switch (phase_) {
     case Phase::WaitVideo:
-      if (state_ && state_->battery_pct < config_.mission.takeoff_min_battery_pct) {
-        abort_on_ground("battery " + std::to_string(state_->battery_pct) +
-                        "% below the take-off minimum");
-      } else {
-        command_takeoff();
-      }
+      command_takeoff_if_ready();
       return;
     case Phase::FindShelf: find_shelf(f.bgr); break;
     case Phase::GoToViewpoint: go_to_viewpoint(f.bgr, false); break;
-    case Phase::TakeInventory: take_inventory(f.bgr); break;
+    case Phase::TakeInventory: take_inventory(f.bgr, damage == 0); break;
     case Phase::Approach: approach(f.bgr); break;
     default: break;
   }
@@ -312,6 +325,15 @@ void FlightSoftware::enter(Phase p, const std::string& event) {
   pi_psi_.reset();
 }
 
+// The first frame proves the video: take off unless the battery is too low.
+void FlightSoftware::command_takeoff_if_ready() {
+  if (state_ && state_->battery_pct < config_.mission.takeoff_min_battery_pct) {
+    abort_on_ground("battery " + std::to_string(state_->battery_pct) + "% below the take-off minimum");
+  } else {
+    command_takeoff();
+  }
+}
+
 void FlightSoftware::command_takeoff() {
   enter(Phase::TakeOff, "taking off");
   attempts_ = 0;
@@ -380,6 +402,10 @@ void FlightSoftware::find_shelf(const cv::Mat& bgr) {
   update_view_telemetry();
   const ControlGains& g = config_.control;
   const CameraIntrinsics& k = config_.camera;
+  if (view_.full && !decision_frame_) {  // to be confirmed on a nearly whole picture
+    set_velocity({});
+    return;
+  }
   if (view_.full) {
     enter(Phase::GoToViewpoint, "whole shelf in view");
     go_to_viewpoint(bgr, true);
@@ -448,15 +474,17 @@ void FlightSoftware::go_to_viewpoint(const cv::Mat& bgr, bool view_fresh) {
   set_velocity(v);
   const bool there = e1.norm() < m.viewpoint_position_tolerance_m &&
                      std::abs(pose->yaw_rad) < m.viewpoint_yaw_tolerance_rad;
-  settled_frames_ = there ? settled_frames_ + 1 : 0;
+  if (!there) settled_frames_ = 0;
+  else if (decision_frame_) ++settled_frames_;  // a damaged picture neither counts nor resets
   if (settled_frames_ >= m.viewpoint_settle_frames) {
     hover();
     enter(Phase::TakeInventory, "at the optimal viewpoint: reading the shelf");
   }
 }
 
-void FlightSoftware::take_inventory(const cv::Mat& bgr) {
+void FlightSoftware::take_inventory(const cv::Mat& bgr, bool whole) {
   hover();
+  if (!decision_frame_) return;  // a guessed band may hold a marker, or shift the grid labels
   analyse_shelf(bgr, tag_detector_, config_, view_);
   update_view_telemetry();
   if (!view_.full) return;
@@ -471,8 +499,10 @@ void FlightSoftware::take_inventory(const cv::Mat& bgr) {
     marker_detector_.detect(bgr, markers_);
   }
   telemetry_.markers_seen = static_cast<int>(markers_.size());
-  inventory_.observe(assign_markers(view_, markers_, config_));
-  if (inventory_.frames() < config_.perception.inventory_frames) return;
+  inventory_.observe(assign_markers(view_, markers_, config_), whole);
+  // Closed after inventory_frames full views, of which enough whole ones to decide which
+  // cells are empty (damaged ones only vote for boxes); the timeout bounds the wait.
+  if (inventory_.frames() < config_.perception.inventory_frames || !inventory_.empty_decidable()) return;
   if (config_.strategy.mode != Strategy::through_cells) {
     start_transfer();
     return;
@@ -519,6 +549,12 @@ bool FlightSoftware::select_target(const cv::Mat& bgr) {
   }
   if (!best) return false;
   target_ = best;
+  // The target's height, from the full view it was chosen on (the grid pose's range).
+  target_height_m_.reset();
+  if (pose_G_) {
+    const auto q = cell_quad(view_, *best);
+    target_height_m_ = cell_height_m(0.25 * (q[0].y + q[1].y + q[2].y + q[3].y), -pose_G_->X_FC.translation().x());
+  }
   telemetry_.target = best;
   const auto q = cell_quad(view_, *best);
   const auto idx = cell_corner_indices(view_.grid, best->level - 1, best->column - 1);
@@ -607,6 +643,22 @@ bool FlightSoftware::measure_target(const cv::Mat& bgr, const cv::Rect2d& predic
       return false;
     }
   }
+  // Identity: the target cell's centre stays at one height above the take-off point. After
+  // the target was lost, the tracked box can settle on the cell above or below (and the
+  // jump test above no longer applies once the last pose is old); a level's corner tags make
+  // as good a pose as the target's. The height check tells them apart: the height the cell's
+  // image row puts it at (cell_height_m) must stay within 0.4 of the smallest row pitch of
+  // the height found when the target was chosen; another level is a whole pitch away.
+  if (target_height_m_) {
+    const cv::Point2d c = 0.25 * (img[0] + img[1] + img[2] + img[3]);
+    const auto height_m = cell_height_m(c.y, -pose->X_FC.translation().x());
+    const auto& rows = config_.shelf.row_pitch_m;
+    if (height_m && std::abs(*height_m - *target_height_m_) > 0.4 * *std::min_element(rows.begin(), rows.end())) {
+      ++telemetry_.rejected_poses;
+      ++telemetry_.wrong_level_poses;
+      return false;
+    }
+  }
   for (size_t k = 0; k < 4; ++k) corner_px_[k] = img[k];
   pose_K_ = pose;
   pose_t_ns_ = now_ns_;
@@ -619,6 +671,18 @@ bool FlightSoftware::measure_target(const cv::Mat& bgr, const cv::Rect2d& predic
     near_edge_ = near_edge_ || c.x < m || c.y < m || c.x > bgr.cols - 1 - m || c.y > bgr.rows - 1 - m;
   }
   return true;
+}
+
+// Height above the take-off point of a point on the shelf's front at image row v_px, seen from
+// range_m in front of it: the state's height h plus range * tan(elevation), the elevation being
+// the row's angle above the optical axis, atan((cy - v) / fy), less the axis' tilt down (the
+// body's pitch from the state record plus the mount's). The body's roll is neglected (the cell
+// is near the image's vertical centre line). Empty without a state record.
+std::optional<double> FlightSoftware::cell_height_m(double v_px, double range_m) const {
+  if (!state_) return std::nullopt;
+  const CameraIntrinsics& k = config_.camera;
+  const double elevation = std::atan((k.cy_px - v_px) / k.fy_px) - (state_->pitch_rad + config_.mount.pitch_rad);
+  return state_->height_m + range_m * std::tan(elevation);
 }
 
 bool FlightSoftware::reacquire(const cv::Mat& bgr) {
@@ -659,7 +723,7 @@ Eigen::Vector3d FlightSoftware::crossing_direction_K(const PoseEstimate& pose) c
   return (aim - pose.p_FB_m()).normalized();
 }
 
-bool FlightSoftware::crossing_allowed(const PoseEstimate& pose, std::string& why) const {
+bool FlightSoftware::crossing_allowed(const PoseEstimate& pose, TimeNs pose_t_ns, std::string& why) const {
   const MissionParams& m = config_.mission;
   const Eigen::Vector2d opening = cell_opening_m(config_.shelf, *target_);
   const double psi = std::abs(pose.yaw_rad);
@@ -674,8 +738,8 @@ bool FlightSoftware::crossing_allowed(const PoseEstimate& pose, std::string& why
   const Eigen::Vector3d front = at(0.0), back = at(config_.shelf.depth_m);
   // The pose is honest only if it is recent (frames may drop) and the vehicle was not moving
   // sideways when it was taken: the video latency hides up to V_y (latency + tau) of motion.
-  const bool fresh = ns_to_seconds(now_ns_ - pose_t_ns_) <= m.pose_fresh_s;
-  const bool still = ns_to_seconds(pose_t_ns_ - lateral_active_ns_) >= m.settle_s;
+  const bool fresh = ns_to_seconds(now_ns_ - pose_t_ns) <= m.pose_fresh_s;
+  const bool still = ns_to_seconds(pose_t_ns - lateral_active_ns_) >= m.settle_s;
   if (!fresh) {
     why = "last pose too old";
   } else if (!still) {
@@ -707,6 +771,10 @@ void FlightSoftware::approach(const cv::Mat& bgr) {
   const bool found = measure_target(bgr, predicted);
   telemetry_.tracked_box_px = box_px_;
   const double dt = control_dt_s();
+  if (found && decision_frame_) {
+    decision_pose_K_ = pose_K_;
+    decision_pose_t_ns_ = pose_t_ns_;
+  }
   if (found) {
     lost_since_ns_.reset();
     back_off_since_ns_.reset();
@@ -752,6 +820,10 @@ void FlightSoftware::approach(const cv::Mat& bgr) {
         hold_since_ns_ && ns_to_seconds(now_ns_ - *hold_since_ns_) > m.settle_hold_s;
     const bool hold = !in_cone || (settling && !settle_given_up);
     v.vx_B_mps = hold ? 0.0 : g.forward_speed_mps;                                 // eq. 10
+    // About to lose the tags: the crossing will be judged on the last nearly whole picture,
+    // so only such pictures move the vehicle now (it hovers on damaged ones), and the last
+    // one before the tags leave is at most a frame old.
+    if (near_edge_ && !decision_frame_) v = {};
     set_velocity(v);
     telemetry_.e_z_m = e_z;
     telemetry_.e_psi_rad = e_psi;
@@ -762,19 +834,28 @@ void FlightSoftware::approach(const cv::Mat& bgr) {
     telemetry_.holding_short = hold;
     return;
   }
-  // The corner tags are gone. Close and at the border: they left the view; cross if centred.
-  if (pose_K_ && near_edge_ && -pose_K_->p_FB_m().x() <= config_.mission.cross_range_max_m) {
+  if (!decision_frame_ && !back_off_since_ns_) {
+    // Not found in a damaged picture: the tags may sit in a guessed band. Nothing is decided
+    // (no crossing, no re-acquisition) until a nearly whole picture shows where they are.
+    if (!lost_since_ns_) lost_since_ns_ = now_ns_;
+    velocity_ = {};
+    return;
+  }
+  // The corner tags are gone. Close and at the border: they left the view; cross if centred,
+  // judged on the last pose from a nearly whole picture.
+  if (decision_pose_K_ && near_edge_ && -decision_pose_K_->p_FB_m().x() <= config_.mission.cross_range_max_m) {
+    const PoseEstimate& pose = *decision_pose_K_;
     std::string why;
-    if (crossing_allowed(*pose_K_, why)) {
-      const double distance = -pose_K_->p_FB_m().x() + config_.shelf.depth_m +
+    if (crossing_allowed(pose, decision_pose_t_ns_, why)) {
+      const double distance = -pose.p_FB_m().x() + config_.shelf.depth_m +
                               0.5 * config_.mission.vehicle_size_m.x() +
                               config_.mission.beyond_distance_m;
       // Along the crossing line at crossing_speed_mps, heading held (yaw rate 0); the line in
       // K turned into the body frame by the heading: v_B = R_z(-yaw) v_K.
-      const Eigen::Vector3d d = crossing_direction_K(*pose_K_);
+      const Eigen::Vector3d d = crossing_direction_K(pose);
       cross_duration_ns_ = seconds_to_ns(distance / (d.x() * g.crossing_speed_mps));
       enter(Phase::Cross, "corner tags left the view: crossing " + cell_text(*target_));
-      const double cy = std::cos(pose_K_->yaw_rad), sy = std::sin(pose_K_->yaw_rad);
+      const double cy = std::cos(pose.yaw_rad), sy = std::sin(pose.yaw_rad);
       set_velocity({g.crossing_speed_mps * (cy * d.x() + sy * d.y()),
                     g.crossing_speed_mps * (-sy * d.x() + cy * d.y()), g.crossing_speed_mps * d.z(), 0.0});
       return;
@@ -838,8 +919,10 @@ void FlightSoftware::next_shelf(const std::string& event) {
   inventory_ = Inventory(shelf_, config_.shelf.levels(), config_.shelf.columns(),
                          config_.perception.marker_min_agreeing_frames);
   target_.reset();
+  target_height_m_.reset();
   tracker_.release();
   pose_K_.reset();
+  decision_pose_K_.reset();
   pose_G_.reset();
   near_edge_ = false;
   crossing_refusals_ = 0;

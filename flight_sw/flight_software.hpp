@@ -15,7 +15,7 @@
 //   EnterSdk --ok--> StartVideo --ok--> WaitVideo --first frame, battery ok--> TakeOff
 //   TakeOff --ok (or reply lost while the height says airborne)--> FindShelf
 //   FindShelf --whole grid in view--> GoToViewpoint --at the optimal viewpoint, settled-->
-//   TakeInventory --inventory_frames full views read--> Approach (target = empty cell nearest
+//   TakeInventory --inventory_frames full views read, enough whole--> Approach (target = empty cell nearest
 //   the image centre; forward only near the normal and, close in, once settled)
 //   --corner tags leave the view, centred within tolerance on a fresh still pose--> Cross
 //   --distance past the back face flown (timed)--> Land --ok--> Done
@@ -31,6 +31,11 @@
 // centre line), flown on odometry (the state record's heading-frame velocities integrated, its
 // height for z; heading held) with the same rc velocity commands, then FindShelf for the next
 // shelf (visual re-acquisition), or Land past the last shelf (Outcome::Completed).
+// Damaged pictures (CameraFrame::damaged): decisions (the phase changes above, the inventory,
+// the target's re-acquisition, the crossing and the last centimetres before it) only on
+// pictures with at most perception.decide_max_damage_events lost bands since their key frame;
+// steering on up to steer_max_damage_events; hover on worse. Only whole pictures count
+// toward an empty cell.
 // Failsafes: no frame for video_hover_s: hover (rc 0 0 0 0); for video_land_s: land (not while
 // crossing: the crossing is open loop and stopping inside the shelf is worse). Target lost:
 // hover and re-acquire from the tags, give up after target_lost_s and land. Battery below
@@ -165,6 +170,7 @@ struct Telemetry {
   bool settled = false;        ///< still and centred long enough to commit to the crossing
   bool holding_short = false;  ///< forward speed held at 0 (off the normal, or settling)
   int rejected_poses = 0;      ///< implausible jumps of the target's pose, ignored
+  int wrong_level_poses = 0;   ///< of which on another level's tags (state height disagrees)
   Eigen::Vector3d e1_G_m = Eigen::Vector3d::Zero();  ///< to the optimal viewpoint
   VelocityCommand velocity;    ///< last commanded
   RcSticks rc;                 ///< last sent
@@ -174,6 +180,8 @@ struct Telemetry {
   double height_m = 0.0;
   int stale_replies = 0;
   int bad_frames = 0;  ///< frames of the wrong size or type, ignored
+  int damaged_frames = 0;  ///< error-concealed pictures received (CameraFrame::damaged)
+  int unflown_frames = 0;  ///< of which too damaged to steer on (perception.steer_max_damage_events): hovered
 };
 
 class FlightSoftware {
@@ -211,17 +219,19 @@ class FlightSoftware {
   // Phase behaviours on a frame
   void find_shelf(const cv::Mat& bgr);
   void go_to_viewpoint(const cv::Mat& bgr, bool view_fresh);
-  void take_inventory(const cv::Mat& bgr);
+  void take_inventory(const cv::Mat& bgr, bool whole);
   void approach(const cv::Mat& bgr);
   // Approach helpers
   bool select_target(const cv::Mat& bgr);
   bool measure_target(const cv::Mat& bgr, const cv::Rect2d& predicted);
   bool reacquire(const cv::Mat& bgr);
+  std::optional<double> cell_height_m(double v_px, double range_m) const;
   void start_tracker(const cv::Mat& bgr, const cv::Rect2d& box);
-  bool crossing_allowed(const PoseEstimate& pose_K, std::string& why) const;
+  bool crossing_allowed(const PoseEstimate& pose_K, TimeNs pose_t_ns, std::string& why) const;
   Eigen::Vector3d crossing_direction_K(const PoseEstimate& pose_K) const;
   // Actions
   void enter(Phase phase, const std::string& event);
+  void command_takeoff_if_ready();
   void command_takeoff();
   void land(Outcome outcome, const std::string& reason);
   void abort_on_ground(const std::string& reason);
@@ -279,6 +289,10 @@ class FlightSoftware {
   std::array<cv::Point2d, 4> corner_px_;  ///< last measured corner tag centres
   std::optional<PoseEstimate> pose_K_;  ///< last pose in the cell frame
   TimeNs pose_t_ns_ = 0;                ///< when the frame of pose_K_ was received
+  std::optional<PoseEstimate> decision_pose_K_;  ///< last pose from a nearly whole picture
+  std::optional<double> target_height_m_;  ///< target cell centre above the take-off point (state h)
+  TimeNs decision_pose_t_ns_ = 0;
+  bool decision_frame_ = true;  ///< the frame being handled may decide (decide_max_damage_events)
   TimeNs lateral_active_ns_ = 0;        ///< last time the lateral law commanded a speed
   std::optional<TimeNs> hold_since_ns_;  ///< holding short of the shelf to settle
   bool near_edge_ = false;              ///< a corner tag was about to leave the view

@@ -18,8 +18,9 @@ size_t Inventory::slot(CellIndex c) const {
   return static_cast<size_t>((c.level - 1) * columns_ + (c.column - 1));
 }
 
-void Inventory::observe(const std::vector<std::pair<CellIndex, int>>& sightings) {
+void Inventory::observe(const std::vector<std::pair<CellIndex, int>>& sightings, bool whole) {
   ++frames_;
+  if (whole) ++whole_frames_;
   for (const auto& [cell, id] : sightings) {
     ++counts_[slot(cell)][id];
   }
@@ -42,7 +43,7 @@ std::optional<int> Inventory::box_at(CellIndex cell) const {
 }
 
 bool Inventory::is_empty(CellIndex cell) const {
-  return frames_ >= min_agreeing_ && counts(cell).empty();
+  return empty_decidable() && counts(cell).empty();
 }
 
 std::vector<BoxEntry> Inventory::boxes() const {
@@ -79,7 +80,8 @@ std::string Inventory::to_json() const {
   // Only integers and fixed keys: no escaping is ever needed.
   std::string s = "{\"shelf\":" + std::to_string(shelf_) + ",\"levels\":" +
                   std::to_string(levels_) + ",\"columns\":" + std::to_string(columns_) +
-                  ",\"frames\":" + std::to_string(frames_) + ",\"boxes\":[";
+                  ",\"frames\":" + std::to_string(frames_) +
+                  ",\"whole_frames\":" + std::to_string(whole_frames_) + ",\"boxes\":[";
   const auto bx = boxes();
   for (size_t i = 0; i < bx.size(); ++i) {
     s += (i ? "," : "");

@@ -3,8 +3,12 @@
 // Built from full-view frames: each frame that shows the whole front grid is one observation
 // of every cell. A box counts once N frames (marker_min_agreeing_frames) have seen its ID in
 // the same cell and no other ID has been seen there as often; a cell counts as empty once N
-// frames have seen it and no marker was ever seen in it (a flickering sighting leaves the cell
-// "uncertain": never listed, never chosen as a target).
+// whole (undamaged) frames have seen it and no marker was ever seen in it (a flickering
+// sighting leaves the cell "uncertain": never listed, never chosen as a target).
+// Why only whole frames vouch for "empty": in an error-concealed picture a band is guessed
+// from an older one, and the damage lasts until the next key frame, so several frames in a row
+// can miss the same marker. A marker they do decode is real (ArUco's code check rejects a
+// smeared one), so damaged frames still vote for boxes.
 
 #include <map>
 #include <optional>
@@ -28,10 +32,15 @@ class Inventory {
   Inventory() = default;
   Inventory(int shelf_index, int levels, int columns, int min_agreeing_frames);
 
-  /// One full-view frame: the (cell, marker id) sightings it produced.
-  void observe(const std::vector<std::pair<CellIndex, int>>& sightings);
+  /// One full-view frame: the (cell, marker id) sightings it produced; `whole` is false for
+  /// an error-concealed (damaged) picture.
+  void observe(const std::vector<std::pair<CellIndex, int>>& sightings, bool whole = true);
 
   int frames() const { return frames_; }
+  /// Frames observed whole: the only ones that count toward an empty cell.
+  int whole_frames() const { return whole_frames_; }
+  /// Whether enough whole frames were observed to decide any cell empty.
+  bool empty_decidable() const { return whole_frames_ >= min_agreeing_; }
   int levels() const { return levels_; }
   int columns() const { return columns_; }
   /// The box decided in a cell, if any.
@@ -45,7 +54,7 @@ class Inventory {
   /// Cells neither decided a box nor empty.
   std::vector<CellIndex> uncertain_cells() const;
 
-  /// {"shelf":0,"levels":4,"columns":4,"frames":5,
+  /// {"shelf":0,"levels":4,"columns":4,"frames":5,"whole_frames":5,
   ///  "boxes":[{"id":7,"shelf":0,"level":1,"column":2},...],
   ///  "empty":[{"level":1,"column":1},...],"uncertain":[...]}
   std::string to_json() const;
@@ -58,6 +67,7 @@ class Inventory {
   int columns_ = 0;
   int min_agreeing_ = 1;
   int frames_ = 0;
+  int whole_frames_ = 0;
   std::vector<std::map<int, int>> counts_;  ///< per cell (row-major by level): id -> frames
 };
 

@@ -44,7 +44,7 @@ TEST(Inventory, DrawnShelfWithBoxesInKnownCellsIsExact) {
   EXPECT_TRUE(inv.is_empty({2, 2}));
   EXPECT_TRUE(inv.uncertain_cells().empty());
   EXPECT_EQ(inv.to_json(),
-            "{\"shelf\":0,\"levels\":4,\"columns\":4,\"frames\":3,\"boxes\":["
+            "{\"shelf\":0,\"levels\":4,\"columns\":4,\"frames\":3,\"whole_frames\":3,\"boxes\":["
             "{\"id\":7,\"shelf\":0,\"level\":1,\"column\":2},{\"id\":0,\"shelf\":0,\"level\":1,\"column\":4},"
             "{\"id\":3,\"shelf\":0,\"level\":2,\"column\":4},{\"id\":12,\"shelf\":0,\"level\":3,\"column\":1},"
             "{\"id\":25,\"shelf\":0,\"level\":4,\"column\":3}],\"empty\":["
@@ -73,6 +73,36 @@ TEST(Inventory, MarkersMustAgreeOverNFrames) {
   Inventory early(0, 1, 1, 3);
   early.observe({});
   EXPECT_FALSE(early.is_empty({1, 1}));
+}
+
+// Error-concealed frames: the band holding a marker may be guessed in every frame until the
+// next key frame, so damaged frames never vouch for an empty cell; a marker they decode is
+// real and counts for its box.
+TEST(Inventory, DamagedFramesVoteForBoxesButNeverForEmpty) {
+  Inventory inv(0, 1, 2, 3);
+  // Cell (1,1) holds box 5, but three damaged frames in a row missed it; cell (1,2) is empty.
+  for (int f = 0; f < 3; ++f) inv.observe({}, /*whole=*/false);
+  EXPECT_EQ(inv.frames(), 3);
+  EXPECT_EQ(inv.whole_frames(), 0);
+  EXPECT_FALSE(inv.empty_decidable());
+  EXPECT_FALSE(inv.is_empty({1, 1})) << "damaged frames that missed a marker declared its cell empty";
+  EXPECT_FALSE(inv.is_empty({1, 2}));
+  EXPECT_EQ(inv.uncertain_cells().size(), 2u);
+  // Damaged frames that do read the marker count toward the box.
+  inv.observe({{{1, 1}, 5}}, false);
+  inv.observe({{{1, 1}, 5}}, false);
+  EXPECT_FALSE(inv.box_at({1, 1}));
+  inv.observe({{{1, 1}, 5}}, false);
+  EXPECT_EQ(inv.box_at({1, 1}), 5);
+  // Whole frames decide the empty cell once there are N of them.
+  inv.observe({{{1, 1}, 5}}, true);
+  inv.observe({}, true);
+  EXPECT_FALSE(inv.is_empty({1, 2}));
+  inv.observe({{{1, 1}, 5}}, true);
+  EXPECT_TRUE(inv.is_empty({1, 2}));
+  EXPECT_FALSE(inv.is_empty({1, 1}));
+  EXPECT_EQ(inv.whole_frames(), 3);
+  EXPECT_EQ(inv.frames(), 9);
 }
 
 }  // namespace

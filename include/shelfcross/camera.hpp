@@ -52,10 +52,19 @@ inline Eigen::Matrix3d rotation_body_from_camera(double mount_pitch_rad) {
 }
 
 /// One decoded camera frame as the flight software receives it.
+///
+/// Damage: a lost video datagram loses a band of the picture; the decoder fills it in from
+/// the previous picture (error concealment) and, through prediction, the damage lasts until
+/// the next key frame. `damage_events` counts the damaged pictures since the last key frame
+/// (this one included): 0 for a whole picture, and each lost datagram adds a band of
+/// guesswork. The co-simulation's frames are whole (its link drops frames, it does not damage
+/// them); tello_pilot copies both fields from its video receiver.
 struct CameraFrame {
   TimeNs t_ns = 0;           ///< receive time (after the video link's latency)
   std::int64_t index = 0;    ///< frame counter of the source; gaps mean dropped frames
   cv::Mat bgr;               ///< CV_8UC3, width x height of the intrinsics
+  bool damaged = false;      ///< error-concealed: part of the picture is guessed
+  int damage_events = 0;     ///< damaged pictures since the last key frame (0 when whole)
 };
 
 }  // namespace shelfcross

@@ -112,7 +112,6 @@ class Pilot {
       }
     }
     std::optional<VideoFrame> f = video_->take_latest();
-    if (f && withhold(*f)) f.reset();
     if (f) {
       const TimeNs taken = clock_.now_ns();
       log_.write(taken, "frame", {{"index", f->index}, {"rx_ns", f->t_ns}, {"handed_ns", f->handed_ns},
@@ -125,7 +124,9 @@ class Pilot {
         hover_override_ = false;
         log_.write(taken, "failsafe", {{"event", "video back: control returned to the flight software"}});
       }
-      inputs.emplace_back(CameraFrame{f->handed_ns, f->index, std::move(f->bgr)});
+      // Damaged (error-concealed) pictures go through, marked: the flight software knows
+      // how far to trust them (perception.decide_/steer_max_damage_events).
+      inputs.emplace_back(CameraFrame{f->handed_ns, f->index, std::move(f->bgr), f->damaged, f->damage_events});
     }
     // The flight computer's timer: with nothing else to hand over, a tick every 50 ms lets
     // the flight software's timeouts and retries fire (a lost first "command" is resent).
@@ -147,41 +148,8 @@ class Pilot {
       last_fed_ns_ = stamp(in);
       submit_fsw(fsw_.step(in));
       log_telemetry();
+      if (std::holds_alternative<CameraFrame>(in)) log_approach_view();
     }
-  }
-
-  // Damaged frames are what a Tello user flies on, but two phases need care:
-  //  - taking the inventory: a damaged band persists until the next key frame, so the
-  //    frames of one group of pictures miss the same marker, and the flight software would
-  //    count its cell empty after N such frames (it counts a cell empty when N frames saw no
-  //    marker there) and then fly into the box. Clean frames go through; of the damaged ones
-  //    only the first of each group of pictures (one a second or so: the flight software's
-  //    3 s video-lost limit is never reached), so its N observations see independent damage;
-  //  - the approach (centring on the cell before the open-loop crossing): frames with more
-  //    than damage_limit damaged frames since their key frame are withheld (the key frame of
-  //    each group always qualifies: its count starts again), so the flight software steers on
-  //    pictures that are mostly decoded, not guessed, and hovers in the gaps.
-  // Every other phase gets every frame.
-  bool withhold(const VideoFrame& f) {
-    if (!f.damaged) return false;
-    const flight_sw::Phase phase = fsw_.phase();
-    std::string why;
-    if (phase == flight_sw::Phase::TakeInventory) {
-      if (!inventory_group_ || *inventory_group_ != f.key_group) {
-        inventory_group_ = f.key_group;
-        return false;
-      }
-      why = "damaged; this group of pictures already gave the inventory a frame";
-    } else if (phase == flight_sw::Phase::Approach) {
-      if (f.damage_events <= o_.damage_limit) return false;
-      why = "damaged in " + std::to_string(f.damage_events) + " frames since the key frame; approaching";
-    } else {
-      return false;
-    }
-    ++withheld_;
-    log_.write(clock_.now_ns(), "frame_withheld",
-               {{"index", f.index}, {"key_group", f.key_group}, {"damage_events", f.damage_events}, {"why", why}});
-    return true;
   }
 
   void record(const VideoFrame& f) {
@@ -246,6 +214,28 @@ class Pilot {
                                         {"battery_pct", tm.battery_pct}, {"height_m", tm.height_m}});
     std::cout << "[" << ns_to_seconds(clock_.now_ns()) << " s] " << flight_sw::phase_name(tm.phase) << ": "
               << tm.event << std::endl;
+  }
+
+  // What the flight software made of each frame of the approach: where it believes it is
+  // relative to the target cell (frame K: x toward the shelf, y left, z up; origin at the
+  // cell's centre on the front face), so that a flight can be understood afterwards.
+  void log_approach_view() {
+    const auto& tm = fsw_.telemetry();
+    if (tm.phase != flight_sw::Phase::Approach) return;
+    nlohmann::json j = {{"tracker_ok", tm.tracker_ok}, {"e_z_m", tm.e_z_m}, {"e_psi_rad", tm.e_psi_rad},
+                        {"settled", tm.settled}, {"holding_short", tm.holding_short},
+                        {"rejected_poses", tm.rejected_poses}, {"wrong_level_poses", tm.wrong_level_poses},
+                        {"damaged_frames", tm.damaged_frames}, {"unflown_frames", tm.unflown_frames}};
+    if (tm.pose && tm.pose_in_cell_frame) {
+      const Eigen::Vector3d p = tm.pose->p_FB_m();
+      j["p_KB_m"] = {p.x(), p.y(), p.z()};
+      j["yaw_K_rad"] = tm.pose->yaw_rad;
+    }
+    if (tm.tracked_box_px) {
+      const cv::Rect2d& b = *tm.tracked_box_px;
+      j["box_px"] = {b.x, b.y, b.width, b.height};
+    }
+    log_.write(clock_.now_ns(), "fsw_view", std::move(j));
   }
 
   // Starts the program's landing; the program then exits with `code` (once landed).
@@ -355,12 +345,18 @@ class Pilot {
                             {"phase", flight_sw::phase_name(fsw_.phase())},
                             {"driver", driver_counters},
                             {"video", video_counters},
-                            {"frames_withheld", withheld_},
+                            {"fsw_damaged_frames", fsw_.telemetry().damaged_frames},
+                            {"fsw_unflown_frames", fsw_.telemetry().unflown_frames},
+                            {"fsw_rejected_poses", fsw_.telemetry().rejected_poses},
+                            {"fsw_wrong_level_poses", fsw_.telemetry().wrong_level_poses},
                             {"fsw_stale_replies", fsw_.telemetry().stale_replies},
                             {"fsw_bad_frames", fsw_.telemetry().bad_frames}});
     std::cout << "tello_pilot: " << flight_sw::outcome_name(r.outcome) << (r.reason.empty() ? "" : ": ")
               << r.reason << "\n  driver: " << driver_counters << "\n  video: " << video_counters
-              << " withheld=" << withheld_
+              << "\n  flight software: damaged_frames=" << fsw_.telemetry().damaged_frames
+              << " unflown_frames=" << fsw_.telemetry().unflown_frames
+              << " rejected_poses=" << fsw_.telemetry().rejected_poses
+              << " wrong_level_poses=" << fsw_.telemetry().wrong_level_poses
               << "\n  inventory: " << o_.inventory_path << "\n  log: " << o_.log_path << std::endl;
   }
 
@@ -378,8 +374,6 @@ class Pilot {
   static constexpr TimeNs kTickPeriodNs = kNsPerSecond / 20;
   std::optional<TimeNs> last_state_ns_;
   std::optional<TimeNs> last_frame_ns_;
-  std::optional<std::int64_t> inventory_group_;  ///< key group of the last damaged frame given in TakeInventory
-  std::int64_t withheld_ = 0;
   int battery_pct_ = -1;
   std::optional<double> last_height_m_;
   static constexpr double kAirborneHeight_m = 0.2;

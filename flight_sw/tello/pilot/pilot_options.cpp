@@ -71,7 +71,6 @@ void read_pilot_file(const std::string& path, PilotOptions& o) {
   if (auto v = root.optional_map("video")) {
     o.video.damaged = parse_damaged(v->optional<std::string>("damaged_frames", damaged_name(o.video.damaged)),
                                     [&](const std::string& why) { v->fail("damaged_frames", why); });
-    o.damage_limit = v->optional<int>("damage_limit", o.damage_limit, within(0, 1000));
     v->finish();
   }
   if (auto out = root.optional_map("output")) {
@@ -156,10 +155,6 @@ std::optional<PilotOptions> parse_options(int argc, char** argv) {
   std::string damaged;
   auto* o_damaged = app.add_option("--damaged-video", damaged,
                                    "damaged frames (lost datagrams): conceal (hand over error-concealed pictures, default) or discard (until the next clean key frame)");
-  int damage_limit = 0;
-  auto* o_dlimit = app.add_option("--damage-limit", damage_limit,
-                                  "approach: withhold frames with more than this many damaged frames since their key frame (default 8)")
-                       ->check(CLI::Range(0, 1000));
   app.add_option("--record-frames", o.record_dir,
                  "write every frame handed to the flight software to this folder as frame_INDEX[_damaged].png (costs time)");
   auto* o_dry = app.add_flag("--dry-run", o.dry_run, "connect, stream and run perception; never send a motion command");
@@ -202,7 +197,6 @@ std::optional<PilotOptions> parse_options(int argc, char** argv) {
   if (o_vsport->count()) o.video.source_port = port(video_source_port);
   if (o_log->count()) o.log_path = log_path;
   if (o_inv->count()) o.inventory_path = inventory_path;
-  if (o_dlimit->count()) o.damage_limit = damage_limit;
   if (o_damaged->count()) {
     o.video.damaged = parse_damaged(damaged, [](const std::string& why) -> void { throw UsageError("--damaged-video: " + why); });
   }

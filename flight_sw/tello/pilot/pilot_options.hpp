@@ -33,7 +33,6 @@ struct PilotOptions {
   std::string log_path = "tello_flight_log.jsonl";
   std::string inventory_path = "tello_inventory.json";
   bool dry_run = false;
-  int damage_limit = 8;             ///< approach: withhold frames with more damaged frames since their key frame
   std::string record_dir;           ///< --record-frames: every frame handed over, as PNG (debugging)
   // Calibration mode (--calibrate OUT): record chessboard views, write the intrinsics, exit.
   std::string calibrate_path;
