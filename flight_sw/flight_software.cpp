@@ -947,8 +947,13 @@ void FlightSoftware::start_transfer() {
   const Eigen::Vector3d p = pose_G_->p_FB_m();
   const double half_tag = 0.5 * sh.tag_size_m;
   const cv::Point3d top_left = grid_tag_G(sh, 0, sh.levels()), bottom_right = grid_tag_G(sh, sh.columns(), 0);
-  const double x_end = last_shelf() ? sh.depth_m + half.x() + config_.mission.beyond_distance_m
-                                    : config_.layout.shelf_spacing_m + viewpoint_G_m_.x();
+  // The last leg (down to the viewpoint height, or back to the centre line) is flown clear of
+  // the shelf just passed: at least the clearance behind its back face, even when the next
+  // shelf's viewpoint is closer (GoToViewpoint then brings the vehicle back to it visually).
+  const double clearance = st.mode == Strategy::over_tops ? st.top_clearance_m : st.end_clearance_m;
+  const double x_end = std::max(last_shelf() ? sh.depth_m + half.x() + config_.mission.beyond_distance_m
+                                             : config_.layout.shelf_spacing_m + viewpoint_G_m_.x(),
+                                sh.depth_m + half.x() + clearance);
   const Eigen::Vector3d end(x_end, viewpoint_G_m_.y(), viewpoint_G_m_.z());
   std::vector<Eigen::Vector3d> w_G;
   if (st.mode == Strategy::over_tops) {

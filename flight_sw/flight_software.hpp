@@ -26,7 +26,8 @@
 // Conventional strategies (config.strategy.mode over_tops / around_ends): TakeInventory
 // --inventory full--> Transfer: waypoints planned in the grid frame G from the last visual pose
 // at the viewpoint (over the tops: straight up until the vehicle's bottom clears the top tags by
-// top_clearance_m, forward to the next shelf's viewpoint distance, down to the viewpoint height;
+// top_clearance_m, forward to the next shelf's viewpoint distance (at least that clearance behind
+// the back face), down to the viewpoint height;
 // around the ends: sideways past the nearer grid end by end_clearance_m, forward, back to the
 // centre line), flown on odometry (the state record's heading-frame velocities integrated, its
 // height for z; heading held) with the same rc velocity commands, then FindShelf for the next

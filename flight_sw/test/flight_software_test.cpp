@@ -89,6 +89,9 @@ class Harness {
         s.t_ns = t_;
         s.yaw_rad = yaw_;
         s.height_m = p_WB_.z();
+        // Velocities in the heading frame at the SDK's resolution (vgx, vgy: 0.1 m/s).
+        s.vx_H_mps = std::round(v_H_.x() * 10.0) / 10.0;
+        s.vy_H_mps = std::round(v_H_.y() * 10.0) / 10.0;
         s.battery_pct = o_.battery(t_);
         handle(fsw_.step(s));
       } else if (t_next == t_frame) {
@@ -559,6 +562,48 @@ TEST(FlightSoftware, DecidesOnlyOnNearlyWholePicturesOfADamagedStream) {
     EXPECT_LT(s[3], 0.97 - 0.041 / 2) << "t " << s[0];
   }
   EXPECT_TRUE(entered) << "never reached the shelf";
+}
+
+// The conventional strategies (issue 8) between two shelves 2.6 m apart: after the first
+// inventory, the Transfer phase flies its waypoints on odometry (the state record's heading-frame
+// velocities at the SDK's 0.1 m/s resolution, integrated), then finds and inventories the
+// second shelf visually, and passes it the same way before landing. Over the tops the vehicle
+// is never inside a shelf's footprint below its top beam; around the ends never within its
+// width. Both shelves' boxes are listed.
+TEST(FlightSoftware, TransferOverTheTopsAndAroundTheEndsPassesBothShelves) {
+  for (const Strategy mode : {Strategy::over_tops, Strategy::around_ends}) {
+    SCOPED_TRACE(strategy_name(mode));
+    FlightConfig c;
+    c.layout.shelf_count = 2;
+    c.layout.shelf_spacing_m = 2.6;
+    c.strategy.mode = mode;
+    Harness h(Options{}, c);
+    h.run(150.0);
+    FlightSoftware& fsw = h.fsw();
+    ASSERT_TRUE(fsw.finished()) << phase_name(fsw.phase()) << ": " << fsw.telemetry().event;
+    EXPECT_EQ(fsw.result().outcome, Outcome::Completed) << fsw.result().reason;
+    EXPECT_TRUE(h.saw_phase(Phase::Transfer));
+    EXPECT_FALSE(h.saw_phase(Phase::Cross));
+    EXPECT_EQ(fsw.shelf_index(), 1);
+    const std::vector<BoxEntry> expected = {{21, 0, 1, 1}, {4, 0, 2, 2}, {9, 0, 3, 2}, {17, 0, 3, 3},
+                                            {30, 0, 4, 4}, {44, 1, 2, 3}};
+    EXPECT_EQ(fsw.all_boxes(), expected);
+    // The shelves: faces at x 3.0 and 5.6 m, 0.34 m deep, posts at |y| <= 0.82 m, top beam
+    // 1.66 m; checked wherever the vehicle (half length 5 cm) overlaps a shelf's depth.
+    bool passed_second = false;
+    for (const auto& s : h.track()) {
+      for (const double face_x : {3.0, 5.6}) {
+        if (s[1] < face_x - 0.05 || s[1] > face_x + 0.34 + 0.05) continue;
+        if (mode == Strategy::over_tops) {
+          EXPECT_GT(s[3], 1.66 + 0.1) << "over shelf at x " << face_x << ": x " << s[1] << ", t " << s[0];
+        } else {
+          EXPECT_GT(std::abs(s[2]), 0.82 + 0.1) << "beside shelf at x " << face_x << ": x " << s[1] << ", t " << s[0];
+        }
+      }
+      passed_second = passed_second || s[1] > 5.6 + 0.34 + 0.2;
+    }
+    EXPECT_TRUE(passed_second) << "landed before the second shelf";
+  }
 }
 
 TEST(FlightSoftware, SameInputsGiveTheSameCommands) {
