@@ -662,6 +662,10 @@ bool FlightSoftware::measure_target(const cv::Mat& bgr, const cv::Rect2d& predic
   for (size_t k = 0; k < 4; ++k) corner_px_[k] = img[k];
   pose_K_ = pose;
   pose_t_ns_ = now_ns_;
+  if (decision_frame_) {  // the crossing is judged on poses from nearly whole pictures only
+    decision_pose_K_ = pose;
+    decision_pose_t_ns_ = now_ns_;
+  }
   box_px_ = corner_box(corner_px_, side);
   tag_side_px_ = side;
   // About to leave the view: a corner tag within a tag side (plus margin) of the border.
@@ -686,14 +690,15 @@ std::optional<double> FlightSoftware::cell_height_m(double v_px, double range_m)
 }
 
 bool FlightSoftware::reacquire(const cv::Mat& bgr) {
-  // The target is the cell of the (possibly partial) grid nearest the last box.
+  // The target is a cell of the (possibly partial) grid near the last box: the nearest one
+  // whose corner tags give a plausible pose of the right level (measure_target's tests), so
+  // that a neighbour above or below is passed over.
   analyse_shelf(bgr, tag_detector_, config_, view_);
   update_view_telemetry();
   if (!view_.grid.valid) return false;
   const cv::Point2d last = centre_of(box_px_);
   const double gate = 0.5 * std::min(box_px_.width, box_px_.height);
-  std::optional<std::array<int, 4>> best;
-  double best_d = gate;
+  std::vector<std::pair<double, std::array<int, 4>>> candidates;
   for (int r = 0; r + 1 < view_.grid.rows; ++r) {
     for (int c = 0; c + 1 < view_.grid.columns; ++c) {
       const auto idx = cell_corner_indices(view_.grid, r, c);
@@ -701,17 +706,18 @@ bool FlightSoftware::reacquire(const cv::Mat& bgr) {
       cv::Point2d m(0, 0);
       for (int i : *idx) m += 0.25 * view_.tags[static_cast<size_t>(i)].centre_px;
       const double d = cv::norm(m - last);
-      if (d < best_d) {
-        best_d = d;
-        best = idx;
-      }
+      if (d < gate) candidates.push_back({d, *idx});
     }
   }
-  if (!best) return false;
-  for (size_t k = 0; k < 4; ++k) corner_px_[k] = view_.tags[static_cast<size_t>((*best)[k])].centre_px;
-  if (!measure_target(bgr, box_px_)) return false;
-  start_tracker(bgr, box_px_);
-  return true;
+  std::stable_sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const auto& [d, idx] : candidates) {
+    for (size_t k = 0; k < 4; ++k) corner_px_[k] = view_.tags[static_cast<size_t>(idx[k])].centre_px;
+    if (measure_target(bgr, box_px_)) {
+      start_tracker(bgr, box_px_);
+      return true;
+    }
+  }
+  return false;
 }
 
 // The crossing line (open loop, METHOD.md section 3): straight, at constant speed, from the
@@ -771,10 +777,6 @@ void FlightSoftware::approach(const cv::Mat& bgr) {
   const bool found = measure_target(bgr, predicted);
   telemetry_.tracked_box_px = box_px_;
   const double dt = control_dt_s();
-  if (found && decision_frame_) {
-    decision_pose_K_ = pose_K_;
-    decision_pose_t_ns_ = pose_t_ns_;
-  }
   if (found) {
     lost_since_ns_.reset();
     back_off_since_ns_.reset();
