@@ -9,6 +9,7 @@
 #include <cmath>
 #include <deque>
 #include <functional>
+#include <optional>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -425,6 +426,27 @@ TEST(FlightSoftware, NeverCrossesOffCentreBacksOffAndGivesUp) {
   EXPECT_LT(h.position().x(), 3.0 - 0.1) << "stayed in front of the shelf";
 }
 
+/// Through the opening of cell (2, 3) of the front shelf: y between posts 2 and 3 (0 and
+/// -0.34 m), z between beams 1 and 2 (0.64 and 0.98 m), less the posts, beams and the vehicle's
+/// half size at every sample inside the shelf's depth; and, when given, the entry within
+/// entry_tol_m (y, z) of the cell centre (-0.17, 0.81) m.
+void expect_through_cell_2_3(const Harness& h, std::optional<Eigen::Vector2d> entry_tol_m = std::nullopt) {
+  bool entered = false;
+  for (const auto& s : h.track()) {
+    if (s[1] < 3.0 || s[1] > 3.34) continue;
+    if (!entered && entry_tol_m) {
+      EXPECT_NEAR(s[2], -0.17, entry_tol_m->x()) << "entry, t " << s[0];
+      EXPECT_NEAR(s[3], 0.81, entry_tol_m->y()) << "entry, t " << s[0];
+    }
+    entered = true;
+    EXPECT_GT(s[2], -0.33 + 0.0925 / 2) << "t " << s[0];
+    EXPECT_LT(s[2], -0.01 - 0.0925 / 2) << "t " << s[0];
+    EXPECT_GT(s[3], 0.65 + 0.041 / 2) << "t " << s[0];
+    EXPECT_LT(s[3], 0.97 - 0.041 / 2) << "t " << s[0];
+  }
+  EXPECT_TRUE(entered) << "never reached the shelf";
+}
+
 // ---- The whole mission ----
 
 TEST(FlightSoftware, WholeMissionInventoriesAndCrossesTheEmptyCell) {
@@ -443,18 +465,7 @@ TEST(FlightSoftware, WholeMissionInventoriesAndCrossesTheEmptyCell) {
   // The target: of the four cells around the image centre only (2, 3) is empty.
   ASSERT_TRUE(fsw.telemetry().target);
   EXPECT_EQ(*fsw.telemetry().target, (CellIndex{2, 3}));
-  // Through the opening of cell (2, 3): y between posts 2 and 3 (0 and -0.34 m), z between
-  // beams 1 and 2 (0.64 and 0.98 m), less the posts, beams and the vehicle's half size.
-  bool inside = false;
-  for (const auto& s : h.track()) {
-    if (s[1] < 3.0 || s[1] > 3.34) continue;
-    inside = true;
-    EXPECT_GT(s[2], -0.33 + 0.0925 / 2) << "t " << s[0];
-    EXPECT_LT(s[2], -0.01 - 0.0925 / 2) << "t " << s[0];
-    EXPECT_GT(s[3], 0.65 + 0.041 / 2) << "t " << s[0];
-    EXPECT_LT(s[3], 0.97 - 0.041 / 2) << "t " << s[0];
-  }
-  EXPECT_TRUE(inside) << "never reached the shelf";
+  expect_through_cell_2_3(h);
   EXPECT_GT(h.position().x(), 3.34 + 0.4) << "landed beyond the shelf";
   EXPECT_EQ(fsw.inventory_json().rfind("{\"shelf\":0,\"levels\":4,\"columns\":4,", 0), 0u);
   // Sticks to zero right before "land": were "land" lost, the Tello would otherwise keep the
@@ -483,18 +494,7 @@ TEST(FlightSoftware, CrossesCentredDespiteVideoLatencyAndVelocityLag) {
   EXPECT_EQ(fsw.result().outcome, Outcome::Crossed) << fsw.result().reason;
   ASSERT_TRUE(fsw.telemetry().target);
   ASSERT_EQ(*fsw.telemetry().target, (CellIndex{2, 3}));  // centre y -0.17 m, z 0.81 m
-  bool entered = false;
-  for (const auto& s : h.track()) {
-    if (s[1] < 3.0 || s[1] > 3.34) continue;
-    if (!entered) {
-      EXPECT_NEAR(s[2], -0.17, 0.02) << "entry, t " << s[0];
-      EXPECT_NEAR(s[3], 0.81, 0.03) << "entry, t " << s[0];
-    }
-    entered = true;
-    EXPECT_GT(s[2], -0.33 + 0.0925 / 2) << "t " << s[0];
-    EXPECT_LT(s[2], -0.01 - 0.0925 / 2) << "t " << s[0];
-  }
-  EXPECT_TRUE(entered) << "never reached the shelf";
+  expect_through_cell_2_3(h, Eigen::Vector2d(0.02, 0.03));
 }
 
 // Error-concealed video (tello_pilot hands over damaged pictures, marked): here the first 5
@@ -546,22 +546,9 @@ TEST(FlightSoftware, DecidesOnlyOnNearlyWholePicturesOfADamagedStream) {
   EXPECT_GE(fsw.inventory().whole_frames(), p.marker_min_agreeing_frames);
   ASSERT_TRUE(fsw.telemetry().target);
   ASSERT_EQ(*fsw.telemetry().target, (CellIndex{2, 3}));  // centre y -0.17 m, z 0.81 m
-  bool entered = false;
-  for (const auto& s : h.track()) {
-    if (s[1] < 3.0 || s[1] > 3.34) continue;
-    if (!entered) {
-      // Measured: y -0.168 m, z 0.814 m. Deciding on every picture (both limits 1000)
-      // enters 2.5 cm high, z 0.835 m: the biased half of the damaged pictures decides.
-      EXPECT_NEAR(s[2], -0.17, 0.015) << "entry, t " << s[0];
-      EXPECT_NEAR(s[3], 0.81, 0.015) << "entry, t " << s[0];
-    }
-    entered = true;
-    EXPECT_GT(s[2], -0.33 + 0.0925 / 2) << "t " << s[0];
-    EXPECT_LT(s[2], -0.01 - 0.0925 / 2) << "t " << s[0];
-    EXPECT_GT(s[3], 0.65 + 0.041 / 2) << "t " << s[0];
-    EXPECT_LT(s[3], 0.97 - 0.041 / 2) << "t " << s[0];
-  }
-  EXPECT_TRUE(entered) << "never reached the shelf";
+  // Measured: entry y -0.168 m, z 0.814 m. Deciding on every picture (both limits 1000)
+  // enters 2.5 cm high, z 0.835 m: the biased half of the damaged pictures decides.
+  expect_through_cell_2_3(h, Eigen::Vector2d(0.015, 0.015));
 }
 
 // The conventional strategies (issue 8) between two shelves 2.6 m apart: after the first
