@@ -261,14 +261,23 @@ void SdkDriver::send_next(TimeNs now) {
   if (outstanding_ || queue_.empty()) return;
   if (last_command_ns_ && now - *last_command_ns_ < config_.command_gap_ns) return;
   if (now < guard_until_ns_) return;
+  const bool motion = classify_command(queue_.front().text) == CommandKind::Motion;
+  if (motion) {
+    rc_setpoint_.reset();  // a manoeuvre ends any stick input
+    // The Tello flies the last sticks it received until told otherwise. Centre them on the
+    // wire first (stop_rc_repeats times, an emergency excepted): if the manoeuvre's datagram
+    // is lost, the drone then hovers until the retry instead of flying on.
+    if (sticks_deflected_ && centred_rcs_ < config_.stop_rc_repeats && queue_.front().text != "emergency") {
+      if (!last_rc_ns_ || now - *last_rc_ns_ >= config_.rc_min_gap_ns) transmit_rc(now, kHoverRc, DriverEvent::Kind::RcSent);
+      return;
+    }
+  }
   // Whatever waits on the command socket now answers nothing we will send: drain it.
   read_replies(now);
   Pending p = std::move(queue_.front());
   queue_.pop_front();
   p.attempt = 1;
   p.sent_ns = now;
-  const bool motion = classify_command(p.text) == CommandKind::Motion;
-  if (motion) rc_setpoint_.reset();  // a manoeuvre ends any stick input
   if (transmit(now, p.text)) {
     ++counters_.commands_sent;
     event(DriverEvent::Kind::Sent, p.text, "", p.attempt, p.options.tag);
@@ -291,22 +300,24 @@ void SdkDriver::send_rc(TimeNs now) {
     const bool due = rc_new_ || (fresh && (!last_rc_ns_ || now - *last_rc_ns_ >= config_.rc_period_ns));
     if (due) {
       rc_new_ = false;
-      last_rc_ns_ = now;
-      if (transmit(now, *rc_setpoint_)) {
-        ++counters_.rc_sent;
-        event(DriverEvent::Kind::RcSent, *rc_setpoint_);
-      }
+      transmit_rc(now, *rc_setpoint_, DriverEvent::Kind::RcSent);
       return;
     }
   }
   if (config_.keepalive_ns > 0 && !config_.dry_run && last_any_ns_ &&
       now - *last_any_ns_ >= config_.keepalive_ns) {
-    last_rc_ns_ = now;
-    if (transmit(now, kHoverRc)) {
-      ++counters_.keepalives;
-      event(DriverEvent::Kind::KeepAlive, kHoverRc);
-    }
+    transmit_rc(now, kHoverRc, DriverEvent::Kind::KeepAlive);
   }
+}
+
+void SdkDriver::transmit_rc(TimeNs now, const std::string& text, DriverEvent::Kind kind) {
+  last_rc_ns_ = now;
+  if (!transmit(now, text)) return;
+  ++(kind == DriverEvent::Kind::KeepAlive ? counters_.keepalives : counters_.rc_sent);
+  event(kind, text);
+  const bool centred = text == kHoverRc;
+  if (!centred) sticks_deflected_ = true;
+  centred_rcs_ = centred ? centred_rcs_ + 1 : 0;
 }
 
 bool SdkDriver::transmit(TimeNs now, const std::string& text) {

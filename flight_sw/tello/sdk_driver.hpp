@@ -25,6 +25,9 @@
 //  - rc gets no reply and is never waited for: the latest rc setpoint is sent at once and
 //    repeated every rc_period_ns while it is fresh (set within rc_hold_ns); an rc not renewed
 //    for rc_hold_ns falls back to "rc 0 0 0 0" (hover), sent once;
+//  - a manoeuvre (takeoff, land, moves, ...; not emergency) that follows deflected sticks
+//    waits until "rc 0 0 0 0" went out stop_rc_repeats times, rc_min_gap_ns apart: the drone
+//    flies the last sticks it got, so a lost `land` must leave it hovering, not flying on;
 //  - keep-alive: when nothing was sent for keepalive_ns, "rc 0 0 0 0" goes out, so the
 //    drone's 15 s no-command watchdog never lands it by surprise (rc is the one command that
 //    gets no reply, so it never disturbs the outstanding command);
@@ -64,6 +67,7 @@ struct DriverConfig {
   TimeNs rc_min_gap_ns = 20 * kMs;
   TimeNs rc_hold_ns = 1500 * kMs;
   TimeNs keepalive_ns = 5 * kNsPerSecond;  ///< 0 disables
+  int stop_rc_repeats = 2;  ///< "rc 0 0 0 0" sent before a manoeuvre that follows deflected sticks
   bool dry_run = false;
 };
 
@@ -171,6 +175,7 @@ class SdkDriver {
   void resend(TimeNs now);
   void send_next(TimeNs now);
   void send_rc(TimeNs now);
+  void transmit_rc(TimeNs now, const std::string& text, DriverEvent::Kind kind);
   bool transmit(TimeNs now, const std::string& text);
 
   DriverConfig config_;
@@ -188,6 +193,8 @@ class SdkDriver {
   TimeNs rc_set_ns_ = 0;
   bool rc_new_ = false;
   std::optional<TimeNs> last_rc_ns_;
+  bool sticks_deflected_ = false;  ///< the last rc sent had a stick off centre ...
+  int centred_rcs_ = 0;            ///< ... or this many "rc 0 0 0 0" went out since
   std::optional<TimeNs> last_state_ns_;
   DriverCounters counters_;
   std::vector<DriverEvent> events_;

@@ -264,6 +264,49 @@ TEST(SdkDriver, NeverWaitsForRcAndRepeatsItAtASteadyRateWhileFresh) {
   EXPECT_TRUE(rig.drone.nothing_sent());
 }
 
+// The drone flies the last sticks it got: a `land` lost on the way after "rc 0 30 0 0" would
+// leave it flying forward until the retry. The sticks are centred on the wire first, twice.
+TEST(SdkDriver, CentresDeflectedSticksTwiceBeforeAManoeuvre) {
+  Rig rig;
+  ASSERT_TRUE(rig.driver->submit("rc 0 30 0 0"));
+  rig.service();
+  EXPECT_EQ(rig.drone.expect_command(), "rc 0 30 0 0");
+  ASSERT_TRUE(rig.driver->submit("rc 0 0 0 0"));
+  ASSERT_TRUE(rig.driver->submit("land"));
+  rig.clock.advance(5 * kMs);
+  rig.service();
+  EXPECT_TRUE(rig.drone.nothing_sent());  // within rc_min_gap (20 ms) of the last rc
+  rig.clock.advance(15 * kMs);
+  rig.service();
+  EXPECT_EQ(rig.drone.expect_command(), "rc 0 0 0 0");
+  EXPECT_TRUE(rig.drone.nothing_sent());
+  rig.clock.advance(20 * kMs);
+  rig.service();
+  EXPECT_EQ(rig.drone.expect_command(), "rc 0 0 0 0");
+  rig.clock.advance(20 * kMs);
+  rig.service();
+  EXPECT_EQ(rig.drone.expect_command(), "land");
+  EXPECT_TRUE(rig.drone.nothing_sent());
+  rig.drone.reply("ok");
+  ASSERT_TRUE(rig.pump_until_event(Kind::Reply));
+  // Centred sticks stay centred: the next manoeuvre goes out without them.
+  ASSERT_TRUE(rig.driver->submit("takeoff"));
+  rig.clock.advance(100 * kMs);
+  rig.service();
+  EXPECT_EQ(rig.drone.expect_command(), "takeoff");
+  EXPECT_EQ(rig.driver->counters().rc_sent, 3);
+}
+
+TEST(SdkDriver, EmergencyNeverWaitsForTheSticks) {
+  Rig rig;
+  ASSERT_TRUE(rig.driver->submit("rc 40 0 0 0"));
+  rig.service();
+  EXPECT_EQ(rig.drone.expect_command(), "rc 40 0 0 0");
+  ASSERT_TRUE(rig.driver->submit("emergency", {.urgent = true}));
+  rig.service();
+  EXPECT_EQ(rig.drone.expect_command(), "emergency");
+}
+
 TEST(SdkDriver, KeepAliveGoesOutWhileALongCommandIsOutstanding) {
   Rig rig;
   ASSERT_TRUE(rig.driver->submit("takeoff"));
