@@ -267,7 +267,7 @@ void SdkDriver::send_next(TimeNs now) {
     // The Tello flies the last sticks it received until told otherwise. Centre them on the
     // wire first (stop_rc_repeats times, an emergency excepted): if the manoeuvre's datagram
     // is lost, the drone then hovers until the retry instead of flying on.
-    if (sticks_deflected_ && centred_rcs_ < config_.stop_rc_repeats && queue_.front().text != "emergency") {
+    if (stops_owed_ > 0 && queue_.front().text != "emergency") {
       if (!last_rc_ns_ || now - *last_rc_ns_ >= config_.rc_min_gap_ns) transmit_rc(now, kHoverRc, DriverEvent::Kind::RcSent);
       return;
     }
@@ -315,9 +315,7 @@ void SdkDriver::transmit_rc(TimeNs now, const std::string& text, DriverEvent::Ki
   if (!transmit(now, text)) return;
   ++(kind == DriverEvent::Kind::KeepAlive ? counters_.keepalives : counters_.rc_sent);
   event(kind, text);
-  const bool centred = text == kHoverRc;
-  if (!centred) sticks_deflected_ = true;
-  centred_rcs_ = centred ? centred_rcs_ + 1 : 0;
+  stops_owed_ = text == kHoverRc ? std::max(0, stops_owed_ - 1) : config_.stop_rc_repeats;
 }
 
 bool SdkDriver::transmit(TimeNs now, const std::string& text) {

@@ -193,8 +193,7 @@ class SdkDriver {
   TimeNs rc_set_ns_ = 0;
   bool rc_new_ = false;
   std::optional<TimeNs> last_rc_ns_;
-  bool sticks_deflected_ = false;  ///< the last rc sent had a stick off centre ...
-  int centred_rcs_ = 0;            ///< ... or this many "rc 0 0 0 0" went out since
+  int stops_owed_ = 0;  ///< "rc 0 0 0 0" still to send before a manoeuvre (stop_rc_repeats after deflected sticks)
   std::optional<TimeNs> last_state_ns_;
   DriverCounters counters_;
   std::vector<DriverEvent> events_;
