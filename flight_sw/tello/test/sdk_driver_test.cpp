@@ -66,6 +66,11 @@ struct Rig {
     driver->service();
     for (auto& e : driver->take_events()) events.push_back(std::move(e));
   }
+  /// Lets `dt` pass, then services the driver once.
+  void elapse(TimeNs dt) {
+    clock.advance(dt);
+    service();
+  }
   int count(Kind k) const {
     return static_cast<int>(std::count_if(events.begin(), events.end(), [&](const DriverEvent& e) { return e.kind == k; }));
   }
@@ -108,14 +113,11 @@ TEST(SdkDriver, RetriesWhenRepliesAreLostAndTakesALateReply) {
   rig.service();
   EXPECT_EQ(rig.drone.expect_command(), "takeoff");
   // The takeoff timeout is 20 s: nothing is re-sent a nanosecond before.
-  rig.clock.advance(20 * kS - 1);
-  rig.service();
+  rig.elapse(20 * kS - 1);
   EXPECT_TRUE(rig.drone.nothing_sent());
-  rig.clock.advance(1);
-  rig.service();
+  rig.elapse(1);
   EXPECT_EQ(rig.drone.expect_command(), "takeoff");  // attempt 2 (the reply was lost)
-  rig.clock.advance(20 * kS);
-  rig.service();
+  rig.elapse(20 * kS);
   EXPECT_EQ(rig.drone.expect_command(), "takeoff");  // attempt 3
   rig.clock.advance(3 * kS);  // late, but within attempt 3's timeout
   rig.drone.reply("ok");
@@ -136,8 +138,7 @@ TEST(SdkDriver, FailsAfterTheLastRetry) {
   rig.service();
   for (int attempt = 1; attempt <= 4; ++attempt) {
     EXPECT_EQ(rig.drone.expect_command(), "streamon") << attempt;
-    rig.clock.advance(7 * kS);
-    rig.service();
+    rig.elapse(7 * kS);
   }
   EXPECT_TRUE(rig.drone.nothing_sent());
   EXPECT_EQ(rig.count(Kind::Failed), 1);
@@ -154,8 +155,7 @@ TEST(SdkDriver, LateReplyToThePreviousCommandIsNotTakenForTheNext) {
   ASSERT_TRUE(rig.driver->submit("battery?", {.retries = 0}));
   rig.service();
   EXPECT_EQ(rig.drone.expect_command(), "battery?");
-  rig.clock.advance(7 * kS);
-  rig.service();
+  rig.elapse(7 * kS);
   ASSERT_EQ(rig.count(Kind::Failed), 1);
   // The next command waits out the stale guard; meanwhile the old reply arrives.
   ASSERT_TRUE(rig.driver->submit("height?"));
@@ -251,11 +251,9 @@ TEST(SdkDriver, NeverWaitsForRcAndRepeatsItAtASteadyRateWhileFresh) {
   rig.drone.reply("80");
   ASSERT_TRUE(rig.pump_until_event(Kind::Reply));
   // Repeats every rc_period (100 ms) while fresh.
-  rig.clock.advance(99 * kMs);
-  rig.service();
+  rig.elapse(99 * kMs);
   EXPECT_TRUE(rig.drone.nothing_sent());
-  rig.clock.advance(1 * kMs);
-  rig.service();
+  rig.elapse(1 * kMs);
   EXPECT_EQ(rig.drone.expect_command(), "rc 0 30 0 -10");
   // Not renewed for rc_hold (1.5 s): falls back to hover.
   rig.clock.set(1500 * kMs);
@@ -273,26 +271,21 @@ TEST(SdkDriver, CentresDeflectedSticksTwiceBeforeAManoeuvre) {
   EXPECT_EQ(rig.drone.expect_command(), "rc 0 30 0 0");
   ASSERT_TRUE(rig.driver->submit("rc 0 0 0 0"));
   ASSERT_TRUE(rig.driver->submit("land"));
-  rig.clock.advance(5 * kMs);
-  rig.service();
+  rig.elapse(5 * kMs);
   EXPECT_TRUE(rig.drone.nothing_sent());  // within rc_min_gap (20 ms) of the last rc
-  rig.clock.advance(15 * kMs);
-  rig.service();
+  rig.elapse(15 * kMs);
   EXPECT_EQ(rig.drone.expect_command(), "rc 0 0 0 0");
   EXPECT_TRUE(rig.drone.nothing_sent());
-  rig.clock.advance(20 * kMs);
-  rig.service();
+  rig.elapse(20 * kMs);
   EXPECT_EQ(rig.drone.expect_command(), "rc 0 0 0 0");
-  rig.clock.advance(20 * kMs);
-  rig.service();
+  rig.elapse(20 * kMs);
   EXPECT_EQ(rig.drone.expect_command(), "land");
   EXPECT_TRUE(rig.drone.nothing_sent());
   rig.drone.reply("ok");
   ASSERT_TRUE(rig.pump_until_event(Kind::Reply));
   // Centred sticks stay centred: the next manoeuvre goes out without them.
   ASSERT_TRUE(rig.driver->submit("takeoff"));
-  rig.clock.advance(100 * kMs);
-  rig.service();
+  rig.elapse(100 * kMs);
   EXPECT_EQ(rig.drone.expect_command(), "takeoff");
   EXPECT_EQ(rig.driver->counters().rc_sent, 3);
 }
@@ -312,15 +305,12 @@ TEST(SdkDriver, KeepAliveGoesOutWhileALongCommandIsOutstanding) {
   ASSERT_TRUE(rig.driver->submit("takeoff"));
   rig.service();
   EXPECT_EQ(rig.drone.expect_command(), "takeoff");
-  rig.clock.advance(5 * kS - 1);
-  rig.service();
+  rig.elapse(5 * kS - 1);
   EXPECT_TRUE(rig.drone.nothing_sent());
-  rig.clock.advance(1);
-  rig.service();
+  rig.elapse(1);
   EXPECT_EQ(rig.drone.expect_command(), "rc 0 0 0 0");  // under the 15 s watchdog
   EXPECT_TRUE(rig.driver->outstanding());
-  rig.clock.advance(5 * kS);
-  rig.service();
+  rig.elapse(5 * kS);
   EXPECT_EQ(rig.drone.expect_command(), "rc 0 0 0 0");
   rig.drone.reply("ok");
   ASSERT_TRUE(rig.pump_until_event(Kind::Reply));
@@ -336,11 +326,9 @@ TEST(SdkDriver, KeepsTheGapBetweenNonRcCommands) {
   EXPECT_EQ(rig.drone.expect_command(), "command");
   rig.drone.reply("ok");
   ASSERT_TRUE(rig.pump_until_event(Kind::Reply));
-  rig.clock.advance(100 * kMs - 1);
-  rig.service();
+  rig.elapse(100 * kMs - 1);
   EXPECT_TRUE(rig.drone.nothing_sent());
-  rig.clock.advance(1);
-  rig.service();
+  rig.elapse(1);
   EXPECT_EQ(rig.drone.expect_command(), "streamon");
 }
 
@@ -350,8 +338,7 @@ TEST(SdkDriver, NeverSendsAnOutOfRangeCommand) {
                         "rc 1.5 0 0 0", "takeoff now", "land\r\n", "rc 0 0 0 0 0"}) {
     EXPECT_FALSE(rig.driver->submit(c)) << c;
   }
-  rig.clock.advance(kS);
-  rig.service();
+  rig.elapse(kS);
   EXPECT_TRUE(rig.drone.nothing_sent());
   EXPECT_EQ(rig.driver->counters().rejected, 9);
   EXPECT_EQ(rig.count(Kind::Rejected), 9);
@@ -371,8 +358,7 @@ TEST(SdkDriver, DryRunNeverSendsAMotionCommand) {
     EXPECT_FALSE(rig.driver->submit(c)) << c;
   }
   for (int i = 0; i < 10; ++i) {
-    rig.clock.advance(2 * kS);
-    rig.service();
+    rig.elapse(2 * kS);
   }
   EXPECT_TRUE(rig.drone.nothing_sent());  // no keep-alive rc either
   EXPECT_EQ(rig.count(Kind::Filtered), 5);
@@ -392,16 +378,14 @@ TEST(SdkDriver, UrgentLandDisplacesTheOutstandingCommand) {
   ASSERT_TRUE(rig.driver->submit("land", {.tag = 2, .urgent = true}));
   rig.service();
   EXPECT_TRUE(rig.drone.nothing_sent());  // the 0.1 s gap still holds
-  rig.clock.advance(100 * kMs);
-  rig.service();
+  rig.elapse(100 * kMs);
   EXPECT_EQ(rig.drone.expect_command(), "land");
   rig.drone.reply("ok");
   ASSERT_TRUE(rig.pump_until_event(Kind::Reply));
   EXPECT_EQ(rig.last(Kind::Reply)->command, "land");
   EXPECT_EQ(rig.last(Kind::Reply)->tag, 2);
   EXPECT_EQ(rig.driver->counters().abandoned, 2);  // takeoff and battery?
-  rig.clock.advance(kS);
-  rig.service();
+  rig.elapse(kS);
   EXPECT_TRUE(rig.drone.nothing_sent());  // the rc setpoint was cleared too
 }
 
@@ -487,8 +471,7 @@ TEST(SdkDriver, ARefusalIsTheReplyUnlessRetryUnlessOk) {
   EXPECT_EQ(rig.last(Kind::Reply)->reply, "error No valid imu");
   EXPECT_EQ(rig.count(Kind::Refused), 0);
   EXPECT_FALSE(rig.driver->outstanding());
-  rig.clock.advance(kSec);
-  rig.service();
+  rig.elapse(kSec);
   EXPECT_TRUE(rig.drone.nothing_sent());  // not re-sent by the driver
 }
 
@@ -507,11 +490,9 @@ TEST(SdkDriver, RetriesARefusedLandAfterTheRefusalDelayUntilOk) {
     // A duplicate of the refusal while waiting to re-send answers nothing: stale.
     rig.drone.reply("error Not joystick");
     ASSERT_TRUE(rig.pump_until_event(Kind::StaleReply, refusal));
-    rig.clock.advance(config.refusal_retry_ns - 1);
-    rig.service();
+    rig.elapse(config.refusal_retry_ns - 1);
     EXPECT_TRUE(rig.drone.nothing_sent());
-    rig.clock.advance(1);
-    rig.service();
+    rig.elapse(1);
     EXPECT_EQ(rig.drone.expect_command(), "land");
     EXPECT_EQ(rig.last(Kind::Sent)->attempt, refusal + 1);
   }
@@ -535,8 +516,7 @@ TEST(SdkDriver, GivesTheLastRefusalAsTheReplyWhenRetriesRunOut) {
     rig.drone.reply("error Not joystick");
     if (attempt < 3) {
       ASSERT_TRUE(rig.pump_until_event(Kind::Refused, attempt));
-      rig.clock.advance(config.refusal_retry_ns);
-      rig.service();
+      rig.elapse(config.refusal_retry_ns);
     }
   }
   ASSERT_TRUE(rig.pump_until_event(Kind::Reply));
@@ -544,8 +524,7 @@ TEST(SdkDriver, GivesTheLastRefusalAsTheReplyWhenRetriesRunOut) {
   EXPECT_EQ(rig.last(Kind::Reply)->attempt, 3);
   EXPECT_FALSE(rig.driver->outstanding());
   // Nothing but the three lands went out, and nothing is refused as out of range.
-  rig.clock.advance(10 * kSec);
-  rig.service();
+  rig.elapse(10 * kSec);
   EXPECT_TRUE(rig.drone.nothing_sent());
   EXPECT_EQ(rig.driver->counters().rejected, 0);
   EXPECT_EQ(rig.driver->counters().commands_sent, 3);
