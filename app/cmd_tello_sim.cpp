@@ -93,7 +93,7 @@ const CommandRegistration kTelloSim{
       sub.add_option("--delay-video", f.video.delay_ms, "frames leave no earlier than capture + this (ms)")->check(delay);
       sub.add_option("--late-replies", f.late_replies, "probability that a reply comes --late-reply-ms late")->check(probability);
       sub.add_option("--late-reply-ms", f.late_reply_ms, "how late a late reply is (ms)")->capture_default_str()->check(delay);
-      sub.add_option("--duplicate-replies", f.duplicate_replies, "probability that a reply is sent twice")->check(probability);
+      sub.add_option("--duplicate-replies", f.replies.duplicate, "probability that a reply is sent twice")->check(probability);
       sub.add_option("--not-joystick", f.not_joystick, "probability of 'error Not joystick' for a manoeuvre (1: always)")
           ->check(probability);
       sub.add_option("--no-valid-imu", f.no_valid_imu, "probability of 'error No valid imu' for a manoeuvre (1: always)")

@@ -56,6 +56,30 @@ enum class RunOutcome {
 };
 const char* outcome_name(RunOutcome outcome);
 
+/// What the link did in a run (sdk: datagrams through the pilot loop; ideal: whole messages,
+/// so the datagram counts stay 0).
+struct LinkMetrics {
+  std::string model = "sdk";
+  std::int64_t video_datagrams = 0;       ///< sent by the drone, lost ones included
+  std::int64_t video_datagrams_lost = 0;
+  std::int64_t frames_captured = 0;       ///< capture instants while streaming
+  std::int64_t frames_lost = 0;           ///< whole frames lost or stalled (never sent)
+  std::int64_t frames_decoded = 0;        ///< pictures the receiver decoded (ideal: frames delivered)
+  std::int64_t frames_damaged = 0;        ///< of those handed over, error-concealed (sdk only)
+  std::int64_t frames_handed = 0;         ///< handed to the flight software
+  std::int64_t commands_sent = 0;         ///< command datagrams, rc and keep-alives included
+  std::int64_t commands_lost = 0;
+  std::int64_t replies_lost = 0;
+  std::int64_t state_records_lost = 0;
+  std::int64_t command_retries = 0;       ///< the driver's re-sends after a reply timeout
+  std::int64_t stale_replies = 0;         ///< replies the driver dropped as stale
+  std::int64_t injected_errors = 0;       ///< "error Not joystick" / "error No valid imu" answers
+  /// Fraction of video datagrams lost (0 when none was sent).
+  double video_datagram_loss() const {
+    return video_datagrams > 0 ? static_cast<double>(video_datagrams_lost) / static_cast<double>(video_datagrams) : 0.0;
+  }
+};
+
 /// Everything a run measured (JSON form: run_metrics_json).
 struct RunMetrics {
   double mission_time_s = 0.0;     ///< start to the end of the run
@@ -82,6 +106,7 @@ struct RunMetrics {
   // Inventory
   InventoryScore inventory;
   std::string flight_software_result;    ///< outcome and reason of the flight software
+  LinkMetrics link;
 };
 
 /// One sample of the run's trajectory (truth and what the flight software was doing).

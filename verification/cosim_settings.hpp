@@ -60,6 +60,15 @@ inline LinkSettings default_link_settings() {
   return l;
 }
 
+/// The pilot program's own settings that a campaign may vary (sdk link only): the rest are
+/// tello_pilot's defaults, as it flies.
+struct PilotSettings {
+  /// The driver's stop-sticks rule (DriverConfig::stop_rc_repeats): "rc 0 0 0 0" this many
+  /// times before a manoeuvre that follows deflected sticks; 0 switches the rule off.
+  int stop_rc_repeats = 2;
+  bool operator==(const PilotSettings&) const = default;
+};
+
 struct CosimSettings {
   double state_rate_hz = 10.0;        ///< the Tello pushes a state record every 100 ms
   double fsw_tick_hz = 20.0;          ///< the flight computer's timer (flight_sw::ClockTick)
@@ -77,6 +86,7 @@ struct CosimSettings {
   /// compute_latency_s defaults to the measured median step time (kMeasuredStepLatencyP50_s);
   /// the dispersion compute_latency_quantile draws it from the measured distribution.
   LinkSettings link = default_link_settings();
+  PilotSettings pilot;
   /// Fault injection, for verifying the harness and campaigns: from this simulated time on
   /// the flight software's next step raises an exception (as a bug in it would). < 0: off.
   double inject_flight_software_exception_s = -1.0;

@@ -47,6 +47,12 @@ const std::vector<DispersionParameter>& dispersion_parameters() {
       {"command_loss_probability", 0.0, 0.9},
       {"compute_latency_s", 0.0, 1.0},
       {"compute_latency_quantile", 0.0, 1.0},
+      {"video_datagram_loss", 0.0, 0.9},
+      {"state_loss", 0.0, 0.9},
+      {"reply_loss", 0.0, 0.9},
+      {"not_joystick_probability", 0.0, 1.0},
+      {"video_stall_start_s", 0.0, 3600.0},
+      {"video_stall_duration_s", 0.0, 3600.0},
   };
   return table;
 }
@@ -122,6 +128,12 @@ RunSetup disperse(const Scenario& nominal, std::uint64_t run_seed) {
   if (has("command_loss_probability")) link.command_loss_probability = value("command_loss_probability");
   if (has("compute_latency_s")) link.compute_latency_s = value("compute_latency_s");
   if (has("compute_latency_quantile")) link.compute_latency_s = measured_step_latency_s(value("compute_latency_quantile"));
+  if (has("video_datagram_loss")) link.video_datagram_loss = value("video_datagram_loss");
+  if (has("state_loss")) link.state_loss = value("state_loss");
+  if (has("reply_loss")) link.reply_loss = value("reply_loss");
+  if (has("not_joystick_probability")) link.not_joystick_probability = value("not_joystick_probability");
+  if (has("video_stall_start_s")) link.video_stall_start_s = value("video_stall_start_s");
+  if (has("video_stall_duration_s")) link.video_stall_duration_s = value("video_stall_duration_s");
   setup.scenario = std::move(s);
   return setup;
 }

@@ -566,6 +566,20 @@ void visit_link(V& v, LinkSettings& l) {
   v.field("command_latency_jitter_s", l.command_latency_jitter_s, between(0.0, 1.0));
   v.field("command_loss_probability", l.command_loss_probability, between(0.0, 0.9));
   v.field("compute_latency_s", l.compute_latency_s, between(0.0, 1.0));
+  v.field("model", l.model);
+  v.check("model", l.model == "sdk" || l.model == "ideal", "unknown link model '" + l.model + "' (sdk or ideal)");
+  v.field("video_datagram_loss", l.video_datagram_loss, between(0.0, 0.9));
+  v.field("state_loss", l.state_loss, between(0.0, 0.9));
+  v.field("reply_loss", l.reply_loss, between(0.0, 0.9));
+  v.field("duplicate_probability", l.duplicate_probability, between(0.0, 0.9));
+  v.field("late_reply_probability", l.late_reply_probability, between(0.0, 1.0));
+  v.field("late_reply_s", l.late_reply_s, between(0.0, 600.0));
+  v.field("not_joystick_probability", l.not_joystick_probability, between(0.0, 1.0));
+  v.field("no_valid_imu_probability", l.no_valid_imu_probability, between(0.0, 1.0));
+  v.field("video_stall_start_s", l.video_stall_start_s, between(-1.0, 3600.0));
+  v.field("video_stall_duration_s", l.video_stall_duration_s, between(0.0, 3600.0));
+  v.field("video_slices", l.video_slices, between(1, 45));
+  v.field("key_interval_frames", l.key_interval_frames, between(0, 600));
 }
 
 template <class V>
@@ -584,6 +598,7 @@ void visit_cosim(V& v, CosimSettings& c) {
   v.field("settling_floor_yaw_rad", c.settling_floor_yaw_rad, kNonNegative);
   v.field("settling_floor_y_m", c.settling_floor_y_m, kNonNegative);
   v.section("link", [&](auto& l) { visit_link(l, c.link); });
+  v.section("pilot", [&](auto& p) { p.field("stop_rc_repeats", c.pilot.stop_rc_repeats, between(0, 10)); });
   v.field("inject_flight_software_exception_s", c.inject_flight_software_exception_s, between(-1.0, 3600.0));
   v.field("strategy", c.strategy);
   v.check("strategy", flight_sw::parse_strategy(c.strategy).has_value(),

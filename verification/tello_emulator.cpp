@@ -31,6 +31,14 @@ std::int64_t millihertz(double hz) { return std::llround(hz * 1000.0); }
 TimeNs event_time(std::int64_t k, std::int64_t mhz) { return k * (kNsPerSecond * 1000) / mhz; }
 TimeNs ms_to_ns(double ms) { return static_cast<TimeNs>(std::llround(ms * 1e6)); }
 
+/// mean + N(0, sigma) truncated at +-3 sigma, never below 0, in ns. No draw when sigma is 0,
+/// so a channel without jitter draws nothing from its jitter stream.
+TimeNs jittered_ms(RandomStream& stream, double mean_ms, double sigma_ms) {
+  double ms = mean_ms;
+  if (sigma_ms > 0.0) ms += sigma_ms * std::clamp(stream.normal(), -3.0, 3.0);
+  return ms_to_ns(std::max(0.0, ms));
+}
+
 /// A command datagram the firmware may see: 1..max bytes of printable ASCII, optionally
 /// ended by "\r\n" or "\n" (the firmware trims whitespace).
 bool well_formed(const std::string& bytes, std::size_t max_bytes) {
@@ -71,13 +79,21 @@ RunSetup make_setup(const Scenario& nominal, const EmulatorConfig& c) {
   return setup;
 }
 
+EmulatorConfig with_seed(EmulatorConfig c, const RunSetup& setup) {
+  c.seed = setup.seed;
+  c.disperse = !setup.drawn.empty();
+  return c;
+}
+
 }  // namespace
 
 bool emulator_applies_dispersion(const std::string& name) {
   static const std::set<std::string> not_applied{
       "camera_focal_error_rel", "camera_cx_error_px",       "camera_cy_error_px",
       "video_latency_mean_s",   "frame_drop_probability",   "command_latency_mean_s",
-      "command_loss_probability", "compute_latency_s"};
+      "command_loss_probability", "compute_latency_s",      "compute_latency_quantile",
+      "video_datagram_loss",    "state_loss",               "reply_loss",
+      "not_joystick_probability", "video_stall_start_s",    "video_stall_duration_s"};
   return not_applied.count(name) == 0;
 }
 
@@ -94,7 +110,13 @@ void validate_emulator_config(const EmulatorConfig& c) {
   check_delay(f.late_reply_ms, "late reply delay");
   check_probability(f.late_replies, "late replies");
   check_probability(f.video_frame_loss, "loss of video frames");
-  check_probability(f.duplicate_replies, "duplicate replies");
+  check_probability(f.commands.duplicate, "duplicate commands");
+  check_probability(f.replies.duplicate, "duplicate replies");
+  check_probability(f.state.duplicate, "duplicate state records");
+  check_delay(f.commands.jitter_ms, "jitter on commands");
+  check_delay(f.replies.jitter_ms, "jitter on replies");
+  check_delay(f.state.jitter_ms, "jitter on state");
+  check_delay(f.video.jitter_ms, "jitter on video");
   check_probability(f.not_joystick, "not-joystick");
   check_probability(f.no_valid_imu, "no-valid-imu");
   if (f.video_stall_start_s && !(*f.video_stall_start_s >= 0.0 && f.video_stall_duration_s > 0.0 &&
@@ -110,8 +132,10 @@ void validate_emulator_config(const EmulatorConfig& c) {
 }
 
 struct TelloEmulator::VideoWorker {
-  VideoWorker(const Scenario& sc, int key_interval_frames, int slices)
-      : renderer(sc.warehouse, sc.camera, render_options_for(sc)),
+  /// own_renderer: the worker thread's renderer; inline video uses the co-simulation's.
+  VideoWorker(const Scenario& sc, int key_interval_frames, int slices, bool own_renderer = true)
+      : renderer(own_renderer ? std::make_unique<render::Renderer>(sc.warehouse, sc.camera, render_options_for(sc))
+                              : nullptr),
         // The emulator forces every key frame (by capture time); the encoder's own interval
         // is a backstop far beyond it.
         encoder(sc.camera.width_px, sc.camera.height_px, std::max(1, static_cast<int>(std::lround(sc.frame_rate_hz))),
@@ -119,7 +143,7 @@ struct TelloEmulator::VideoWorker {
                                              : std::max(1, static_cast<int>(std::lround(sc.frame_rate_hz)))),
                 23, std::min(slices, (sc.camera.height_px + 15) / 16)),
         motion_blur(sc.cosim.motion_blur_samples > 1) {}
-  render::Renderer renderer;
+  std::unique_ptr<render::Renderer> renderer;
   tello::H264Encoder encoder;
   bool motion_blur;
   cv::Mat bgr;
@@ -127,12 +151,25 @@ struct TelloEmulator::VideoWorker {
 };
 
 TelloEmulator::TelloEmulator(const Scenario& scenario, EmulatorConfig config)
-    : setup_(make_setup(scenario, config)),
+    : TelloEmulator(make_setup(scenario, config), std::move(config), {}, nullptr, {}) {}
+
+TelloEmulator::TelloEmulator(const RunSetup& setup, EmulatorConfig config, EmulatorChannels channels,
+                             render::Renderer& renderer, TickObserver on_tick)
+    : TelloEmulator(setup, with_seed(std::move(config), setup), std::move(channels), &renderer, std::move(on_tick)) {}
+
+TelloEmulator::TelloEmulator(RunSetup setup, EmulatorConfig config, EmulatorChannels channels,
+                             render::Renderer* inline_renderer, TickObserver on_tick)
+    : setup_(std::move(setup)),
       scenario_(setup_.scenario),
       config_((validate_emulator_config(config), std::move(config))),
-      command_socket_(config_.bind_ip, config_.command_port),
-      state_socket_(config_.bind_ip, config_.state_source_port),
-      video_socket_(config_.bind_ip, config_.video_source_port),
+      command_socket_(channels.command ? std::move(channels.command)
+                                       : std::make_unique<tello::UdpSocket>(config_.bind_ip, config_.command_port)),
+      state_socket_(channels.state ? std::move(channels.state)
+                                   : std::make_unique<tello::UdpSocket>(config_.bind_ip, config_.state_source_port)),
+      video_socket_(channels.video ? std::move(channels.video)
+                                   : std::make_unique<tello::UdpSocket>(config_.bind_ip, config_.video_source_port)),
+      inline_renderer_(inline_renderer),
+      on_tick_(std::move(on_tick)),
       world_(scenario_->warehouse, scenario_->vehicle.size_m, scenario_->cosim.vehicle_margin_m),
       tello_(scenario_->vehicle, scenario_->autopilot, scenario_->wind,
              RandomStream(config_.seed, StreamId::wind).next_u64(), {}, scenario_->start.p_WB_m.x(),
@@ -145,6 +182,10 @@ TelloEmulator::TelloEmulator(const Scenario& scenario, EmulatorConfig config)
       error_faults_(mix64(config_.seed ^ 5), StreamId::link_faults),
       frame_faults_(mix64(config_.seed ^ 6), StreamId::link_faults),
       render_noise_(config_.seed, StreamId::render_noise),
+      command_jitter_(mix64(config_.seed ^ 7), StreamId::link_faults),
+      reply_jitter_(mix64(config_.seed ^ 8), StreamId::link_faults),
+      state_jitter_(mix64(config_.seed ^ 9), StreamId::link_faults),
+      video_jitter_(mix64(config_.seed ^ 10), StreamId::link_faults),
       tick_mhz_(millihertz(scenario_->autopilot.rate_hz)),
       frame_mhz_(millihertz(scenario_->frame_rate_hz)),
       state_mhz_(millihertz(scenario_->cosim.state_rate_hz)),
@@ -159,6 +200,15 @@ TelloEmulator::TelloEmulator(const Scenario& scenario, EmulatorConfig config)
   report_.seed = config_.seed;
   report_.dispersed = config_.disperse;
   report_.drawn = setup_.drawn;
+  start_video();
+}
+
+void TelloEmulator::start_video() {
+  if (inline_renderer_) {
+    video_ = std::make_unique<VideoWorker>(*scenario_, config_.key_interval_frames, config_.slices_per_frame, false);
+    renderer_description_ = inline_renderer_->backend_description();
+    return;
+  }
   // The renderer's EGL context is made current on the thread that creates it, and a context
   // is current on one thread at a time: the worker creates (and alone uses) the renderer.
   worker_ = std::thread([this] { video_loop(); });
@@ -188,8 +238,9 @@ void TelloEmulator::end(const std::string& reason) {
 }
 
 TimeNs TelloEmulator::next_due_ns() const {
+  // Commands that fell due are handed to the firmware at the next tick, so they never make
+  // anything due before it.
   TimeNs t = event_time(k_tick_, tick_mhz_);
-  if (!incoming_.empty()) t = std::min(t, incoming_.top().due_ns);
   std::lock_guard lock(mutex_);
   if (!outgoing_.empty()) t = std::min(t, outgoing_.top().due_ns);
   return t;
@@ -214,7 +265,7 @@ void TelloEmulator::advance(TimeNs now_ns) {
 }
 
 void TelloEmulator::receive_commands(TimeNs now_ns) {
-  while (auto d = command_socket_.receive()) {
+  while (auto d = command_socket_->receive()) {
     last_datagram_ns_ = now_ns;
     std::lock_guard lock(mutex_);
     ++counters_.commands_received;
@@ -222,12 +273,31 @@ void TelloEmulator::receive_commands(TimeNs now_ns) {
       ++counters_.commands_malformed;
       continue;
     }
-    if (command_faults_.bernoulli(config_.faults.commands.loss)) {
+    // Two draws per datagram, always, so one setting never shifts the other's draws.
+    const bool lost = command_faults_.bernoulli(config_.faults.commands.loss);
+    const bool twice = command_faults_.bernoulli(config_.faults.commands.duplicate);
+    if (lost) {
       ++counters_.commands_dropped;
       continue;
     }
-    incoming_.push({now_ns + ms_to_ns(config_.faults.commands.delay_ms), seq_++, d->bytes, d->from});
+    const ChannelFaults& f = config_.faults.commands;
+    const TimeNs due = std::max(last_command_due_, now_ns + jittered_ms(command_jitter_, f.delay_ms, f.jitter_ms));
+    last_command_due_ = due;
+    incoming_.push({due, seq_++, d->bytes, d->from});
+    if (twice) {
+      ++counters_.commands_duplicated;
+      incoming_.push({due, seq_++, d->bytes, d->from});
+    }
   }
+}
+
+TimeNs TelloEmulator::due_time(Channel channel, TimeNs t) {
+  const EmulatorFaults& f = config_.faults;
+  const ChannelFaults& c = channel == Channel::reply ? f.replies : channel == Channel::state ? f.state : f.video;
+  RandomStream& jitter = channel == Channel::reply ? reply_jitter_ : channel == Channel::state ? state_jitter_ : video_jitter_;
+  TimeNs& last = last_due_[static_cast<int>(channel)];
+  last = std::max(last, t + jittered_ms(jitter, c.delay_ms, c.jitter_ms));
+  return last;
 }
 
 std::int64_t TelloEmulator::key_interval_captures() const {
@@ -280,6 +350,7 @@ void TelloEmulator::tick(TimeNs t, TimeNs now_ns) {
     t_prev_ = t;
   }
   if (tello_.mode() != plant::FlightMode::landed) report_.flew = true;
+  if (on_tick_) on_tick_(t, tello_);
   if (end_reason_) return;
 
   // 2. Commands due by t, to the firmware; its replies.
@@ -297,11 +368,18 @@ void TelloEmulator::tick(TimeNs t, TimeNs now_ns) {
       const std::string text =
           tello::format_state_record(state_from_truth(s, a_W_, ground_z_m_, battery, motor_time_s_, t));
       std::lock_guard lock(mutex_);
-      if (state_faults_.bernoulli(config_.faults.state.loss)) {
+      const bool lost = state_faults_.bernoulli(config_.faults.state.loss);
+      const bool twice = state_faults_.bernoulli(config_.faults.state.duplicate);
+      if (lost) {
         ++counters_.state_dropped;
       } else {
-        outgoing_.push({t + ms_to_ns(config_.faults.state.delay_ms), out_seq_++, Channel::state,
-                        {client_->ip, config_.client_state_port}, text});
+        const TimeNs due = due_time(Channel::state, t);
+        const tello::Endpoint to{client_->ip, config_.client_state_port};
+        outgoing_.push({due, out_seq_++, Channel::state, to, text});
+        if (twice) {
+          ++counters_.state_duplicated;
+          outgoing_.push({due, out_seq_++, Channel::state, to, text});
+        }
       }
     }
     while (event_time(k_state_, state_mhz_) <= t) ++k_state_;
@@ -324,7 +402,7 @@ void TelloEmulator::tick(TimeNs t, TimeNs now_ns) {
         ++counters_.frames_stalled;
       } else if (lost) {
         ++counters_.frames_lost;
-      } else if (now_ns - t > frame_period_ns) {
+      } else if (!inline_renderer_ && now_ns - t > frame_period_ns) {
         ++counters_.frames_dropped_late;
       } else if (worker_busy_ || job_) {
         ++counters_.frames_dropped_busy;
@@ -334,9 +412,16 @@ void TelloEmulator::tick(TimeNs t, TimeNs now_ns) {
         // if the encoder counted (the Tello's encoder sees every frame).
         const bool key = !video_was_on_ || k_frame_ >= next_key_capture_;
         if (key) next_key_capture_ = k_frame_ + key_interval_captures();
-        job_ = FrameJob{k_frame_, t, X_WC_prev_frame_, X_WC, noise_seed, key, {client_->ip, config_.client_video_port}};
+        const FrameJob job{k_frame_, t, X_WC_prev_frame_, X_WC, noise_seed, key, {client_->ip, config_.client_video_port}};
         video_was_on_ = true;
-        job_ready_.notify_one();
+        if (inline_renderer_) {
+          // The co-simulation: rendered and encoded now, in simulated time (an encoding
+          // error is a failure of the run, not a dropped frame).
+          queue_frame_locked(job, encode_frame(*video_, *inline_renderer_, job), now_ns);
+        } else {
+          job_ = job;
+          job_ready_.notify_one();
+        }
       }
     } else {
       video_was_on_ = false;  // the next streamon starts with a key frame
@@ -401,12 +486,12 @@ void TelloEmulator::send_reply(TimeNs t, const std::string& text, const tello::E
   // Three draws per reply, always.
   const bool lost = reply_faults_.bernoulli(f.replies.loss);
   const bool late = reply_faults_.bernoulli(f.late_replies);
-  const bool twice = reply_faults_.bernoulli(f.duplicate_replies);
+  const bool twice = reply_faults_.bernoulli(f.replies.duplicate);
   if (lost) {
     ++counters_.replies_dropped;
     return;
   }
-  TimeNs due = t + ms_to_ns(f.replies.delay_ms);
+  TimeNs due = due_time(Channel::reply, t);
   if (late) {
     due += ms_to_ns(f.late_reply_ms);
     ++counters_.replies_late;
@@ -421,8 +506,8 @@ void TelloEmulator::send_reply(TimeNs t, const std::string& text, const tello::E
 void TelloEmulator::flush_locked(TimeNs now_ns) {
   while (!outgoing_.empty() && outgoing_.top().due_ns <= now_ns) {
     const Outgoing& o = outgoing_.top();
-    tello::UdpSocket& socket =
-        o.channel == Channel::reply ? command_socket_ : o.channel == Channel::state ? state_socket_ : video_socket_;
+    tello::DatagramChannel& socket =
+        o.channel == Channel::reply ? *command_socket_ : o.channel == Channel::state ? *state_socket_ : *video_socket_;
     if (!socket.send_to(o.to, o.bytes)) {
       ++counters_.send_errors;
     } else if (o.channel == Channel::reply) {
@@ -443,7 +528,7 @@ void TelloEmulator::video_loop() {
     std::string error;
     try {
       worker = std::make_unique<VideoWorker>(*scenario_, config_.key_interval_frames, config_.slices_per_frame);
-      renderer_description_ = worker->renderer.backend_description();
+      renderer_description_ = worker->renderer->backend_description();
     } catch (const std::exception& e) {
       error = e.what();
     }
@@ -459,24 +544,20 @@ void TelloEmulator::video_loop() {
     {
       std::unique_lock lock(mutex_);
       job_ready_.wait(lock, [this] { return stop_ || job_.has_value(); });
-      if (stop_) return;
+      if (stop_) {
+        // The renderer's EGL context is destroyed on the thread it is current on: another
+        // thread's eglDestroyContext could only defer it (and the context would leak).
+        video_.reset();
+        return;
+      }
       job = *job_;
       job_.reset();
       worker_busy_ = true;
     }
-    std::vector<std::string> datagrams;
-    bool key = false;
+    EncodedFrame frame;
     std::string error;
     try {
-      if (video_->motion_blur) {
-        video_->renderer.render_blurred_into(job.X_WC_prev, job.X_WC, job.noise_seed, video_->bgr);
-      } else {
-        video_->renderer.render_into(job.X_WC, job.noise_seed, video_->bgr);
-      }
-      const std::string access_unit = video_->encoder.encode(video_->bgr, job.force_key);
-      const std::vector<int> types = tello::nal_unit_types(access_unit);
-      key = std::find(types.begin(), types.end(), 5) != types.end();
-      datagrams = tello::tello_datagrams(access_unit);
+      frame = encode_frame(*video_, *video_->renderer, job);
     } catch (const std::exception& e) {
       error = e.what();
     }
@@ -486,20 +567,40 @@ void TelloEmulator::video_loop() {
       video_->error = "video: " + error;
       continue;
     }
-    ++counters_.frames_sent;
-    if (key) ++counters_.key_frames;
-    const TimeNs due = job.t_ns + ms_to_ns(config_.faults.video.delay_ms);
-    for (std::string& d : datagrams) {
-      if (video_faults_.bernoulli(config_.faults.video.loss)) {
-        ++counters_.video_datagrams_dropped;
-      } else {
-        outgoing_.push({due, out_seq_++, Channel::video, job.to, std::move(d)});
-      }
-    }
     // Sends what is due by the capture time: the frame itself unless delayed (the worker has
     // no clock; the main loop sends delayed datagrams when they fall due).
-    flush_locked(job.t_ns);
+    queue_frame_locked(job, std::move(frame), job.t_ns);
   }
+}
+
+TelloEmulator::EncodedFrame TelloEmulator::encode_frame(VideoWorker& video, render::Renderer& renderer,
+                                                        const FrameJob& job) {
+  if (video.motion_blur) {
+    renderer.render_blurred_into(job.X_WC_prev, job.X_WC, job.noise_seed, video.bgr);
+  } else {
+    renderer.render_into(job.X_WC, job.noise_seed, video.bgr);
+  }
+  const std::string access_unit = video.encoder.encode(video.bgr, job.force_key);
+  const std::vector<int> types = tello::nal_unit_types(access_unit);
+  EncodedFrame frame;
+  frame.key = std::find(types.begin(), types.end(), 5) != types.end();
+  frame.datagrams = tello::tello_datagrams(access_unit);
+  return frame;
+}
+
+void TelloEmulator::queue_frame_locked(const FrameJob& job, EncodedFrame frame, TimeNs t_send) {
+  ++counters_.frames_sent;
+  if (frame.key) ++counters_.key_frames;
+  // One delay per frame (its datagrams leave back to back).
+  const TimeNs due = due_time(Channel::video, job.t_ns);
+  for (std::string& d : frame.datagrams) {
+    if (video_faults_.bernoulli(config_.faults.video.loss)) {
+      ++counters_.video_datagrams_dropped;
+    } else {
+      outgoing_.push({due, out_seq_++, Channel::video, job.to, std::move(d)});
+    }
+  }
+  flush_locked(t_send);
 }
 
 EmulatorReport TelloEmulator::report() const {
@@ -541,12 +642,12 @@ std::string emulator_report_json(const EmulatorReport& r) {
          {"seed", r.seed},
          {"dispersed", r.dispersed},
          {"counters",
-          {{"commands_received", c.commands_received}, {"commands_dropped", c.commands_dropped},
+          {{"commands_received", c.commands_received}, {"commands_dropped", c.commands_dropped}, {"commands_duplicated", c.commands_duplicated},
            {"commands_malformed", c.commands_malformed}, {"commands_delivered", c.commands_delivered},
            {"injected_errors", c.injected_errors}, {"replies_sent", c.replies_sent},
            {"replies_dropped", c.replies_dropped}, {"replies_late", c.replies_late},
            {"replies_duplicated", c.replies_duplicated}, {"state_sent", c.state_sent},
-           {"state_dropped", c.state_dropped}, {"frames_captured", c.frames_captured},
+           {"state_dropped", c.state_dropped}, {"state_duplicated", c.state_duplicated}, {"frames_captured", c.frames_captured},
            {"frames_sent", c.frames_sent}, {"frames_dropped_busy", c.frames_dropped_busy},
            {"frames_dropped_late", c.frames_dropped_late}, {"frames_stalled", c.frames_stalled}, {"frames_lost", c.frames_lost},
            {"key_frames", c.key_frames}, {"video_datagrams_sent", c.video_datagrams_sent},

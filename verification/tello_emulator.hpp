@@ -48,6 +48,7 @@
 
 #include <atomic>
 #include <condition_variable>
+#include <functional>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -62,6 +63,7 @@
 
 #include "flight_sw/perception.hpp"
 #include "flight_sw/tello/udp_socket.hpp"
+#include "render/renderer.hpp"
 #include "plant/collision.hpp"
 #include "plant/simulated_tello.hpp"
 #include "shelfcross/random.hpp"
@@ -72,10 +74,16 @@
 
 namespace shelfcross::verification {
 
-/// Loss and added delay of one channel.
+/// Loss, delay and duplication of one channel's datagrams.
 struct ChannelFaults {
-  double loss = 0.0;      ///< probability that a datagram is dropped, 0..1
-  double delay_ms = 0.0;  ///< added to every datagram of the channel, >= 0
+  double loss = 0.0;       ///< probability that a datagram is dropped, 0..1
+  double delay_ms = 0.0;   ///< added to every datagram of the channel, >= 0
+  /// Standard deviation of a normal jitter added to delay_ms (truncated at +-3 sigma, the
+  /// total never below 0). A channel keeps its order: a datagram never leaves before the one
+  /// queued before it on the same channel (one Wi-Fi hop does not reorder).
+  double jitter_ms = 0.0;
+  double duplicate = 0.0;  ///< probability that a datagram arrives twice (commands, replies, state)
+  bool operator==(const ChannelFaults&) const = default;
 };
 
 struct EmulatorFaults {
@@ -83,11 +91,11 @@ struct EmulatorFaults {
   double video_frame_loss = 0.0;   ///< probability that a whole frame (all its datagrams) is lost
   double late_replies = 0.0;       ///< probability that a reply is held back late_reply_ms more
   double late_reply_ms = 7500.0;   ///< past a client's 7 s reply timeout
-  double duplicate_replies = 0.0;  ///< probability that a reply is sent twice
   double not_joystick = 0.0;       ///< probability of "error Not joystick" for a manoeuvre (1: forced)
   double no_valid_imu = 0.0;       ///< probability of "error No valid imu" for a manoeuvre (1: forced)
   std::optional<double> video_stall_start_s;  ///< no frames in [start, start + duration)
   double video_stall_duration_s = 0.0;
+  bool operator==(const EmulatorFaults&) const = default;
 };
 
 struct EmulatorConfig {
@@ -126,6 +134,7 @@ struct EmulatorCounters {
   // commands in
   std::int64_t commands_received = 0;   ///< datagrams read from the command socket
   std::int64_t commands_dropped = 0;    ///< lost by fault injection
+  std::int64_t commands_duplicated = 0; ///< delivered twice by fault injection
   std::int64_t commands_malformed = 0;  ///< empty, too long or not printable ASCII: dropped
   std::int64_t commands_delivered = 0;  ///< handed to the firmware
   std::int64_t injected_errors = 0;     ///< "error Not joystick" / "error No valid imu" answers
@@ -137,6 +146,7 @@ struct EmulatorCounters {
   // state out
   std::int64_t state_sent = 0;
   std::int64_t state_dropped = 0;
+  std::int64_t state_duplicated = 0;
   // video out
   std::int64_t frames_captured = 0;       ///< capture instants while streaming
   std::int64_t frames_sent = 0;           ///< rendered, encoded and cut into datagrams
@@ -179,12 +189,29 @@ bool emulator_applies_dispersion(const std::string& name);
 std::string emulator_report_json(const EmulatorReport& report);
 std::string emulator_report_text(const EmulatorReport& report);
 
+/// Datagram channels of the caller's (the co-simulation's in-memory ones) instead of UDP
+/// sockets; all three or none.
+struct EmulatorChannels {
+  std::unique_ptr<tello::DatagramChannel> command, state, video;
+};
+
 class TelloEmulator {
  public:
+  /// Called after every autopilot tick with its time and the vehicle (the co-simulation's
+  /// truth metrics); never from the video worker.
+  using TickObserver = std::function<void(TimeNs t_ns, const plant::SimulatedTello& tello)>;
+
   /// Binds the sockets, builds the world, the renderer and the encoder. Throws
   /// std::invalid_argument (bad settings or address), std::runtime_error (port busy, no EGL,
   /// no libx264), config errors of the scenario.
   TelloEmulator(const Scenario& scenario, EmulatorConfig config);
+  /// The simulated Tello of a co-simulation run: the run's (dispersed) setup, in-memory
+  /// channels, and no video thread: captures are rendered by `renderer` (the caller's, made
+  /// for the run's warehouse and camera, used only from the calling thread) and encoded
+  /// inline, so the run is a pure function of (scenario, seed). config.seed and
+  /// config.disperse are taken from the setup.
+  TelloEmulator(const RunSetup& setup, EmulatorConfig config, EmulatorChannels channels, render::Renderer& renderer,
+                TickObserver on_tick = {});
   ~TelloEmulator();  ///< stops and joins the video worker
   TelloEmulator(const TelloEmulator&) = delete;
   TelloEmulator& operator=(const TelloEmulator&) = delete;
@@ -193,7 +220,8 @@ class TelloEmulator {
   /// last autopilot tick <= now_ns handling everything due, sends what is due. now_ns never
   /// decreases.
   void advance(TimeNs now_ns);
-  /// The earliest time something is due after the last advance (next tick or queued datagram).
+  /// The earliest time something is due after the last advance: the next tick, or a queued
+  /// outgoing datagram (incoming commands are handled at ticks).
   TimeNs next_due_ns() const;
 
   bool finished() const { return end_reason_.has_value(); }
@@ -201,10 +229,10 @@ class TelloEmulator {
   void end(const std::string& reason);
   EmulatorReport report() const;
 
-  int command_fd() const { return command_socket_.fd(); }
-  std::uint16_t command_port() const { return command_socket_.local_port(); }
-  std::uint16_t state_source_port() const { return state_socket_.local_port(); }
-  std::uint16_t video_source_port() const { return video_socket_.local_port(); }
+  int command_fd() const { return command_socket_->fd(); }
+  std::uint16_t command_port() const { return command_socket_->local_port(); }
+  std::uint16_t state_source_port() const { return state_socket_->local_port(); }
+  std::uint16_t video_source_port() const { return video_socket_->local_port(); }
   const plant::SimulatedTello& tello() const { return tello_; }
   /// The world flown (dispersed or nominal) and the camera its client would believe.
   const RunSetup& setup() const { return setup_; }
@@ -239,7 +267,13 @@ class TelloEmulator {
     tello::Endpoint to;
   };
   struct VideoWorker;
+  struct EncodedFrame {
+    std::vector<std::string> datagrams;
+    bool key = false;
+  };
 
+  TelloEmulator(RunSetup setup, EmulatorConfig config, EmulatorChannels channels, render::Renderer* inline_renderer,
+                TickObserver on_tick);
   void receive_commands(TimeNs now_ns);
   void tick(TimeNs t_ns, TimeNs now_ns);
   void deliver(TimeNs t_ns, const IncomingCommand& command);
@@ -248,16 +282,29 @@ class TelloEmulator {
   void enqueue(Channel channel, TimeNs due_ns, const tello::Endpoint& to, std::string bytes, TimeNs now_ns);
   void flush_locked(TimeNs now_ns);
   void video_loop();
+  /// Renders, encodes and frames one capture (the worker's job, or inline).
+  static EncodedFrame encode_frame(VideoWorker& video, render::Renderer& renderer, const FrameJob& job);
+  /// Queues a frame's datagrams (loss and delay drawn) and sends what is due by t_send (under the mutex).
+  void queue_frame_locked(const FrameJob& job, EncodedFrame frame, TimeNs t_send);
+  /// The due time of a datagram of `channel` queued at t: delay + jitter, never before the
+  /// channel's previous one.
+  TimeNs due_time(Channel channel, TimeNs t);
+  void start_video();
 
   RunSetup setup_;
   std::shared_ptr<const Scenario> scenario_;
   EmulatorConfig config_;
-  tello::UdpSocket command_socket_, state_socket_, video_socket_;
+  std::unique_ptr<tello::DatagramChannel> command_socket_, state_socket_, video_socket_;
+  render::Renderer* inline_renderer_ = nullptr;  ///< co-simulation: render and encode inline
+  TickObserver on_tick_;
   plant::CollisionWorld world_;
   plant::SimulatedTello tello_;
   double ground_z_m_;
   RandomStream command_faults_, reply_faults_, state_faults_, video_faults_, error_faults_, frame_faults_;
   RandomStream render_noise_;
+  RandomStream command_jitter_, reply_jitter_, state_jitter_, video_jitter_;
+  TimeNs last_due_[3] = {0, 0, 0};  ///< per outgoing channel (reply, state, video)
+  TimeNs last_command_due_ = 0;
 
   // Main-loop state (the thread that calls advance()).
   std::priority_queue<IncomingCommand, std::vector<IncomingCommand>, std::greater<>> incoming_;

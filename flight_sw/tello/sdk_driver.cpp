@@ -66,11 +66,16 @@ std::string DriverCounters::text() const {
 }
 
 SdkDriver::SdkDriver(DriverConfig config, const Clock& clock)
+    : SdkDriver(config, clock, std::make_unique<UdpSocket>(config.local_ip, config.local_command_port),
+                std::make_unique<UdpSocket>(config.local_ip, config.local_state_port)) {}
+
+SdkDriver::SdkDriver(DriverConfig config, const Clock& clock, std::unique_ptr<DatagramChannel> command_channel,
+                     std::unique_ptr<DatagramChannel> state_channel)
     : config_(std::move(config)),
       clock_(clock),
       drone_command_{config_.drone_ip, config_.drone_command_port},
-      command_socket_(config_.local_ip, config_.local_command_port),
-      state_socket_(config_.local_ip, config_.local_state_port) {
+      command_channel_(std::move(command_channel)),
+      state_channel_(std::move(state_channel)) {
   // Refuse a bad address now, not at the first send; compare senders in canonical text form.
   char canonical[INET_ADDRSTRLEN] = {};
   const in_addr a = parse_ipv4(config_.drone_ip);
@@ -165,7 +170,7 @@ void SdkDriver::service() {
 }
 
 void SdkDriver::read_replies(TimeNs now) {
-  while (auto d = command_socket_.receive()) {
+  while (auto d = command_channel_->receive()) {
     if (!(d->from == drone_command_)) {
       ++counters_.foreign_command_datagrams;
       event(DriverEvent::Kind::Foreign, "", "command socket: from " + d->from.text());
@@ -199,7 +204,7 @@ void SdkDriver::read_replies(TimeNs now) {
 }
 
 void SdkDriver::read_states(TimeNs now) {
-  while (auto d = state_socket_.receive()) {
+  while (auto d = state_channel_->receive()) {
     const bool from_drone = d->from.ip == drone_command_.ip &&
                             (config_.state_source_port == 0 || d->from.port == config_.state_source_port);
     if (!from_drone) {
@@ -327,7 +332,7 @@ bool SdkDriver::transmit(TimeNs now, const std::string& text) {
     return false;
   }
   last_any_ns_ = now;
-  if (!command_socket_.send_to(drone_command_, text)) {
+  if (!command_channel_->send_to(drone_command_, text)) {
     ++counters_.send_errors;
     return false;
   }

@@ -39,6 +39,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -136,6 +137,10 @@ class SdkDriver {
   /// Binds the command and state sockets; throws std::runtime_error (port busy) or
   /// std::invalid_argument (bad address).
   SdkDriver(DriverConfig config, const Clock& clock);
+  /// The same driver on channels of the caller's (the co-simulation's in-memory ones);
+  /// config's local ports and address are not used.
+  SdkDriver(DriverConfig config, const Clock& clock, std::unique_ptr<DatagramChannel> command_channel,
+            std::unique_ptr<DatagramChannel> state_channel);
 
   /// Hands a command over. rc: becomes the setpoint (sent by service()). Others: queued.
   /// Returns false when the text was refused (invalid: Rejected event) or filtered (dry run).
@@ -152,10 +157,10 @@ class SdkDriver {
   std::optional<TimeNs> last_state_ns() const { return last_state_ns_; }
   const DriverCounters& counters() const { return counters_; }
   const DriverConfig& config() const { return config_; }
-  std::uint16_t local_command_port() const { return command_socket_.local_port(); }
-  std::uint16_t local_state_port() const { return state_socket_.local_port(); }
-  int command_fd() const { return command_socket_.fd(); }
-  int state_fd() const { return state_socket_.fd(); }
+  std::uint16_t local_command_port() const { return command_channel_->local_port(); }
+  std::uint16_t local_state_port() const { return state_channel_->local_port(); }
+  int command_fd() const { return command_channel_->fd(); }
+  int state_fd() const { return state_channel_->fd(); }
 
  private:
   struct Pending {
@@ -181,8 +186,8 @@ class SdkDriver {
   DriverConfig config_;
   const Clock& clock_;
   Endpoint drone_command_;
-  UdpSocket command_socket_;
-  UdpSocket state_socket_;
+  std::unique_ptr<DatagramChannel> command_channel_;
+  std::unique_ptr<DatagramChannel> state_channel_;
   std::deque<Pending> queue_;
   std::optional<Pending> outstanding_;
   std::optional<TimeNs> last_command_ns_;  ///< last non-rc send

@@ -28,7 +28,23 @@ struct Datagram {
   Endpoint from;
 };
 
-class UdpSocket {
+/// One local datagram endpoint: what the driver and the video receiver read and write. A
+/// UdpSocket in tello_pilot and the emulator; a MemoryChannel (datagram_channel.hpp) when the
+/// co-simulation carries the datagrams itself, in simulated time.
+class DatagramChannel {
+ public:
+  virtual ~DatagramChannel() = default;
+  /// Sends one datagram; false when it cannot go out (the OS refused it).
+  virtual bool send_to(const Endpoint& to, std::string_view bytes) = 0;
+  /// The next datagram that has arrived, or nothing (never blocks).
+  virtual std::optional<Datagram> receive() = 0;
+  /// A file descriptor that polls readable when a datagram waits; -1 when there is none
+  /// (in-memory channels: their owner knows when it delivered something).
+  virtual int fd() const { return -1; }
+  virtual std::uint16_t local_port() const = 0;
+};
+
+class UdpSocket final : public DatagramChannel {
  public:
   /// Binds to local_ip:local_port (port 0: an ephemeral port, see local_port()).
   /// `receive_buffer_bytes` > 0 asks the kernel for that receive buffer (video needs room
@@ -41,13 +57,13 @@ class UdpSocket {
   UdpSocket(UdpSocket&& other) noexcept;
   UdpSocket& operator=(UdpSocket&& other) noexcept;
 
-  int fd() const { return fd_; }
-  std::uint16_t local_port() const { return local_port_; }
+  int fd() const override { return fd_; }
+  std::uint16_t local_port() const override { return local_port_; }
 
   /// Sends one datagram; returns false (errno kept) when the OS refuses it.
-  bool send_to(const Endpoint& to, std::string_view bytes);
+  bool send_to(const Endpoint& to, std::string_view bytes) override;
   /// The next pending datagram, or nothing when none waits (never blocks).
-  std::optional<Datagram> receive();
+  std::optional<Datagram> receive() override;
   /// Waits up to timeout_ms for a datagram to be readable (poll); true when one is.
   bool wait_readable(int timeout_ms) const;
 

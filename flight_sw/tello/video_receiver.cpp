@@ -24,11 +24,11 @@ std::string VideoStats::text() const {
 }
 
 struct VideoReceiver::ThreadState {
-  UdpSocket socket;
+  std::unique_ptr<DatagramChannel> channel;
   H264Decoder decoder;
   in_addr drone_ip;
-  ThreadState(const VideoReceiverConfig& c)
-      : socket(c.local_ip, c.local_port, c.receive_buffer_bytes), drone_ip(parse_ipv4(c.drone_ip)) {}
+  ThreadState(const VideoReceiverConfig& c, std::unique_ptr<DatagramChannel> ch)
+      : channel(std::move(ch)), drone_ip(parse_ipv4(c.drone_ip)) {}
 };
 
 namespace {
@@ -88,12 +88,24 @@ bool begins_access_unit(const std::string& s) {
 }  // namespace
 
 VideoReceiver::VideoReceiver(VideoReceiverConfig config, const Clock& clock)
+    : VideoReceiver(config, clock,
+                    std::make_unique<UdpSocket>(config.local_ip, config.local_port, config.receive_buffer_bytes)) {}
+
+VideoReceiver::VideoReceiver(VideoReceiverConfig config, const Clock& clock, std::unique_ptr<DatagramChannel> channel)
     : config_(std::move(config)), clock_(clock), started_ns_(clock.now_ns()) {
-  thread_state_ = std::make_unique<ThreadState>(config_);
-  local_port_ = thread_state_->socket.local_port();
+  thread_state_ = std::make_unique<ThreadState>(config_, std::move(channel));
+  local_port_ = thread_state_->channel->local_port();
   notify_fd_ = make_eventfd();
   stop_fd_ = make_eventfd();
-  thread_ = std::thread([this] { run(); });
+  if (config_.threaded) {
+    if (thread_state_->channel->fd() < 0) throw std::invalid_argument("a threaded video receiver needs a pollable channel");
+    thread_ = std::thread([this] { run(); });
+  }
+}
+
+void VideoReceiver::service() {
+  if (config_.threaded) return;
+  while (auto d = thread_state_->channel->receive()) on_datagram(*d);
 }
 
 VideoReceiver::~VideoReceiver() {
@@ -105,12 +117,12 @@ VideoReceiver::~VideoReceiver() {
 }
 
 void VideoReceiver::run() {
-  UdpSocket& socket = thread_state_->socket;
+  DatagramChannel& channel = *thread_state_->channel;
   while (!stop_) {
-    pollfd fds[2] = {{socket.fd(), POLLIN, 0}, {stop_fd_, POLLIN, 0}};
+    pollfd fds[2] = {{channel.fd(), POLLIN, 0}, {stop_fd_, POLLIN, 0}};
     if (::poll(fds, 2, 200) <= 0) continue;
     while (!stop_) {
-      auto d = socket.receive();
+      auto d = channel.receive();
       if (!d) break;
       on_datagram(*d);
     }

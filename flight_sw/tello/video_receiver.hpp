@@ -29,6 +29,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -52,6 +53,10 @@ struct VideoReceiverConfig {
   size_t max_frame_bytes = 1 << 20;  ///< a frame growing past this is dropped (lost frame end)
   int receive_buffer_bytes = 4 << 20;
   DamagedFrames damaged = DamagedFrames::conceal;  ///< see the header comment
+  /// true: a receiver thread reads and decodes as datagrams arrive (tello_pilot). false: no
+  /// thread; the owner calls service(), which reads and decodes what has arrived, in its own
+  /// thread (the co-simulation: deterministic, decoding charged to the run).
+  bool threaded = true;
 };
 
 /// One decoded frame as handed over.
@@ -93,10 +98,15 @@ class VideoReceiver {
   /// Binds the video port and starts the receiver thread. Throws std::runtime_error (port
   /// busy, no H.264 decoder) or std::invalid_argument (bad address).
   VideoReceiver(VideoReceiverConfig config, const Clock& clock);
+  /// The same receiver reading the caller's channel (config's local port is not used).
+  VideoReceiver(VideoReceiverConfig config, const Clock& clock, std::unique_ptr<DatagramChannel> channel);
   ~VideoReceiver();  ///< stops and joins the thread
   VideoReceiver(const VideoReceiver&) = delete;
   VideoReceiver& operator=(const VideoReceiver&) = delete;
 
+  /// Unthreaded receivers: reads every datagram that has arrived, decoding each frame as it
+  /// completes. A threaded receiver does this on its thread; there it does nothing.
+  void service();
   /// The newest frame not yet taken (the mailbox empties), or nothing.
   std::optional<VideoFrame> take_latest();
   /// An eventfd that is readable while a frame waits in the mailbox (for poll()).

@@ -326,7 +326,7 @@ TEST_F(TelloEmulatorTest, InjectedCommandLossAndReplyFaults) {
   // Forced refusals and duplicated replies.
   EmulatorConfig f;
   f.faults.not_joystick = 1.0;
-  f.faults.duplicate_replies = 1.0;
+  f.faults.replies.duplicate = 1.0;
   t_ns_ = 0;
   start(f);
   send("command");

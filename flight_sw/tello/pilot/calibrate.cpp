@@ -7,7 +7,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "flight_sw/tello/pilot/flight_log.hpp"
+#include "flight_sw/tello/flight_log.hpp"
 #include "flight_sw/tello/pilot/pilot.hpp"
 #include "flight_sw/tello/sdk_driver.hpp"
 #include "flight_sw/tello/video_receiver.hpp"
@@ -15,7 +15,13 @@
 namespace shelfcross::tello::pilot {
 
 int run_calibration(const PilotOptions& o, const Clock& clock, const std::atomic<int>& signals) {
-  FlightLog log(o.log_path);
+  std::optional<FlightLog> log_file;
+  try {
+    log_file.emplace(o.log_path);
+  } catch (const FlightLogError& e) {
+    throw UsageError(e.what());
+  }
+  FlightLog& log = *log_file;
   DriverConfig dc = o.driver;
   dc.dry_run = true;  // nothing but command and streamon can leave this program
   SdkDriver driver(dc, clock);

@@ -7,21 +7,11 @@
 #include <string>
 
 #include "flight_sw/config.hpp"
+#include "flight_sw/tello/pilot_loop.hpp"
 #include "flight_sw/tello/sdk_driver.hpp"
 #include "flight_sw/tello/video_receiver.hpp"
 
 namespace shelfcross::tello::pilot {
-
-/// The program's last-line failsafes, independent of the flight software's own.
-struct Failsafes {
-  double state_timeout_s = 2.0;        ///< airborne and no state record this long: land
-  double state_start_timeout_s = 10.0; ///< no state record at all this long after start: give up
-  double video_hover_s = 5.0;          ///< airborne and no frame this long: hover (rc 0 0 0 0)
-  double video_land_s = 8.0;           ///< airborne and no frame this long: land
-  int critical_battery_pct = 10;       ///< battery at or below: land
-  double max_flight_s = 480.0;         ///< airborne this long: land
-  double land_reply_s = 7.0;           ///< the program's own land: reply timeout (3 retries)
-};
 
 struct PilotOptions {
   DriverConfig driver;              ///< drone address, command and state ports, dry_run

@@ -1,17 +1,17 @@
-#include "flight_sw/tello/pilot/flight_log.hpp"
+#include "flight_sw/tello/flight_log.hpp"
 
 #include <cmath>
-#include <stdexcept>
 
-#include "flight_sw/tello/pilot/pilot_options.hpp"
+namespace shelfcross::tello {
 
-namespace shelfcross::tello::pilot {
-
-FlightLog::FlightLog(const std::string& path) : out_(path, std::ios::trunc) {
-  if (!out_) throw UsageError("cannot write the flight log '" + path + "'");
+FlightLog::FlightLog(const std::string& path) {
+  if (path.empty()) return;
+  out_.open(path, std::ios::trunc);
+  if (!out_) throw FlightLogError("cannot write the flight log '" + path + "'");
 }
 
 void FlightLog::write(TimeNs t_ns, const std::string& type, nlohmann::json fields) {
+  if (!out_.is_open()) return;
   nlohmann::ordered_json line = nlohmann::ordered_json::object();  // t_s, t_ns, type first
   line["t_s"] = std::round(ns_to_seconds(t_ns) * 1e6) / 1e6;
   line["t_ns"] = t_ns;
@@ -22,4 +22,4 @@ void FlightLog::write(TimeNs t_ns, const std::string& type, nlohmann::json field
   out_.flush();
 }
 
-}  // namespace shelfcross::tello::pilot
+}  // namespace shelfcross::tello
