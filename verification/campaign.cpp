@@ -98,6 +98,18 @@ nlohmann::json summarize_campaign(const std::vector<RunRecord>& runs, std::int64
       collect("inventory_precision", m["inventory"].value("precision", json()));
       collect("inventory_recall", m["inventory"].value("recall", json()));
     }
+    // What the link did (sdk: datagrams; ideal: whole frames and commands).
+    if (const json l = m.value("link", json()); l.is_object()) {
+      for (const char* key : {"video_datagrams", "video_datagrams_lost", "frames_decoded", "frames_damaged",
+                              "commands_sent", "commands_lost", "replies_lost", "state_records_lost",
+                              "command_retries"}) {
+        collect(std::string("link_") + key, l.value(key, json()));
+      }
+      const double datagrams = l.value("video_datagrams", 0.0);
+      if (datagrams > 0) collect("link_video_datagram_loss", l.value("video_datagrams_lost", 0.0) / datagrams);
+      const double handed = l.value("frames_handed", 0.0);
+      if (handed > 0) collect("link_damaged_frame_fraction", l.value("frames_damaged", 0.0) / handed);
+    }
   }
   json summary;
   summary["runs"] = count;

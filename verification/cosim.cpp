@@ -163,6 +163,7 @@ EmulatorFaults sdk_faults(const LinkSettings& l) {
   f.late_reply_ms = 1e3 * l.late_reply_s;
   f.not_joystick = l.not_joystick_probability;
   f.no_valid_imu = l.no_valid_imu_probability;
+  f.lost_command_prefix = l.lost_command;
   if (l.video_stall_start_s >= 0.0 && l.video_stall_duration_s > 0.0) {
     f.video_stall_start_s = l.video_stall_start_s;
     f.video_stall_duration_s = l.video_stall_duration_s;

@@ -53,6 +53,9 @@ struct LinkSettings {
   double video_stall_duration_s = 0.0;
   int video_slices = 45;                   ///< slices per picture (one per macroblock row)
   int key_interval_frames = 0;             ///< 0: a key frame per second of captures
+  /// Fault injection: every command datagram beginning with this text is lost ("land": a
+  /// lost land, as in the lossy flights); empty: none.
+  std::string lost_command = "";
   bool operator==(const LinkSettings&) const = default;
 };
 

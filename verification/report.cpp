@@ -9,6 +9,7 @@
 
 #include "verification/campaign.hpp"
 #include "verification/dispersion.hpp"
+#include "verification/link_report.hpp"
 #include "verification/plot.hpp"
 #include "verification/results_store.hpp"
 #include "verification/scenario.hpp"
@@ -214,6 +215,7 @@ json write_campaign_report(const std::filesystem::path& dir) {
   md << "## Distributions\n\n![altitude settling](settling_altitude.png)\n\n![heading settling](settling_heading.png)\n\n"
         "![lateral entry offset](entry_offset_y.png)\n\n![vertical entry offset](entry_offset_z.png)\n\n";
   md << latency_sweep_section(scenario, runs, dir);
+  md << link_section(runs, dir);
   md << "## Failed runs (" << failures << ")\n\n";
   if (failures) {
     md << "| run | outcome | detail | replay |\n|---|---|---|---|\n" << failed.str();

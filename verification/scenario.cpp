@@ -580,6 +580,7 @@ void visit_link(V& v, LinkSettings& l) {
   v.field("video_stall_duration_s", l.video_stall_duration_s, between(0.0, 3600.0));
   v.field("video_slices", l.video_slices, between(1, 45));
   v.field("key_interval_frames", l.key_interval_frames, between(0, 600));
+  v.field("lost_command", l.lost_command);
 }
 
 template <class V>

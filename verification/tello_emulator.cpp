@@ -276,7 +276,8 @@ void TelloEmulator::receive_commands(TimeNs now_ns) {
     // Two draws per datagram, always, so one setting never shifts the other's draws.
     const bool lost = command_faults_.bernoulli(config_.faults.commands.loss);
     const bool twice = command_faults_.bernoulli(config_.faults.commands.duplicate);
-    if (lost) {
+    const std::string& prefix = config_.faults.lost_command_prefix;
+    if (lost || (!prefix.empty() && d->bytes.rfind(prefix, 0) == 0)) {
       ++counters_.commands_dropped;
       continue;
     }

@@ -93,6 +93,9 @@ struct EmulatorFaults {
   double late_reply_ms = 7500.0;   ///< past a client's 7 s reply timeout
   double not_joystick = 0.0;       ///< probability of "error Not joystick" for a manoeuvre (1: forced)
   double no_valid_imu = 0.0;       ///< probability of "error No valid imu" for a manoeuvre (1: forced)
+  /// Fault injection: every command datagram whose text begins with this is lost (e.g.
+  /// "land"); empty: none. Applied after the random draws, so it shifts none of them.
+  std::string lost_command_prefix;
   std::optional<double> video_stall_start_s;  ///< no frames in [start, start + duration)
   double video_stall_duration_s = 0.0;
   bool operator==(const EmulatorFaults&) const = default;

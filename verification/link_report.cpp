@@ -1,0 +1,74 @@
+#include "verification/link_report.hpp"
+
+#include <cmath>
+#include <iomanip>
+#include <map>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "verification/plot.hpp"
+#include "verification/statistics.hpp"
+
+namespace shelfcross::verification {
+namespace {
+
+std::string fixed(double v, int decimals) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(decimals) << v;
+  return s.str();
+}
+
+}  // namespace
+
+std::string link_section(const std::vector<RunRecord>& runs, const std::filesystem::path& dir) {
+  using nlohmann::json;
+  constexpr double kBin = 0.005;  // 0.5 % of the video datagrams
+  std::map<std::string, std::int64_t> models;
+  std::map<long, std::pair<std::int64_t, std::int64_t>> bins;  // bin -> (runs, successes)
+  for (const RunRecord& r : runs) {
+    const json m = json::parse(r.metrics_json);
+    const json l = m.value("link", json());
+    if (!l.is_object()) {
+      ++models["(not recorded)"];
+      continue;
+    }
+    ++models[l.value("model", std::string("?"))];
+    const double sent = l.value("video_datagrams", 0.0);
+    if (sent <= 0) continue;
+    const double loss = l.value("video_datagrams_lost", 0.0) / sent;
+    auto& [n, ok] = bins[static_cast<long>(std::floor(loss / kBin))];
+    ++n;
+    ok += r.outcome == "success";
+  }
+  std::ostringstream md;
+  md << "## The link\n\n";
+  for (const auto& [model, n] : models) md << "- `" << model << "`: " << n << " runs\n";
+  md << "\nPer-run figures (`link_*` rows of the metrics table): datagrams sent and lost, pictures "
+        "decoded and error-concealed, commands sent and lost, replies and state records lost.\n\n";
+  if (bins.empty()) return md.str();
+  md << "### Success rate against video datagram loss\n\nEach run's measured loss (video datagrams lost / "
+        "sent), in "
+     << fixed(kBin * 100, 1) << " % bins.\n\n| video datagram loss | runs | successes | success rate | 95 % lower bound |\n"
+        "|---|---|---|---|---|\n";
+  std::vector<double> centre_pct, rate;
+  for (const auto& [bin, counts] : bins) {
+    const auto [n, ok] = counts;
+    const double lo = bin * kBin * 100, hi = (bin + 1) * kBin * 100;
+    const double p = static_cast<double>(ok) / static_cast<double>(n);
+    md << "| " << fixed(lo, 1) << "-" << fixed(hi, 1) << " % | " << n << " | " << ok << " | " << fixed(p, 3) << " | "
+       << fixed(clopper_pearson_lower(ok, n), 3) << " |\n";
+    centre_pct.push_back(0.5 * (lo + hi));
+    rate.push_back(p);
+  }
+  Chart chart("Success rate against video datagram loss", "video datagrams lost (%)", "success rate");
+  chart.set_y_limits(0.0, 1.05);
+  chart.add_line(centre_pct, rate, cv::Scalar(60, 160, 60), 2);
+  chart.add_points(centre_pct, rate, cv::Scalar(60, 160, 60), 4);
+  chart.add_hline(0.9, cv::Scalar(120, 120, 120), "90 %");
+  chart.save_png((dir / "link_loss.png").string());
+  md << "\n![success rate against video datagram loss](link_loss.png)\n\n";
+  return md.str();
+}
+
+}  // namespace shelfcross::verification

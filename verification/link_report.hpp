@@ -1,0 +1,18 @@
+#pragma once
+// The campaign report's link section: what the link did in each run (RunMetrics::link, as
+// stored) and the success rate against the video datagram loss each run actually met.
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "verification/results_store.hpp"
+
+namespace shelfcross::verification {
+
+/// A markdown section, and link_loss.png in `dir` when any run of the sdk link carried video:
+/// runs binned by their measured video datagram loss (lost / sent, 0.5 % bins), each bin's
+/// runs, successes, rate and one-sided 95 % Clopper-Pearson lower bound; and the links' models.
+std::string link_section(const std::vector<RunRecord>& runs, const std::filesystem::path& dir);
+
+}  // namespace shelfcross::verification
