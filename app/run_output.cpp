@@ -1,7 +1,10 @@
 #include "run_output.hpp"
 
+#include <algorithm>
 #include <fstream>
 #include <iomanip>
+#include <sstream>
+#include <stdexcept>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/imgproc.hpp>
@@ -36,23 +39,51 @@ void annotate(cv::Mat& img, const flight_sw::FlightSoftware& fsw, TimeNs t_ns) {
 
 }  // namespace
 
+ReplayVideo::ReplayVideo(const std::filesystem::path& path, double fps, cv::Size size) : size_(size) {
+  // fourcc avc1: H.264 with the MP4 sample entry browsers expect; OpenCV's FFmpeg backend
+  // encodes it with libx264 in yuv420p.
+  writer_.open(path.string(), cv::CAP_FFMPEG, cv::VideoWriter::fourcc('a', 'v', 'c', '1'), fps, size);
+  if (!writer_.isOpened()) {
+    throw std::runtime_error("cannot open " + path.string() +
+                             " for H.264 writing (OpenCV videoio, FFmpeg backend with libx264)");
+  }
+}
+
+void ReplayVideo::write(const cv::Mat& annotated, std::int64_t frame) {
+  if (annotated.size() != size_ || annotated.type() != CV_8UC3) {
+    throw std::invalid_argument("replay video: picture of the wrong size or type");
+  }
+  // Pictures that never arrived: the last picture again, marked, so the video keeps time.
+  if (last_frame_ && !last_.empty()) {
+    for (std::int64_t missing = *last_frame_ + 1; missing < frame; ++missing) {
+      cv::Mat copy = last_.clone();
+      cv::putText(copy, "frame #" + std::to_string(missing) + " not received", {12, size_.height - 16},
+                  cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(0, 0, 255), 2, cv::LINE_AA);
+      writer_.write(copy);
+      ++written_;
+    }
+  }
+  writer_.write(annotated);
+  ++written_;
+  annotated.copyTo(last_);
+  last_frame_ = last_frame_ ? std::max(*last_frame_, frame) : frame;
+}
+
 verification::RunResult run_and_write(const verification::RunSetup& setup, const std::filesystem::path& dir, bool video) {
   using nlohmann::json;
   const verification::Scenario& sc = *setup.scenario;
   std::filesystem::create_directories(dir);
   render::Renderer renderer(sc.warehouse, sc.camera, verification::render_options_for(sc));
-  std::unique_ptr<cv::VideoWriter> writer;
+  std::unique_ptr<ReplayVideo> writer;
   if (video) {
-    const auto path = (dir / "video.mp4").string();
-    writer = std::make_unique<cv::VideoWriter>(path, cv::VideoWriter::fourcc('m', 'p', '4', 'v'), sc.frame_rate_hz,
-                                               cv::Size(sc.camera.width_px, sc.camera.height_px));
-    if (!writer->isOpened()) throw std::runtime_error("cannot open " + path + " for writing (OpenCV videoio)");
+    writer = std::make_unique<ReplayVideo>(dir / "video.mp4", sc.frame_rate_hz,
+                                           cv::Size(sc.camera.width_px, sc.camera.height_px));
   }
   cv::Mat annotated;
   const verification::FrameObserver observer = [&](const CameraFrame& frame, const flight_sw::FlightSoftware& fsw) {
     frame.bgr.copyTo(annotated);
     annotate(annotated, fsw, frame.t_ns);
-    writer->write(annotated);
+    writer->write(annotated, frame.index);
   };
   const verification::RunResult result =
       verification::run_cosimulation(setup, renderer, video ? observer : verification::FrameObserver{});
