@@ -112,8 +112,8 @@ void draw_annotations(cv::Mat& img, const FrameAnnotations& a) {
     errors << "e_z " << *a.e_z_m << " m  e_psi " << *a.e_psi_rad << " rad";
     put_line(img, errors.str(), row++, white);
   } else if (a.stale_errors) {
-    errors << "e_z " << a.stale_e_z_m << " m  e_psi " << a.stale_e_psi_rad << " rad  (" << from_text(*a.stale_errors, a.t_ns)
-           << ")";
+    errors << "e_z " << a.stale_e_z_m << " m  e_psi " << a.stale_e_psi_rad << " rad  ("
+           << from_text(*a.stale_errors, a.t_ns) << ")";
     put_line(img, errors.str(), row++, grey);
   }
   if (a.stale_tags) put_line(img, "tags not drawn: from " + from_text(*a.stale_tags, a.t_ns), row++, grey);

@@ -121,7 +121,9 @@ std::optional<std::string> Autopilot::execute(TimeNs t_ns, const sdk::Command& c
       capture_references(last_state_);
       return std::nullopt;
     case Verb::land:
-      if (mode_ != FlightMode::taking_off && mode_ != FlightMode::flying) return refuse("refused: " + mode_text(), "error");
+      if (mode_ != FlightMode::taking_off && mode_ != FlightMode::flying) {
+        return refuse("refused: " + mode_text(), "error");
+      }
       start_landing(true);
       return std::nullopt;
     case Verb::emergency:
@@ -147,7 +149,9 @@ std::optional<std::string> Autopilot::execute(TimeNs t_ns, const sdk::Command& c
       move_speed_mps_ = c.args[0] / 100.0;
       return "ok";
     case Verb::rc:
-      if (!flying_free) return refuse("ignored: " + mode_text() + " (rc acts only while flying free), no reply", std::nullopt);
+      if (!flying_free) {
+        return refuse("ignored: " + mode_text() + " (rc acts only while flying free), no reply", std::nullopt);
+      }
       sticks_ = {c.args[0], c.args[1], c.args[2], c.args[3]};
       return std::nullopt;
     case Verb::up: case Verb::down: case Verb::left: case Verb::right: case Verb::forward: case Verb::back:
