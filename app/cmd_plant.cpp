@@ -43,7 +43,10 @@ CSV columns: t_s, position x_m y_m z_m and velocity vx_mps vy_mps vz_mps in the 
 (x forward, y left, z up, origin on the floor), roll_rad pitch_rad yaw_rad (ZYX Euler of
 R_WB; roll > 0 lowers the right side, pitch > 0 lowers the nose, yaw > 0 turns left), body
 rates p_radps q_radps r_radps, rotor speeds w1..w4_radps. Autopilot replies go to stderr
-(or --replies FILE) as `<t_s> <reply>`.)";
+(or --replies FILE) as `<t_s> <reply>`. Every command the firmware ignored (no effect, no
+reply: before `command`, `rc` unless flying free) or refused (answered `error`: `takeoff`
+unless landed, a move while landed or during another manoeuvre, ...) is printed with its time
+and the reason, on stderr even with --replies; so is a landing by the 15 s watchdog.)";
 
 struct PlantOptions {
   std::string commands_file;
@@ -192,24 +195,55 @@ int run(const PlantOptions& o) {
   }
   std::ostream& log = o.replies_file.empty() ? std::cerr : replies_out;
   const auto log_reply = [&](TimeNs t, const std::string& what) { log << ns_to_seconds(t) << ' ' << what << '\n'; };
+  // What the firmware ignored or refused goes to the replies and, when they go to a file, to
+  // stderr as well: a command file that flies nothing must say why.
+  int refused = 0;
+  const auto log_notice = [&](TimeNs t, const std::string& what) {
+    log_reply(t, what);
+    if (!o.replies_file.empty()) std::cerr << ns_to_seconds(t) << ' ' << what << '\n';
+  };
 
   const std::int64_t n_samples = t_end * o.rate_hz / kNsPerSecond;  // samples k = 0..n_samples
   if (!o.commands_file.empty()) {
     SimulatedTello tello(vehicle, autopilot, wind, 0);
     std::size_t next = 0;
+    TimeNs last_command_ns = 0;
+    // The firmware's watchdog: flying with no command for watchdog_s, it lands by itself.
+    const auto step_to = [&](TimeNs t) {
+      const FlightMode before = tello.mode();
+      tello.step_to(t);
+      if ((before == FlightMode::taking_off || before == FlightMode::flying) && tello.mode() == FlightMode::landing) {
+        std::ostringstream why;
+        why << "landing by itself: no command for " << autopilot.watchdog_s << " s (since "
+            << ns_to_seconds(last_command_ns) << " s)";
+        log_notice(t, why.str());
+      }
+    };
     for (std::int64_t k = 0; k <= n_samples; ++k) {
       const TimeNs t_sample = tick_time_ns(k, o.rate_hz);
       while (next < commands.size() && commands[next].t_ns <= t_sample) {
         const auto& c = commands[next++];
+        step_to(c.t_ns);
         const auto reply = tello.submit(c.t_ns, c.text);
-        if (reply) log_reply(c.t_ns, "\"" + c.text + "\" -> " + *reply);
+        last_command_ns = c.t_ns;
+        const std::string& why = tello.autopilot().last_refusal();
+        if (!why.empty()) {
+          ++refused;
+          log_notice(c.t_ns, "\"" + c.text + "\" " + (reply ? "-> " + *reply + ": " : "") + why);
+        } else if (reply) {
+          log_reply(c.t_ns, "\"" + c.text + "\" -> " + *reply);
+        }
         for (const auto& r : tello.take_replies()) log_reply(r.t_ns, "(deferred) -> " + r.text);
       }
-      tello.step_to(t_sample);
+      step_to(t_sample);
       for (const auto& r : tello.take_replies()) log_reply(r.t_ns, "(deferred) -> " + r.text);
       write_row(out, t_sample, tello.state());
     }
     log_reply(tello.time_ns(), "final mode: " + std::string(to_string(tello.mode())));
+    if (refused > 0) {
+      std::cerr << refused << " of " << commands.size() << " commands ignored or refused by the simulated firmware"
+                << " (listed above" << (o.replies_file.empty() ? "" : " and in " + o.replies_file) << ")\n";
+    }
     return 0;
   }
   Quadrotor quad(vehicle, wind, 0);

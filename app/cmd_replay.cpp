@@ -21,7 +21,8 @@ const CommandRegistration kReplay{
       auto o = std::make_shared<ReplayOptions>();
       sub.add_option("dir", o->dir, "campaign folder (holds results.sqlite)")->required();
       sub.add_option("--run", o->run, "run index")->required()->check(CLI::NonNegativeNumber);
-      sub.add_flag("--video", o->video, "also write video.mp4");
+      sub.add_flag("--video", o->video, "also write video.mp4 (H.264, the camera's rate and size) with what the flight "
+                "software computed from each picture drawn on it (docs/replay.md)");
       return [o]() -> int {
         const auto db = std::filesystem::path(o->dir) / "results.sqlite";
         verification::ResultsStore store = verification::ResultsStore::open_existing(db);
@@ -38,7 +39,8 @@ const CommandRegistration kReplay{
           if (rec.index == o->run) stored = rec;
         }
         std::cout << "replay of run " << o->run << ": " << verification::outcome_name(r.outcome) << ", hash " << r.run_hash
-                  << "\nwrote " << out.string() << "\n";
+                  << "\nwrote " << out.string() << ": run.json, trajectory.csv, events.log"
+                  << (o->video ? ", video.mp4" : "") << "\n";
         if (!stored) {
           std::cout << "run " << o->run << " is not stored yet: nothing to compare\n";
           return 0;

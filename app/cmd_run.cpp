@@ -22,7 +22,8 @@ const CommandRegistration kRun{
       sub.add_option("--scenario", o->scenario, "scenario file")->capture_default_str();
       sub.add_option("--seed", o->seed, "the run's seed: its dispersion draws, noise, latencies")->capture_default_str();
       sub.add_option("--out", o->out, "output folder: run.json, trajectory.csv, events.log")->capture_default_str();
-      sub.add_flag("--video", o->video, "also write video.mp4 with the flight software's detections");
+      sub.add_flag("--video", o->video, "also write video.mp4 (H.264, the camera's rate and size) with what the flight "
+                "software computed from each picture drawn on it (docs/replay.md)");
       return [o]() -> int {
         const verification::Scenario nominal = verification::load_scenario(o->scenario);
         const verification::RunSetup setup = verification::disperse(nominal, o->seed);

@@ -61,16 +61,34 @@ double Autopilot::tof_m() const { return 0.1 + last_state_.p_WB_m.z() - rest_z()
 
 std::optional<std::string> Autopilot::on_command(TimeNs t_ns, std::string_view text) {
   last_command_ns_ = t_ns;  // any datagram counts for the watchdog
+  last_refusal_.clear();
   const auto parsed = sdk::parse(text);
   if (const auto* err = std::get_if<sdk::ParseError>(&parsed)) {
     // rc is never answered, even when malformed; nothing is answered outside SDK mode.
     const bool is_rc = text.substr(0, 3) == "rc " || text == "rc";
-    if (!sdk_mode_ || is_rc) return std::nullopt;
-    return err->reply;
+    if (!sdk_mode_) {
+      last_refusal_ = "ignored: not in SDK mode ('command' not received yet), no reply";
+      return std::nullopt;
+    }
+    if (is_rc) return refuse("ignored: " + err->reason + ", no reply (rc is never answered)", std::nullopt);
+    return refuse("refused: " + err->reason, err->reply);
   }
   const auto& c = std::get<sdk::Command>(parsed);
-  if (!sdk_mode_ && c.verb != sdk::Verb::command) return std::nullopt;
+  if (!sdk_mode_ && c.verb != sdk::Verb::command) {
+    last_refusal_ = "ignored: not in SDK mode ('command' not received yet), no reply";
+    return std::nullopt;
+  }
   return execute(t_ns, c);
+}
+
+std::optional<std::string> Autopilot::refuse(std::string why, std::optional<std::string> reply) {
+  last_refusal_ = std::move(why);
+  return reply;
+}
+
+std::string Autopilot::mode_text() const {
+  if (mode_ == FlightMode::flying && manoeuvre_.active) return "a manoeuvre is running";
+  return "the drone is " + std::string(to_string(mode_));
 }
 
 void Autopilot::start_landing(bool reply_when_done) {
@@ -90,7 +108,10 @@ std::optional<std::string> Autopilot::execute(TimeNs t_ns, const sdk::Command& c
       sdk_mode_ = true;
       return "ok";
     case Verb::takeoff:
-      if (mode_ != FlightMode::landed || battery_pct() < 10) return "error";
+      if (mode_ != FlightMode::landed) return refuse("refused: " + mode_text(), "error");
+      if (battery_pct() < 10) {
+        return refuse("refused: battery at " + std::to_string(battery_pct()) + " % (takeoff needs 10 %)", "error");
+      }
       mode_ = FlightMode::taking_off;
       phase_start_ns_ = t_ns;
       settled_since_ns_.reset();
@@ -100,7 +121,9 @@ std::optional<std::string> Autopilot::execute(TimeNs t_ns, const sdk::Command& c
       capture_references(last_state_);
       return std::nullopt;
     case Verb::land:
-      if (mode_ != FlightMode::taking_off && mode_ != FlightMode::flying) return "error";
+      if (mode_ != FlightMode::taking_off && mode_ != FlightMode::flying) {
+        return refuse("refused: " + mode_text(), "error");
+      }
       start_landing(true);
       return std::nullopt;
     case Verb::emergency:
@@ -111,7 +134,7 @@ std::optional<std::string> Autopilot::execute(TimeNs t_ns, const sdk::Command& c
       }
       return "ok";
     case Verb::stop:
-      if (mode_ != FlightMode::flying) return "error";
+      if (mode_ != FlightMode::flying) return refuse("refused: " + mode_text(), "error");
       manoeuvre_.active = false;
       sticks_ = {};
       capture_references(last_state_);
@@ -126,11 +149,14 @@ std::optional<std::string> Autopilot::execute(TimeNs t_ns, const sdk::Command& c
       move_speed_mps_ = c.args[0] / 100.0;
       return "ok";
     case Verb::rc:
-      if (flying_free) sticks_ = {c.args[0], c.args[1], c.args[2], c.args[3]};
+      if (!flying_free) {
+        return refuse("ignored: " + mode_text() + " (rc acts only while flying free), no reply", std::nullopt);
+      }
+      sticks_ = {c.args[0], c.args[1], c.args[2], c.args[3]};
       return std::nullopt;
     case Verb::up: case Verb::down: case Verb::left: case Verb::right: case Verb::forward: case Verb::back:
     case Verb::cw: case Verb::ccw: case Verb::go: {
-      if (!flying_free) return "error";
+      if (!flying_free) return refuse("refused: " + mode_text(), "error");
       const double yaw = euler_zyx_from_quaternion(last_state_.q_WB).z();
       const double d = c.args[0] / 100.0;
       Eigen::Vector3d delta_H = Eigen::Vector3d::Zero();
@@ -155,7 +181,7 @@ std::optional<std::string> Autopilot::execute(TimeNs t_ns, const sdk::Command& c
       return std::nullopt;
     }
     case Verb::flip: case Verb::curve:
-      return "error";  // not simulated
+      return refuse("refused: flip and curve are not simulated", "error");
     default:
       return read_reply(c.verb);
   }

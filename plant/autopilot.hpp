@@ -28,6 +28,8 @@
 //    answer "ok" when settled. `flip` and `curve` are parsed but answered "error" (not simulated).
 //  - A manoeuvre command while another runs, or one that needs flight while landed: "error".
 //  - Watchdog: taking off or flying without any command for watchdog_s -> lands (no reply).
+//  - Every command ignored (no effect, no reply) or refused ("error", "out of range", ...)
+//    leaves the reason in last_refusal(), for people (`shelfcross plant` prints it).
 //  - Reads: battery? "87", height? "3dm", tof? "801mm", time? "12s", speed? "100.0",
 //    attitude? "pitch:0;roll:0;yaw:0;", baro? "1.234567", temp? "60~62C", wifi? "90",
 //    sdk? "20", sn? (14 characters), acceleration? "agx:..;agy:..;agz:..;".
@@ -69,6 +71,9 @@ class Autopilot {
   Eigen::Vector4d update(TimeNs t_ns, const RigidBodyState& state);
   /// Deferred replies that became due (stamped with the tick that produced them), oldest first.
   std::vector<SdkReply> take_replies();
+  /// Why the command of the last on_command call was ignored (no reply, no effect) or refused
+  /// (answered with an error), for people; empty when it was carried out.
+  const std::string& last_refusal() const { return last_refusal_; }
 
   FlightMode mode() const { return mode_; }
   bool sdk_mode() const { return sdk_mode_; }
@@ -97,6 +102,9 @@ class Autopilot {
   };
 
   std::optional<std::string> execute(TimeNs t_ns, const sdk::Command& c);
+  // Records why the command had no effect (last_refusal) and returns its reply.
+  std::optional<std::string> refuse(std::string why, std::optional<std::string> reply);
+  std::string mode_text() const;
   std::string read_reply(sdk::Verb verb) const;
   void start_landing(bool reply_when_done);
   void capture_references(const RigidBodyState& s);
@@ -138,6 +146,7 @@ class Autopilot {
   double takeoff_z_m_;
   TimeNs motor_on_ns_ = 0;
   std::vector<SdkReply> replies_;
+  std::string last_refusal_;
 };
 
 }  // namespace shelfcross::plant

@@ -18,6 +18,13 @@ namespace fs = std::filesystem;
 
 using Result = shelfcross::app::test::ProgramResult;
 
+std::vector<std::string> lines_of(const std::string& path) {
+  std::ifstream in(path);
+  std::vector<std::string> lines;
+  for (std::string l; std::getline(in, l);) lines.push_back(l);
+  return lines;
+}
+
 Result run(const std::string& args) { return shelfcross::app::test::run_shelfcross("plant", args); }
 
 class CmdPlant : public ::testing::Test {
@@ -84,12 +91,6 @@ TEST_F(CmdPlant, BadOptionsAreBadInput) {
   EXPECT_EQ(run("--commands " + f + " --rotor-speeds " + f + " --seconds 1 --out " + out()).exit_code, 2);
 }
 
-std::vector<std::string> lines_of(const std::string& path) {
-  std::ifstream in(path);
-  std::vector<std::string> lines;
-  for (std::string l; std::getline(in, l);) lines.push_back(l);
-  return lines;
-}
 
 TEST_F(CmdPlant, GoodRunWritesHeaderAndExpectedRows) {
   const std::string f = write("demo.commands",
@@ -115,6 +116,56 @@ TEST_F(CmdPlant, GoodRunWritesHeaderAndExpectedRows) {
   ASSERT_GE(reply_lines.size(), 2u);
   EXPECT_NE(reply_lines[0].find("-> ok"), std::string::npos);
   EXPECT_NE(reply_lines[1].find("(deferred) -> ok"), std::string::npos);
+}
+
+// Issue 19: a command file that flies nothing says why. Every command the firmware ignored or
+// refused is printed with its time and the reason; the run still writes its CSV (exit 0).
+TEST_F(CmdPlant, TakeoffBeforeCommandIsReportedAsIgnored) {
+  const std::string f = write("early.commands", "0 takeoff\n0.5 rc 0 50 0 0\n1 command\n");
+  const Result r = run("--commands " + f + " --seconds 3 --out " + out());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("0 \"takeoff\" ignored: not in SDK mode ('command' not received yet), no reply"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("0.5 \"rc 0 50 0 0\" ignored: not in SDK mode"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("1 \"command\" -> ok"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("2 of 3 commands ignored or refused by the simulated firmware"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("final mode: landed"), std::string::npos) << r.output;
+}
+
+TEST_F(CmdPlant, RefusedAndIgnoredCommandsGiveTheReason) {
+  const std::string f = write("refused.commands",
+                              "0 command\n0.2 land\n0.4 forward 50\n0.5 takeoff\n1 rc 0 50 0 0\n1.5 takeoff\n"
+                              "2 flip l\n");
+  const std::string replies = (dir_ / "replies.txt").string();
+  const Result r = run("--commands " + f + " --seconds 3 --out " + out() + " --replies " + replies);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  // On stderr although the replies go to a file.
+  EXPECT_NE(r.output.find("0.2 \"land\" -> error: refused: the drone is landed"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("0.4 \"forward 50\" -> error: refused: the drone is landed"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("1 \"rc 0 50 0 0\" ignored: the drone is taking_off (rc acts only while flying free)"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("1.5 \"takeoff\" -> error: refused: the drone is taking_off"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("2 \"flip l\" -> error: refused: flip and curve are not simulated"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("5 of 7 commands ignored or refused"), std::string::npos) << r.output;
+  // And in the replies file, in time order with the replies.
+  const auto reply_lines = lines_of(replies);
+  ASSERT_GE(reply_lines.size(), 6u);
+  EXPECT_EQ(reply_lines[0], "0 \"command\" -> ok");
+  EXPECT_EQ(reply_lines[1], "0.2 \"land\" -> error: refused: the drone is landed");
+}
+
+TEST_F(CmdPlant, WatchdogLandingIsReported) {
+  const std::string f = write("quiet.commands", "0 command\n0.5 takeoff\n");
+  const Result r = run("--commands " + f + " --seconds 20 --rate 10 --out " + out());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("landing by itself: no command for 15 s (since 0.5 s)"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("ignored or refused"), std::string::npos) << r.output;
 }
 
 TEST_F(CmdPlant, RotorSpeedFileBypassesTheAutopilot) {
