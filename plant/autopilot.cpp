@@ -51,8 +51,10 @@ double Autopilot::tilt_limit_rad() const {
 }
 
 int Autopilot::battery_pct() const {
-  const double used = motor_on_time_s() / params_.battery_endurance_s;
-  return static_cast<int>(std::clamp(std::floor(100.0 * (1.0 - used)), 0.0, 100.0));
+  // The one battery of the simulated Tello: linear in motor-on time, read by `battery?` and
+  // sent in every state record.
+  const double used_pct = 100.0 * motor_on_time_s() / params_.battery_endurance_s;
+  return static_cast<int>(std::clamp(std::floor(params_.battery_start_pct - used_pct), 0.0, 100.0));
 }
 
 double Autopilot::height_above_takeoff_m() const { return last_state_.p_WB_m.z() - takeoff_z_m_; }

@@ -165,6 +165,7 @@ struct AutopilotParams {
   double max_tilt_rate_radps = 4.0;
   double max_yaw_rate_radps = 3.0;
   double battery_endurance_s = 780.0;   ///< 13 min of motor-on time from 100 % (Table 4)
+  double battery_start_pct = 100.0;     ///< charge at power-on; drains linearly with motor-on time
   bool operator==(const AutopilotParams&) const = default;
 };
 

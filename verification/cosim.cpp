@@ -215,7 +215,6 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
   Eigen::Vector3d v_prev = Eigen::Vector3d::Zero();
   Eigen::Vector3d a_W = Eigen::Vector3d::Zero();
   bool touching_floor = true;
-  double motor_time_s = 0.0;
   const int shelf_count = mission_shelf_count(sc);
   m.shelves = shelf_count;
   m.strategy = sc.cosim.strategy;
@@ -249,7 +248,6 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
     const Eigen::Isometry3d X = body_pose(s);
     const double dt_s = ns_to_seconds(t - t_now);
     a_W = (s.v_WB_W_mps - v_prev) / dt_s;
-    if (tello.mode() != plant::FlightMode::landed) motor_time_s += dt_s;
     m.path_length_m += (X.translation() - X_prev.translation()).norm();
     if (const auto contact = world.sweep(X_prev, t_now, X, t, plant::FloorContacts::ignore)) {
       m.contact = *contact;
@@ -506,7 +504,7 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
   } else {
     LinkModel link(cs.link, setup.seed);
     RandomStream render_noise(setup.seed, StreamId::render_noise);
-    plant::SimulatedTello tello(sc.vehicle, sc.autopilot, sc.wind, RandomStream(setup.seed, StreamId::wind).next_u64(),
+    plant::SimulatedTello tello(sc.vehicle, autopilot_params_for(sc), sc.wind, RandomStream(setup.seed, StreamId::wind).next_u64(),
                                 {}, sc.start.p_WB_m.x(), sc.start.p_WB_m.y(), sc.start.yaw_rad);
     init_truth(tello);
     ideal_fsw = std::make_unique<flight_sw::FlightSoftware>(flight_config);
@@ -624,8 +622,9 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
       }
       if (t == event_time(k_state, state_mhz)) {
         if (sdk_on) {
-          const double battery = cs.battery_start_pct - 100.0 * motor_time_s / cs.endurance_s;
-          const StateRecord truth = state_from_truth(s, a_W, ground_z_m, battery, motor_time_s, t);
+          const plant::Autopilot& firmware = tello.autopilot();
+          const StateRecord truth =
+              state_from_truth(s, a_W, ground_z_m, firmware.battery_pct(), firmware.motor_on_time_s(), t);
           to_fsw.push({link.state_arrival(t), seq++, StateText{tello::format_state_record(truth)}});
         }
         ++k_state;

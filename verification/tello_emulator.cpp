@@ -171,7 +171,7 @@ TelloEmulator::TelloEmulator(RunSetup setup, EmulatorConfig config, EmulatorChan
       inline_renderer_(inline_renderer),
       on_tick_(std::move(on_tick)),
       world_(scenario_->warehouse, scenario_->vehicle.size_m, scenario_->cosim.vehicle_margin_m),
-      tello_(scenario_->vehicle, scenario_->autopilot, scenario_->wind,
+      tello_(scenario_->vehicle, autopilot_params_for(*scenario_), scenario_->wind,
              RandomStream(config_.seed, StreamId::wind).next_u64(), {}, scenario_->start.p_WB_m.x(),
              scenario_->start.p_WB_m.y(), scenario_->start.yaw_rad),
       ground_z_m_(tello_.state().p_WB_m.z()),
@@ -326,7 +326,6 @@ void TelloEmulator::tick(TimeNs t, TimeNs now_ns) {
   if (t > t_prev_) {
     const double dt_s = ns_to_seconds(t - t_prev_);
     a_W_ = (s.v_WB_W_mps - v_prev_) / dt_s;
-    if (tello_.mode() != plant::FlightMode::landed) motor_time_s_ += dt_s;
     report_.path_length_m += (X.translation() - X_prev_.translation()).norm();
     if (const auto contact = world_.sweep(X_prev_, t_prev_, X, t, plant::FloorContacts::ignore)) {
       report_.contact = *contact;
@@ -365,9 +364,9 @@ void TelloEmulator::tick(TimeNs t, TimeNs now_ns) {
   // 3. The state record, to the `command` sender's state port.
   if (t >= event_time(k_state_, state_mhz_)) {
     if (tello_.autopilot().sdk_mode() && client_) {
-      const double battery = sc.cosim.battery_start_pct - 100.0 * motor_time_s_ / sc.cosim.endurance_s;
-      const std::string text =
-          tello::format_state_record(state_from_truth(s, a_W_, ground_z_m_, battery, motor_time_s_, t));
+      const plant::Autopilot& firmware = tello_.autopilot();
+      const std::string text = tello::format_state_record(
+          state_from_truth(s, a_W_, ground_z_m_, firmware.battery_pct(), firmware.motor_on_time_s(), t));
       std::lock_guard lock(mutex_);
       const bool lost = state_faults_.bernoulli(config_.faults.state.loss);
       const bool twice = state_faults_.bernoulli(config_.faults.state.duplicate);
@@ -609,7 +608,7 @@ EmulatorReport TelloEmulator::report() const {
   r.end_reason = end_reason_.value_or("running");
   r.detail = end_detail_;
   r.elapsed_s = ns_to_seconds(tello_.time_ns());
-  r.flight_time_s = motor_time_s_;
+  r.flight_time_s = tello_.autopilot().motor_on_time_s();
   r.landed = tello_.mode() == plant::FlightMode::landed;
   r.crossed = crossing_.crossed();
   r.entry_offset_y_m = crossing_.entry_offset_y_m();

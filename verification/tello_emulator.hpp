@@ -325,7 +325,6 @@ class TelloEmulator {
   Eigen::Vector3d v_prev_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d a_W_ = Eigen::Vector3d::Zero();
   TimeNs t_prev_ = 0;
-  double motor_time_s_ = 0.0;
   ShelfCrossingMonitor crossing_;
   std::optional<std::string> end_reason_;
   std::string end_detail_;

@@ -7,6 +7,13 @@
 
 namespace shelfcross::verification {
 
+plant::AutopilotParams autopilot_params_for(const Scenario& scenario) {
+  plant::AutopilotParams p = scenario.autopilot;
+  p.battery_start_pct = scenario.cosim.battery_start_pct;
+  p.battery_endurance_s = scenario.cosim.endurance_s;
+  return p;
+}
+
 using flight_sw::CellIndex;
 
 Eigen::Vector3d euler_zyx(const Eigen::Matrix3d& R) {

@@ -10,10 +10,17 @@
 
 #include "flight_sw/perception.hpp"
 #include "plant/dynamics.hpp"
+#include "plant/params.hpp"
 #include "shelfcross/sdk_messages.hpp"
 #include "shelfcross/warehouse.hpp"
+#include "verification/scenario.hpp"
 
 namespace shelfcross::verification {
+
+/// The simulated Tello's firmware parameters for a scenario: its autopilot section, with the
+/// one battery of the vehicle set from cosim.battery_start_pct and cosim.endurance_s (the
+/// autopilot answers `battery?` and fills every state record from it).
+plant::AutopilotParams autopilot_params_for(const Scenario& scenario);
 
 /// ZYX Euler angles (roll, pitch, yaw) of R_WB, the convention of sdk_messages.hpp.
 Eigen::Vector3d euler_zyx(const Eigen::Matrix3d& R);
