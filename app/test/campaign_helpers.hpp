@@ -68,6 +68,7 @@ inline std::vector<std::pair<int, std::string>> stored_hashes(const fs::path& db
 }
 
 /// The default scenario with runs cut at 4 s: start-up and take-off, enough to differ per seed.
+/// Its link is the shipped one (sdk: the Tello's datagrams through tello_pilot's loop).
 inline fs::path short_scenario(const fs::path& dir) {
   std::ifstream in(std::string(SHELFCROSS_SOURCE_DIR) + "/scenarios/paper_test_shelf.yaml");
   std::stringstream text;
@@ -80,6 +81,15 @@ inline fs::path short_scenario(const fs::path& dir) {
   const fs::path path = dir / "short.yaml";
   std::ofstream(path) << yaml;
   return path;
+}
+
+/// The link model stored in every run's metrics, by index.
+inline std::vector<std::string> stored_link_models(const fs::path& db) {
+  SQLite::Database d(db.string(), SQLite::OPEN_READONLY);
+  SQLite::Statement q(d, "SELECT metrics_json FROM runs ORDER BY run_index");
+  std::vector<std::string> out;
+  while (q.executeStep()) out.push_back(nlohmann::json::parse(q.getColumn(0).getString())["link"]["model"].get<std::string>());
+  return out;
 }
 
 inline std::string campaign_hash(const fs::path& dir) {

@@ -89,6 +89,7 @@ TEST(MpiCampaign, ThreeRanksEqualOneProcess) {
   EXPECT_EQ(stored_hashes(root / "mpi" / "results.sqlite"), stored_hashes(root / "one" / "results.sqlite"));
   EXPECT_EQ(campaign_hash(root / "mpi"), campaign_hash(root / "one"));
   EXPECT_EQ(campaign_hash(root / "one").size(), 32u);
+  EXPECT_EQ(stored_link_models(root / "mpi" / "results.sqlite"), std::vector<std::string>(4, "sdk"));
   // The same command again resumes: nothing left to do, nothing run twice.
   EXPECT_EQ(wait_exit(spawn(concat(mpirun(3, {}), campaign_args(scenario, 4, root / "mpi")))), 0);
   EXPECT_EQ(indices(root / "mpi" / "results.sqlite"), (std::vector<int>{0, 1, 2, 3}));

@@ -4,6 +4,7 @@
 #include <filesystem>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "flight_sw/inventory.hpp"
 #include "flight_sw/navigation.hpp"
@@ -47,6 +48,9 @@ TEST(CoSimulation, SameSeedGivesTheSameRunHash) {
   EXPECT_GT(a.metrics.path_length_m, 0.9);  // it took off
 }
 
+// With the sdk link (the default): the same runs on one or two worker threads; the MPI test
+// (app/test/cmd_mpi_campaign_test.cpp) and `replay` (cmd_campaign_test.cpp) check ranks and
+// single replays on the same default scenario.
 TEST(Campaign, OneOrTwoWorkersGiveTheSameRunsAndCampaignHash) {
   const std::shared_ptr<const Scenario> s = default_with([](Scenario& s) { s.cosim.timeout_s = 5.0; });
   const CampaignMeta meta{write_scenario(*s), 7, 3};
@@ -62,6 +66,10 @@ TEST(Campaign, OneOrTwoWorkersGiveTheSameRunsAndCampaignHash) {
     EXPECT_EQ(a[i].run_hash, b[i].run_hash);
     EXPECT_EQ(a[i].dispersion_json, b[i].dispersion_json);
     EXPECT_EQ(a[i].metrics_json, b[i].metrics_json);
+    // The shipped link: the Tello's datagrams through tello_pilot's loop, decoded inline.
+    const auto link = nlohmann::json::parse(a[i].metrics_json)["link"];
+    EXPECT_EQ(link["model"], "sdk");
+    EXPECT_GT(link["video_datagrams"].get<int>(), 0);
   }
   const auto sa = summarize_campaign(a, 3), sb = summarize_campaign(b, 3);
   EXPECT_EQ(sa["campaign_hash"], sb["campaign_hash"]);
