@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdint>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <type_traits>
 
@@ -78,6 +79,17 @@ Map::Map(YAML::Node node, std::shared_ptr<const std::string> file)
     : node_(std::move(node)), file_(std::move(file)) {
   if (!node_.IsMap()) {
     throw ConfigError(*file_, line_of_node(node_), "expected a mapping of keys to values");
+  }
+  // A key given twice: yaml-cpp keeps both pairs and a lookup sees only the first, so one of
+  // the two values would be silently ignored. Refused at the second, naming the first.
+  std::map<std::string, int> first_line;
+  for (const auto& kv : node_) {
+    if (!kv.first.IsScalar()) continue;
+    const auto [at, inserted] = first_line.emplace(kv.first.Scalar(), line_of_node(kv.first));
+    if (!inserted) {
+      throw ConfigError(*file_, line_of_node(kv.first),
+                        "key '" + kv.first.Scalar() + "' given twice (first on line " + std::to_string(at->second) + ")");
+    }
   }
 }
 

@@ -47,6 +47,19 @@ TEST(StrictYaml, RefusesUnknownKeyWithItsLine) {
   EXPECT_NE(std::string(e.what()).find("test.yaml:3:"), std::string::npos);
 }
 
+TEST(StrictYaml, RefusesAKeyGivenTwiceAtItsSecondLine) {
+  // One of the two values would otherwise be silently ignored.
+  const ConfigError e = error_of("camera:\n  width_px: 960\n  height_px: 720\n  width_px: 961\n", [](const Map& m) {
+    const Map cam = m.map("camera");
+    cam.required<int>("width_px");
+  });
+  EXPECT_EQ(e.line(), 4);
+  EXPECT_NE(e.reason().find("key 'width_px' given twice (first on line 2)"), std::string::npos) << e.reason();
+  // At the top level too.
+  const ConfigError top = error_of("a: 1\nb: 2\na: 3\n", [](const Map& m) { m.required<int>("a"); });
+  EXPECT_EQ(top.line(), 3);
+}
+
 TEST(StrictYaml, RefusesWrongTypes) {
   EXPECT_EQ(error_of("a: 1\nspeed: fast\n", [](const Map& m) { m.required<double>("speed"); }).line(), 2);
   EXPECT_EQ(error_of("n: 1.5\n", [](const Map& m) { m.required<int>("n"); }).line(), 1);

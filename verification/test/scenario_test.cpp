@@ -214,6 +214,22 @@ TEST(Scenario, RefusesUnknownKey) {
                  "unknown key 'gravity_mps2'");
 }
 
+TEST(Scenario, RefusesAKeyGivenTwice) {
+  // width_px twice in camera: one value would otherwise be silently ignored.
+  expect_refused(insert_line(11, "camera:\n  width_px: 960\n  width_px: 961"), 13,
+                 "key 'width_px' given twice (first on line 12)");
+  expect_refused(insert_line(3, "name: again"), 3, "key 'name' given twice (first on line 2)");
+  expect_refused(insert_line(11, "cosim: {link: {model: sdk, model: ideal}}"), 11, "key 'model' given twice");
+}
+
+TEST(Scenario, LinkModelIsSdkByDefaultAndRefusesUnknownModels) {
+  EXPECT_EQ(parse_scenario(kBase, "small.yaml").cosim.link.model, "sdk");
+  EXPECT_EQ(parse_scenario(insert_line(11, "cosim: {link: {model: ideal}}"), "ideal.yaml").cosim.link.model, "ideal");
+  expect_refused(insert_line(11, "cosim: {link: {model: wifi}}"), 11, "unknown link model 'wifi' (sdk or ideal)");
+  expect_refused(insert_line(11, "cosim: {link: {video_datagram_loss: 1.5}}"), 11, "video_datagram_loss");
+  expect_refused(insert_line(11, "cosim: {pilot: {stop_rc_repeats: -1}}"), 11, "stop_rc_repeats");
+}
+
 TEST(Scenario, RefusesWrongType) {
   expect_refused(insert_line(11, "camera: {frame_rate_hz: fast}"), 11, "expected a number");
   expect_refused(replace_line(9, "        - {level: one, column: 1, marker_id: 3}"), 9,
