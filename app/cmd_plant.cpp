@@ -16,8 +16,8 @@
 #include "command_registry.hpp"
 #include "plant/dynamics.hpp"
 #include "plant/quadrotor.hpp"
-#include "plant/sdk_command.hpp"
 #include "plant/simulated_tello.hpp"
+#include "sdk/command.hpp"
 
 namespace shelfcross::app {
 namespace {

@@ -8,7 +8,7 @@ function(shelfcross_module)
   file(GLOB sources CONFIGURE_DEPENDS "${CMAKE_CURRENT_SOURCE_DIR}/*.cpp")
   file(GLOB headers CONFIGURE_DEPENDS "${CMAKE_CURRENT_SOURCE_DIR}/*.hpp")
   set(target shelfcross_${M_NAME})
-  # Modules include each other as "plant/dynamics.hpp" or "flight_sw/tello/sdk_state.hpp": the
+  # Modules include each other as "plant/dynamics.hpp" or "flight_sw/tello/sdk_driver.hpp": the
   # source root is the include root (installed: include/shelfcross/<folder>/).
   if(sources)
     add_library(${target} ${sources})

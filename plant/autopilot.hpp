@@ -1,7 +1,7 @@
 #pragma once
 // The Tello's onboard autopilot (its firmware) as an SDK user experiences it.
 //
-// It takes SDK command text (as the drone does, parsed by plant/sdk_command.hpp) and answers
+// It takes SDK command text (as the drone does, parsed by sdk/command.hpp) and answers
 // with the real reply strings; it runs its inner loops at AutopilotParams::rate_hz on the
 // vehicle's state (the Tello's own vision/IMU estimate is taken as exact here; sensor models
 // belong to verification/).
@@ -49,7 +49,7 @@
 
 #include "plant/dynamics.hpp"
 #include "plant/params.hpp"
-#include "plant/sdk_command.hpp"
+#include "sdk/command.hpp"
 #include "shelfcross/sdk_messages.hpp"
 #include "shelfcross/time.hpp"
 

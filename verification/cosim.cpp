@@ -10,14 +10,15 @@
 
 #include "flight_sw/tello/datagram_channel.hpp"
 #include "flight_sw/tello/pilot_loop.hpp"
-#include "flight_sw/tello/sdk_state.hpp"
 #include "plant/collision.hpp"
 #include "plant/simulated_tello.hpp"
 #include "render/ground_truth.hpp"
+#include "sdk/state_record.hpp"
 #include "shelfcross/random.hpp"
 #include "verification/link_model.hpp"
 #include "verification/run_hash.hpp"
 #include "verification/tello_emulator.hpp"
+#include "verification/tello_state_format.hpp"
 #include "verification/vehicle_truth.hpp"
 
 namespace shelfcross::verification {
@@ -625,7 +626,7 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
           const plant::Autopilot& firmware = tello.autopilot();
           const StateRecord truth =
               state_from_truth(s, a_W, ground_z_m, firmware.battery_pct(), firmware.motor_on_time_s(), t);
-          to_fsw.push({link.state_arrival(t), seq++, StateText{tello::format_state_record(truth)}});
+          to_fsw.push({link.state_arrival(t), seq++, StateText{format_state_record(truth)}});
         }
         ++k_state;
       }
@@ -638,7 +639,7 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
           step_fsw(*frame, t);
           if (observer && !outcome) observer(*frame, fsw);
         } else if (auto* state = std::get_if<StateText>(&msg)) {
-          if (auto record = tello::parse_state_record(state->text, t)) step_fsw(*record, t);
+          if (auto record = sdk::parse_state_record(state->text, t)) step_fsw(*record, t);
         } else {
           SdkReply reply = std::get<SdkReply>(msg);
           reply.t_ns = t;

@@ -14,13 +14,14 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core/mat.hpp>
 
-#include "flight_sw/tello/h264_codec.hpp"
-#include "flight_sw/tello/sdk_state.hpp"
-#include "plant/sdk_command.hpp"
 #include "render/ground_truth.hpp"
 #include "render/renderer.hpp"
+#include "sdk/command.hpp"
+#include "sdk/video_framing.hpp"
 #include "verification/campaign.hpp"
 #include "verification/cosim.hpp"
+#include "verification/h264_encoder.hpp"
+#include "verification/tello_state_format.hpp"
 
 namespace shelfcross::verification {
 namespace {
@@ -52,15 +53,15 @@ bool well_formed(const std::string& bytes, std::size_t max_bytes) {
 /// Manoeuvres a real Tello refuses with "error Not joystick" / "error No valid imu". Land and
 /// emergency are never refused here, so a client can always end a flight.
 bool refusable(const std::string& text) {
-  const auto parsed = plant::sdk::parse(text);
-  const auto* c = std::get_if<plant::sdk::Command>(&parsed);
-  return c && plant::sdk::is_manoeuvre(c->verb) && c->verb != plant::sdk::Verb::land;
+  const auto parsed = sdk::parse(text);
+  const auto* c = std::get_if<sdk::Command>(&parsed);
+  return c && sdk::is_manoeuvre(c->verb) && c->verb != sdk::Verb::land;
 }
 
 bool is_manoeuvre_text(const std::string& text) {
-  const auto parsed = plant::sdk::parse(text);
-  const auto* c = std::get_if<plant::sdk::Command>(&parsed);
-  return c && plant::sdk::is_manoeuvre(c->verb);
+  const auto parsed = sdk::parse(text);
+  const auto* c = std::get_if<sdk::Command>(&parsed);
+  return c && sdk::is_manoeuvre(c->verb);
 }
 
 void check_probability(double p, const char* name) {
@@ -144,7 +145,7 @@ struct TelloEmulator::VideoWorker {
                 23, std::min(slices, (sc.camera.height_px + 15) / 16)),
         motion_blur(sc.cosim.motion_blur_samples > 1) {}
   std::unique_ptr<render::Renderer> renderer;
-  tello::H264Encoder encoder;
+  H264Encoder encoder;
   bool motion_blur;
   cv::Mat bgr;
   std::string error;  ///< set (under the emulator's mutex) when rendering or encoding failed
@@ -365,7 +366,7 @@ void TelloEmulator::tick(TimeNs t, TimeNs now_ns) {
   if (t >= event_time(k_state_, state_mhz_)) {
     if (tello_.autopilot().sdk_mode() && client_) {
       const plant::Autopilot& firmware = tello_.autopilot();
-      const std::string text = tello::format_state_record(
+      const std::string text = format_state_record(
           state_from_truth(s, a_W_, ground_z_m_, firmware.battery_pct(), firmware.motor_on_time_s(), t));
       std::lock_guard lock(mutex_);
       const bool lost = state_faults_.bernoulli(config_.faults.state.loss);
@@ -581,10 +582,10 @@ TelloEmulator::EncodedFrame TelloEmulator::encode_frame(VideoWorker& video, rend
     renderer.render_into(job.X_WC, job.noise_seed, video.bgr);
   }
   const std::string access_unit = video.encoder.encode(video.bgr, job.force_key);
-  const std::vector<int> types = tello::nal_unit_types(access_unit);
+  const std::vector<int> types = sdk::nal_unit_types(access_unit);
   EncodedFrame frame;
   frame.key = std::find(types.begin(), types.end(), 5) != types.end();
-  frame.datagrams = tello::tello_datagrams(access_unit);
+  frame.datagrams = sdk::tello_datagrams(access_unit);
   return frame;
 }
 

@@ -6,14 +6,14 @@
 //     command came from; nothing is answered before `command` (SimulatedTello's firmware
 //     decides every reply: ranges, real error strings, deferred manoeuvre replies, no reply to
 //     rc, rc ignored while landed, the 15 s no-command watchdog, read commands);
-//   - after `command`, one SDK 2.0 state record (tello::format_state_record of the plant's
+//   - after `command`, one SDK 2.0 state record (format_state_record of the plant's
 //     truth, as the co-simulation builds it) every 100 ms to client_state_port of the address
 //     that sent `command`, from state_source_port;
 //   - after `streamon`, the camera (the scenario's intrinsics and mount, the co-simulation's
-//     renderer) at the scenario's frame rate, encoded by tello::H264Encoder (libx264
+//     renderer) at the scenario's frame rate, encoded by H264Encoder (libx264
 //     zero-latency, SPS and PPS before every key frame, a key frame per second of captures
 //     (dropped captures do not stretch the group) and on the first frame after streamon, one
-//     slice per macroblock row by default), cut by tello::tello_datagrams into 1460-byte
+//     slice per macroblock row by default), cut by sdk::tello_datagrams into 1460-byte
 //     datagrams with a short last one, to client_video_port of that address, from
 //     video_source_port. Why these settings: flight_sw/tello/README.md, tello-sim.
 //

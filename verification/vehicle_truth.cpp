@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "flight_sw/tello/sdk_state.hpp"
+#include "sdk/state_record.hpp"
 
 namespace shelfcross::verification {
 
@@ -53,7 +53,7 @@ StateRecord state_from_truth(const plant::RigidBodyState& s, const Eigen::Vector
   r.vy_H_mps = v_H.y();
   r.vz_H_mps = v_H.z();
   // Specific force: f_B = R^T (a_W - g_W), g_W = (0, 0, -g).
-  const Eigen::Vector3d f_B = R.transpose() * (a_W_mps2 + Eigen::Vector3d(0, 0, tello::kStandardGravity_mps2));
+  const Eigen::Vector3d f_B = R.transpose() * (a_W_mps2 + Eigen::Vector3d(0, 0, sdk::kStandardGravity_mps2));
   r.ax_B_mps2 = f_B.x();
   r.ay_B_mps2 = f_B.y();
   r.az_B_mps2 = f_B.z();

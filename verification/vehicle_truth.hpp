@@ -32,7 +32,7 @@ Eigen::Isometry3d body_pose(const plant::RigidBodyState& s);
 std::optional<flight_sw::CellIndex> cell_at(const ShelfSpec& s, double y_S, double z_S);
 
 /// The Tello's state record from the plant's truth, before the SDK's quantisation (which
-/// tello::format_state_record applies): attitude from R_WB, velocity in the heading frame,
+/// format_state_record applies, tello_state_format.hpp): attitude from R_WB, velocity in the heading frame,
 /// specific force f_B = R^T (a_W - g_W), height above the floor, a ToF down the body z axis
 /// (0.1 m on the ground, nothing past 8 m or 60 deg of tilt), baro 100 m + z, battery floored.
 StateRecord state_from_truth(const plant::RigidBodyState& s, const Eigen::Vector3d& a_W_mps2, double ground_z_m,

@@ -103,16 +103,16 @@ std::vector<DriverEvent> SdkDriver::take_events() {
 
 bool SdkDriver::submit(const std::string& text, const CommandOptions& options) {
   std::string why;
-  const auto kind = classify_command(text, &why);
+  const auto kind = sdk::classify_command(text, &why);
   if (!kind) {
     ++counters_.rejected;
     event(DriverEvent::Kind::Rejected, text, why, 0, options.tag);
     return false;
   }
-  if (config_.dry_run && (*kind == CommandKind::Motion || *kind == CommandKind::Rc)) {
+  if (config_.dry_run && (*kind == sdk::CommandKind::Motion || *kind == sdk::CommandKind::Rc)) {
     ++counters_.filtered;
     event(DriverEvent::Kind::Filtered, text, "dry run: not sent", 0, options.tag);
-    if (*kind != CommandKind::Rc) {
+    if (*kind != sdk::CommandKind::Rc) {
       event(DriverEvent::Kind::Reply, text, "ok", 1, options.tag);
       events_.back().synthetic = true;
     }
@@ -135,7 +135,7 @@ bool SdkDriver::submit(const std::string& text, const CommandOptions& options) {
     rc_setpoint_.reset();
     guard_until_ns_ = 0;
   }
-  if (*kind == CommandKind::Rc) {
+  if (*kind == sdk::CommandKind::Rc) {
     // The same sticks again only renew the setpoint: the steady repeat sends them.
     if (rc_setpoint_ != text) rc_new_ = true;
     rc_setpoint_ = text;
@@ -212,8 +212,8 @@ void SdkDriver::read_states(TimeNs now) {
       event(DriverEvent::Kind::Foreign, "", "state socket: from " + d->from.text());
       continue;
     }
-    StateParseReport report;
-    auto record = parse_state_record(d->bytes, now, &report);
+    sdk::StateParseReport report;
+    auto record = sdk::parse_state_record(d->bytes, now, &report);
     const std::string raw = trim_reply(d->bytes);
     if (!record) {
       ++counters_.bad_states;
@@ -266,7 +266,7 @@ void SdkDriver::send_next(TimeNs now) {
   if (outstanding_ || queue_.empty()) return;
   if (last_command_ns_ && now - *last_command_ns_ < config_.command_gap_ns) return;
   if (now < guard_until_ns_) return;
-  const bool motion = classify_command(queue_.front().text) == CommandKind::Motion;
+  const bool motion = sdk::classify_command(queue_.front().text) == sdk::CommandKind::Motion;
   if (motion) {
     rc_setpoint_.reset();  // a manoeuvre ends any stick input
     // The Tello flies the last sticks it received until told otherwise. Centre them on the
@@ -326,7 +326,7 @@ void SdkDriver::transmit_rc(TimeNs now, const std::string& text, DriverEvent::Ki
 bool SdkDriver::transmit(TimeNs now, const std::string& text) {
   // Every datagram passes the SDK's ranges once more, whatever path it took here.
   std::string why;
-  if (!classify_command(text, &why)) {
+  if (!sdk::classify_command(text, &why)) {
     ++counters_.rejected;
     event(DriverEvent::Kind::Rejected, text, why);
     return false;

@@ -6,7 +6,7 @@
 // due. All times come from the Clock it is given (tests step a ManualClock).
 //
 // Command rules it enforces:
-//  - every outgoing text is validated (classify_command): an unknown command or an argument
+//  - every outgoing text is validated (sdk::classify_command): an unknown command or an argument
 //    out of the SDK's range is refused locally and never sent;
 //  - one non-rc command outstanding at a time, queued commands wait for its reply or timeout;
 //    at least command_gap_ns between two non-rc commands;
@@ -45,9 +45,9 @@
 #include <vector>
 
 #include "flight_sw/tello/clock.hpp"
-#include "flight_sw/tello/sdk_command.hpp"
-#include "flight_sw/tello/sdk_state.hpp"
 #include "flight_sw/tello/udp_socket.hpp"
+#include "sdk/command.hpp"
+#include "sdk/state_record.hpp"
 #include "shelfcross/sdk_messages.hpp"
 
 namespace shelfcross::tello {
@@ -59,7 +59,7 @@ struct DriverConfig {
   std::uint16_t local_command_port = 0;  ///< 0: ephemeral (the drone replies to the sender)
   std::uint16_t local_state_port = 8890;
   std::uint16_t state_source_port = 0;   ///< 0: any port of drone_ip (undocumented on a Tello)
-  ReplyTimeouts timeouts;
+  sdk::ReplyTimeouts timeouts;
   int retries = 3;                       ///< re-sends after the first attempt
   TimeNs command_gap_ns = 100 * kMs;
   TimeNs stale_guard_ns = 300 * kMs;

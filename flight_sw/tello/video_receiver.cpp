@@ -9,9 +9,14 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "flight_sw/tello/h264_codec.hpp"
+#include "flight_sw/tello/h264_decoder.hpp"
+#include "sdk/video_framing.hpp"
 
 namespace shelfcross::tello {
+
+using sdk::begins_access_unit;
+using sdk::only_parameter_sets;
+using sdk::starts_with_start_code;
 
 std::string VideoStats::text() const {
   std::ostringstream s;
@@ -47,42 +52,6 @@ void signal_fd(int fd) {
 void clear_fd(int fd) {
   std::uint64_t v = 0;
   [[maybe_unused]] const ssize_t n = ::read(fd, &v, sizeof v);
-}
-
-bool starts_with_start_code(const std::string& s) {
-  return (s.size() >= 3 && s[0] == 0 && s[1] == 0 && s[2] == 1) ||
-         (s.size() >= 4 && s[0] == 0 && s[1] == 0 && s[2] == 0 && s[3] == 1);
-}
-
-// Parameter sets, delimiters and SEI only (the Tello sends SPS and PPS as short datagrams of
-// their own before each key frame): no picture yet, the frame goes on.
-bool only_parameter_sets(const std::string& s) {
-  if (!starts_with_start_code(s)) return false;
-  const std::vector<int> types = nal_unit_types(s);
-  for (int t : types) {
-    if (t != 6 && t != 7 && t != 8 && t != 9) return false;
-  }
-  return !types.empty();
-}
-
-// A datagram that begins an access unit: a start code, then an SPS, PPS, SEI or delimiter,
-// or a slice whose first_mb_in_slice is 0 (ue(v) 0 is the single bit 1 right after the
-// one-byte NAL header). The Tello starts each frame in a datagram of its own, and within a
-// frame only its first slice begins at macroblock 0.
-bool begins_access_unit(const std::string& s) {
-  size_t header = 0;
-  if (s.size() >= 4 && s[0] == 0 && s[1] == 0 && s[2] == 0 && s[3] == 1) {
-    header = 4;
-  } else if (s.size() >= 3 && s[0] == 0 && s[1] == 0 && s[2] == 1) {
-    header = 3;
-  } else {
-    return false;
-  }
-  if (s.size() <= header) return false;
-  const int type = static_cast<unsigned char>(s[header]) & 0x1f;
-  if (type == 6 || type == 7 || type == 8 || type == 9) return true;
-  if (type != 1 && type != 5) return false;
-  return s.size() > header + 1 && (static_cast<unsigned char>(s[header + 1]) & 0x80) != 0;
 }
 
 }  // namespace

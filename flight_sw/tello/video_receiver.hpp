@@ -15,7 +15,7 @@
 // VideoReceiverConfig::damaged:
 //   conceal (default): every picture the decoder outputs after the first clean key frame is
 //     handed over, damaged ones as libavcodec's error concealment filled them in (lost
-//     macroblocks copied from the previous picture along guessed motion; h264_codec.hpp), and
+//     macroblocks copied from the previous picture along guessed motion; h264_decoder.hpp), and
 //     marked: VideoFrame::damaged is true from the first sign of damage until a key frame
 //     decodes cleanly. What a real Tello user sees: smeared bands, not a frozen picture.
 //   discard: nothing is handed over from the first sign of damage until a key frame decodes
@@ -39,6 +39,7 @@
 
 #include "flight_sw/tello/clock.hpp"
 #include "flight_sw/tello/udp_socket.hpp"
+#include "sdk/video_framing.hpp"
 
 namespace shelfcross::tello {
 
@@ -49,7 +50,7 @@ struct VideoReceiverConfig {
   std::uint16_t source_port = 0;  ///< 0: any port of drone_ip
   std::string local_ip = "0.0.0.0";
   std::uint16_t local_port = 11111;  ///< 0: ephemeral (tests)
-  size_t datagram_size = 1460;       ///< a datagram shorter than this ends a frame
+  size_t datagram_size = sdk::kVideoDatagramBytes;  ///< a datagram shorter than this ends a frame
   size_t max_frame_bytes = 1 << 20;  ///< a frame growing past this is dropped (lost frame end)
   int receive_buffer_bytes = 4 << 20;
   DamagedFrames damaged = DamagedFrames::conceal;  ///< see the header comment

@@ -11,8 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "flight_sw/tello/h264_codec.hpp"
-#include "flight_sw/tello/sdk_state.hpp"
+#include "flight_sw/tello/h264_decoder.hpp"
+#include "sdk/state_record.hpp"
+#include "sdk/video_framing.hpp"
 #include "verification/cosim.hpp"
 
 namespace shelfcross::verification {
@@ -107,8 +108,8 @@ TEST_F(TelloEmulatorTest, NothingBeforeCommandThenOkAndStateRecordsAt10Hz) {
   for (const auto& [t, text] : records) {
     EXPECT_EQ(text.rfind("mid:", 0), 0u) << text;
     EXPECT_EQ(text.substr(text.size() - 2), "\r\n") << text;
-    tello::StateParseReport rep;
-    const auto parsed = tello::parse_state_record(text, t, &rep);
+    sdk::StateParseReport rep;
+    const auto parsed = sdk::parse_state_record(text, t, &rep);
     ASSERT_TRUE(parsed.has_value()) << text;
     EXPECT_TRUE(rep.mission_pad);
     EXPECT_EQ(rep.missing_keys, 0);
@@ -220,7 +221,7 @@ TEST_F(TelloEmulatorTest, StreamonSendsH264InTelloDatagrams) {
       EXPECT_EQ(d->from.port, emu_->video_source_port());
       ASSERT_LE(d->bytes.size(), 1460u);
       frames.back().push_back(d->bytes);
-      const std::vector<int> types = tello::nal_unit_types(d->bytes);
+      const std::vector<int> types = sdk::nal_unit_types(d->bytes);
       const bool parameter_sets_only =
           !types.empty() && std::all_of(types.begin(), types.end(), [](int t) { return t == 7 || t == 8 || t == 9; });
       if (d->bytes.size() < 1460 && !parameter_sets_only) {
@@ -238,7 +239,7 @@ TEST_F(TelloEmulatorTest, StreamonSendsH264InTelloDatagrams) {
     const auto& datagrams = frames[f];
     std::string au;
     for (const auto& d : datagrams) au += d;
-    const std::vector<int> types = tello::nal_unit_types(au);
+    const std::vector<int> types = sdk::nal_unit_types(au);
     const auto idr = std::find(types.begin(), types.end(), 5);
     if (f == 0) {
       ASSERT_NE(idr, types.end()) << "the first frame after streamon is a key frame";
@@ -246,8 +247,8 @@ TEST_F(TelloEmulatorTest, StreamonSendsH264InTelloDatagrams) {
     if (idr != types.end()) {
       // SPS and PPS first, each in a short datagram of its own, then the key frame.
       ASSERT_GE(datagrams.size(), 3u);
-      EXPECT_EQ(tello::nal_unit_types(datagrams[0]), std::vector<int>{7});
-      EXPECT_EQ(tello::nal_unit_types(datagrams[1]), std::vector<int>{8});
+      EXPECT_EQ(sdk::nal_unit_types(datagrams[0]), std::vector<int>{7});
+      EXPECT_EQ(sdk::nal_unit_types(datagrams[1]), std::vector<int>{8});
       EXPECT_LT(std::find(types.begin(), types.end(), 7), idr);
       EXPECT_LT(std::find(types.begin(), types.end(), 8), idr);
     }

@@ -13,9 +13,11 @@
 #include <opencv2/core.hpp>
 
 #include "flight_sw/tello/clock.hpp"
-#include "flight_sw/tello/h264_codec.hpp"
+#include "flight_sw/tello/h264_decoder.hpp"
 #include "flight_sw/tello/video_receiver.hpp"
+#include "sdk/video_framing.hpp"
 #include "shelfcross/random.hpp"
+#include "verification/h264_encoder.hpp"  // the drone's side: a Tello-like stream
 
 namespace shelfcross::tello {
 namespace {
@@ -32,7 +34,7 @@ std::vector<std::string> encoded_frames(int slices = 1) {
       base.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uchar>(60 + n), static_cast<uchar>(80 + y / 8 + n), static_cast<uchar>(100 + x / 10));
     }
   }
-  H264Encoder encoder(kWidth, kHeight, 30, kKeyInterval, 23, slices);
+  verification::H264Encoder encoder(kWidth, kHeight, 30, kKeyInterval, 23, slices);
   std::vector<std::string> out;
   for (int k = 0; k < kFrames; ++k) {
     cv::Mat f = base.clone();
@@ -57,7 +59,7 @@ void BM_ReceiverLastDatagramToHandOver(benchmark::State& state) {
   VideoReceiver receiver(config, clock);
   const Endpoint to{"127.0.0.1", receiver.local_port()};
   std::vector<std::vector<std::string>> datagrams;
-  for (const auto& f : frames) datagrams.push_back(tello_datagrams(f));
+  for (const auto& f : frames) datagrams.push_back(sdk::tello_datagrams(f));
   size_t k = 0;
   double total_s = 0.0, worst_s = 0.0;
   int64_t n = 0;

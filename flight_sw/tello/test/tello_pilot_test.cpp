@@ -20,9 +20,11 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "flight_sw/tello/h264_codec.hpp"
-#include "flight_sw/tello/sdk_command.hpp"
 #include "flight_sw/tello/test/loopback.hpp"
+#include "sdk/command.hpp"
+#include "sdk/video_framing.hpp"
+// The drone's side, to make a Tello-like stream (tests may link verification/; the program not).
+#include "verification/h264_encoder.hpp"
 
 extern char** environ;
 
@@ -127,7 +129,7 @@ struct FakeTello {
   UdpSocket video{"127.0.0.1", 0};
   std::uint16_t pilot_state_port = free_port();
   std::uint16_t pilot_video_port = free_port();
-  H264Encoder encoder{960, 720, 30, 10};
+  verification::H264Encoder encoder{960, 720, 30, 10};
   std::vector<std::string> received;
   /// The reply to a non-rc command ("ok" unless a test scripts refusals).
   std::function<std::string(const std::string&)> answer = [](const std::string&) { return std::string("ok"); };
@@ -160,7 +162,7 @@ struct FakeTello {
     }
     if (send_state) state.send_to({"127.0.0.1", pilot_state_port}, state_text);
     if (streaming) {
-      for (const auto& d : tello_datagrams(encoder.encode(picture(frame)))) video.send_to({"127.0.0.1", pilot_video_port}, d);
+      for (const auto& d : sdk::tello_datagrams(encoder.encode(picture(frame)))) video.send_to({"127.0.0.1", pilot_video_port}, d);
       ++frame;
     }
   }
@@ -178,7 +180,7 @@ struct FakeTello {
   void expect_all_valid() const {
     for (const auto& c : received) {
       std::string why;
-      EXPECT_TRUE(classify_command(c, &why)) << "'" << c << "': " << why;
+      EXPECT_TRUE(sdk::classify_command(c, &why)) << "'" << c << "': " << why;
     }
   }
 };

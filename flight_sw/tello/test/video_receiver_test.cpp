@@ -7,14 +7,20 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "flight_sw/tello/h264_codec.hpp"
+#include "flight_sw/tello/h264_decoder.hpp"
 #include "flight_sw/tello/test/loopback.hpp"
+#include "sdk/video_framing.hpp"
 #include "shelfcross/random.hpp"
+// The drone's side, to make a Tello-like stream (tests may link verification/; the library not).
+#include "verification/h264_encoder.hpp"
 
 namespace shelfcross::tello {
 namespace {
 
+using sdk::nal_unit_types;
+using sdk::tello_datagrams;
 using testing::pump_until;
+using verification::H264Encoder;
 
 constexpr int kWidth = 960;
 constexpr int kHeight = 720;

@@ -12,8 +12,10 @@
 //   roll = roll_t,  pitch = -pitch_t,  yaw = -yaw_t          (degrees -> rad)
 //   vx = vgx, vy = -vgy, vz = -vgz                           (dm/s -> m/s)
 //   ax = agx, ay = -agy, az = -agz                           (mg -> m/s^2, g = 9.80665)
-// format_state_record (the simulated Tello's side) applies the inverse, rounding the way
-// the drone reports: integers for attitude, velocity, heights, battery and temperatures.
+// The record's format exists here once. The parser is the ground station's side (the driver,
+// flight_sw/tello); the drone's side, verification::format_state_record (the simulated Tello
+// in verification/), applies the inverse, rounding the way the drone reports: integers for
+// attitude, velocity, heights, battery and temperatures.
 
 #include <cstdint>
 #include <optional>
@@ -22,7 +24,7 @@
 
 #include "shelfcross/sdk_messages.hpp"
 
-namespace shelfcross::tello {
+namespace shelfcross::sdk {
 
 inline constexpr double kStandardGravity_mps2 = 9.80665;
 /// tof reads this when the range sensor sees nothing valid.
@@ -43,8 +45,4 @@ struct StateParseReport {
 std::optional<StateRecord> parse_state_record(std::string_view datagram, TimeNs t_ns,
                                               StateParseReport* report = nullptr);
 
-/// The simulated Tello's state datagram (SDK 2.0 layout, no mission pad seen), from a record
-/// in shelfcross units. `battery_pct`, temperatures and times come from the record too.
-std::string format_state_record(const StateRecord& record);
-
-}  // namespace shelfcross::tello
+}  // namespace shelfcross::sdk

@@ -1,13 +1,12 @@
 #pragma once
-// H.264 through FFmpeg's libavcodec (Debian): the low-delay decoder the video receiver uses,
-// the libx264 encoder that tests, benchmarks and the Tello emulator use to make a Tello-like
-// stream, and the Tello's way of cutting an access unit into datagrams (PROTOCOL.md, Video).
+// H.264 through FFmpeg's libavcodec (Debian): the low-delay decoder the video receiver uses.
+// The drone's side (the libx264 encoder that makes a Tello-like stream) is
+// verification/h264_encoder.hpp; the datagram framing both sides share is
+// sdk/video_framing.hpp.
 
 #include <cstdint>
 #include <memory>
-#include <string>
 #include <string_view>
-#include <vector>
 
 #include <opencv2/core/mat.hpp>
 
@@ -50,35 +49,6 @@ class H264Decoder {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
-
-/// libx264 through libavcodec: ultrafast preset, zerolatency tune, one thread, no B-frames,
-/// Annex-B with SPS/PPS repeated before every key frame (as the Tello sends), `slices` slices
-/// per picture (x264 `slices`: bands of whole macroblock rows; 1: one slice per picture).
-class H264Encoder {
- public:
-  /// Throws std::runtime_error when libavcodec has no libx264 encoder, std::invalid_argument
-  /// for slices outside 1..(macroblock rows).
-  H264Encoder(int width_px, int height_px, int fps = 30, int key_interval = 30, int crf = 23, int slices = 1);
-  ~H264Encoder();
-  H264Encoder(const H264Encoder&) = delete;
-  H264Encoder& operator=(const H264Encoder&) = delete;
-
-  /// One BGR frame (CV_8UC3, the encoder's size) in, one access unit out (Annex-B bytes).
-  std::string encode(const cv::Mat& bgr, bool force_key_frame = false);
-
- private:
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
-};
-
-/// The NAL unit types (nal_unit_type, 5 bits) of an Annex-B byte string, in order.
-std::vector<int> nal_unit_types(std::string_view annex_b);
-
-/// The Tello's datagrams for one access unit: leading parameter sets (SPS, PPS, AUD) one per
-/// datagram, then the rest cut into `datagram_size` pieces with a shorter last piece (when
-/// the rest is an exact multiple, its last byte goes alone), so a receiver finds the frame's
-/// end at the first short datagram.
-std::vector<std::string> tello_datagrams(std::string_view access_unit, size_t datagram_size = 1460);
 
 /// Peak signal-to-noise ratio of two 8-bit images of one size and type, dB (inf if equal).
 double psnr_db(const cv::Mat& a, const cv::Mat& b);

@@ -1,11 +1,12 @@
-#include "plant/sdk_command.hpp"
+#include "sdk/command.hpp"
 
+#include <cassert>
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <vector>
 
-namespace shelfcross::plant::sdk {
+namespace shelfcross::sdk {
 namespace {
 
 struct VerbSpec {
@@ -173,4 +174,44 @@ std::variant<Command, ParseError> parse(std::string_view text) {
   return c;
 }
 
-}  // namespace shelfcross::plant::sdk
+CommandKind kind_of(Verb verb) {
+  switch (verb) {
+    case Verb::command: case Verb::streamon: case Verb::streamoff:
+      return CommandKind::Control;
+    case Verb::rc:
+      return CommandKind::Rc;
+    default:
+      return is_read(verb) ? CommandKind::Read : CommandKind::Motion;
+  }
+}
+
+std::optional<CommandKind> classify_command(std::string_view text, std::string* why) {
+  const auto fail = [why](std::string reason) -> std::optional<CommandKind> {
+    if (why) *why = std::move(reason);
+    return std::nullopt;
+  };
+  if (text.empty()) return fail("empty command");
+  for (const char ch : text)
+    if (ch < 0x20 || ch > 0x7e) return fail("non-printable character in command");
+  const auto parsed = parse(text);
+  if (const auto* err = std::get_if<ParseError>(&parsed)) return fail(err->reason);
+  const Command& c = std::get<Command>(parsed);
+  const std::string canonical = to_text(c);
+  if (canonical != text)
+    return fail("not in canonical form (one space between tokens, no leading or trailing space, integers "
+                "without '+' or leading zeros): '" + std::string(text) + "' is '" + canonical + "'");
+  return kind_of(c.verb);
+}
+
+std::string rc_text(int a, int b, int c, int d) {
+  assert(std::abs(a) <= 100 && std::abs(b) <= 100 && std::abs(c) <= 100 && std::abs(d) <= 100);
+  return "rc " + std::to_string(a) + " " + std::to_string(b) + " " + std::to_string(c) + " " + std::to_string(d);
+}
+
+TimeNs ReplyTimeouts::timeout_for(std::string_view text) const {
+  if (text == "takeoff") return takeoff_ns;
+  if (text == "land") return land_ns;
+  return default_ns;
+}
+
+}  // namespace shelfcross::sdk

@@ -1,0 +1,152 @@
+#include "flight_sw/tello/h264_decoder.hpp"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <opencv2/core.hpp>
+
+extern "C" {
+#include <libavcodec/avcodec.h>
+#include <libavutil/frame.h>
+#include <libavutil/imgutils.h>
+#include <libavutil/log.h>
+#include <libswscale/swscale.h>
+}
+
+namespace shelfcross::tello {
+namespace {
+
+// FFmpeg's decoders print every damaged macroblock; the receiver counts errors itself.
+void quiet_ffmpeg() {
+  static const bool once = [] {
+    av_log_set_level(AV_LOG_FATAL);
+    return true;
+  }();
+  (void)once;
+}
+
+}  // namespace
+
+// ---- Decoder ----
+
+struct H264Decoder::Impl {
+  AVCodecParserContext* parser = nullptr;
+  AVCodecContext* ctx = nullptr;
+  AVPacket* packet = nullptr;
+  AVFrame* frame = nullptr;   // receive buffer
+  AVFrame* latest = nullptr;  // the last decoded picture
+  bool have_latest = false;
+  SwsContext* sws = nullptr;
+
+  ~Impl() {
+    sws_freeContext(sws);
+    av_frame_free(&latest);
+    av_frame_free(&frame);
+    av_packet_free(&packet);
+    avcodec_free_context(&ctx);
+    if (parser) av_parser_close(parser);
+  }
+
+  void send(DecodeResult& r) {
+    if (avcodec_send_packet(ctx, packet) < 0) r.error = true;
+    for (;;) {
+      const int rc = avcodec_receive_frame(ctx, frame);
+      if (rc == AVERROR(EAGAIN) || rc == AVERROR_EOF) break;
+      if (rc < 0) {
+        r.error = true;
+        break;
+      }
+      ++r.pictures;
+      const bool damaged = frame->decode_error_flags != 0 || (frame->flags & AV_FRAME_FLAG_CORRUPT);
+      if (damaged) r.error = true;
+      r.clean = !damaged;
+      r.concealed = damaged;
+      r.key_frame = frame->key_frame || frame->pict_type == AV_PICTURE_TYPE_I;
+      av_frame_unref(latest);
+      av_frame_move_ref(latest, frame);
+      have_latest = true;
+    }
+  }
+};
+
+H264Decoder::H264Decoder() : impl_(std::make_unique<Impl>()) {
+  quiet_ffmpeg();
+  const AVCodec* codec = avcodec_find_decoder(AV_CODEC_ID_H264);
+  if (!codec) throw std::runtime_error("libavcodec has no H.264 decoder");
+  impl_->parser = av_parser_init(AV_CODEC_ID_H264);
+  impl_->ctx = avcodec_alloc_context3(codec);
+  impl_->packet = av_packet_alloc();
+  impl_->frame = av_frame_alloc();
+  impl_->latest = av_frame_alloc();
+  if (!impl_->parser || !impl_->ctx || !impl_->packet || !impl_->frame || !impl_->latest) {
+    throw std::runtime_error("H.264 decoder: out of memory");
+  }
+  // Each call hands a whole access unit: output it now, not when the next start code shows.
+  impl_->parser->flags |= PARSER_FLAG_COMPLETE_FRAMES;
+  AVCodecContext* c = impl_->ctx;
+  c->flags |= AV_CODEC_FLAG_LOW_DELAY;  // output each picture at once, no reorder buffer
+  c->flags2 |= AV_CODEC_FLAG2_FAST;
+  c->thread_count = 1;                  // frame threads would add a frame of delay per thread
+  c->thread_type = 0;
+  c->has_b_frames = 0;
+  // Damaged pictures: concealed from the previous picture (see the header) and output.
+  c->flags |= AV_CODEC_FLAG_OUTPUT_CORRUPT;
+  c->error_concealment = FF_EC_GUESS_MVS | FF_EC_DEBLOCK | FF_EC_FAVOR_INTER;
+  if (avcodec_open2(c, codec, nullptr) < 0) throw std::runtime_error("cannot open the H.264 decoder");
+}
+
+H264Decoder::~H264Decoder() = default;
+
+DecodeResult H264Decoder::decode(std::string_view au) {
+  DecodeResult r;
+  const auto* data = reinterpret_cast<const uint8_t*>(au.data());
+  int size = static_cast<int>(au.size());
+  while (size > 0) {
+    uint8_t* out = nullptr;
+    int out_size = 0;
+    const int used = av_parser_parse2(impl_->parser, impl_->ctx, &out, &out_size, data, size,
+                                      AV_NOPTS_VALUE, AV_NOPTS_VALUE, 0);
+    if (used < 0) {
+      r.error = true;
+      break;
+    }
+    data += used;
+    size -= used;
+    if (out_size > 0) {
+      impl_->packet->data = out;
+      impl_->packet->size = out_size;
+      impl_->send(r);
+    }
+    if (used == 0 && out_size == 0) break;  // no progress
+  }
+  return r;
+}
+
+bool H264Decoder::latest_bgr(cv::Mat& bgr) {
+  if (!impl_->have_latest) return false;
+  const AVFrame* f = impl_->latest;
+  impl_->sws = sws_getCachedContext(impl_->sws, f->width, f->height,
+                                    static_cast<AVPixelFormat>(f->format), f->width, f->height,
+                                    AV_PIX_FMT_BGR24, SWS_POINT, nullptr, nullptr, nullptr);
+  if (!impl_->sws) return false;
+  bgr.create(f->height, f->width, CV_8UC3);
+  uint8_t* dst[4] = {bgr.data, nullptr, nullptr, nullptr};
+  int dst_stride[4] = {static_cast<int>(bgr.step[0]), 0, 0, 0};
+  sws_scale(impl_->sws, f->data, f->linesize, 0, f->height, dst, dst_stride);
+  return true;
+}
+
+// ---- Picture comparison ----
+
+double psnr_db(const cv::Mat& a, const cv::Mat& b) {
+  if (a.size() != b.size() || a.type() != b.type()) {
+    throw std::invalid_argument("psnr_db: images differ in size or type");
+  }
+  const double norm = cv::norm(a, b, cv::NORM_L2SQR);
+  if (norm == 0.0) return std::numeric_limits<double>::infinity();
+  const double mse = norm / static_cast<double>(a.total() * a.channels());
+  return 10.0 * std::log10(255.0 * 255.0 / mse);
+}
+
+}  // namespace shelfcross::tello

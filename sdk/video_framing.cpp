@@ -1,0 +1,93 @@
+#include "sdk/video_framing.hpp"
+
+#include <cassert>
+
+namespace shelfcross::sdk {
+namespace {
+
+// One NAL unit of an Annex-B string.
+struct Nal {
+  std::size_t code_begin;  ///< first byte of the start code (00 00 01 or 00 00 00 01)
+  std::size_t payload;     ///< first byte of the NAL header
+};
+
+std::vector<Nal> find_nals(std::string_view s) {
+  std::vector<Nal> nals;
+  for (std::size_t i = 0; i + 3 <= s.size(); ++i) {
+    if (s[i] == 0 && s[i + 1] == 0 && s[i + 2] == 1) {
+      const std::size_t begin = (i > 0 && s[i - 1] == 0) ? i - 1 : i;
+      nals.push_back({begin, i + 3});
+      i += 2;
+    }
+  }
+  return nals;
+}
+
+}  // namespace
+
+std::vector<int> nal_unit_types(std::string_view s) {
+  std::vector<int> types;
+  for (const Nal& n : find_nals(s)) {
+    if (n.payload < s.size()) types.push_back(static_cast<unsigned char>(s[n.payload]) & 0x1f);
+  }
+  return types;
+}
+
+bool starts_with_start_code(std::string_view s) {
+  return (s.size() >= 3 && s[0] == 0 && s[1] == 0 && s[2] == 1) ||
+         (s.size() >= 4 && s[0] == 0 && s[1] == 0 && s[2] == 0 && s[3] == 1);
+}
+
+bool only_parameter_sets(std::string_view s) {
+  if (!starts_with_start_code(s)) return false;
+  const std::vector<int> types = nal_unit_types(s);
+  for (int t : types) {
+    if (t != 6 && t != 7 && t != 8 && t != 9) return false;
+  }
+  return !types.empty();
+}
+
+bool begins_access_unit(std::string_view s) {
+  std::size_t header = 0;
+  if (s.size() >= 4 && s[0] == 0 && s[1] == 0 && s[2] == 0 && s[3] == 1) {
+    header = 4;
+  } else if (s.size() >= 3 && s[0] == 0 && s[1] == 0 && s[2] == 1) {
+    header = 3;
+  } else {
+    return false;
+  }
+  if (s.size() <= header) return false;
+  const int type = static_cast<unsigned char>(s[header]) & 0x1f;
+  if (type == 6 || type == 7 || type == 8 || type == 9) return true;
+  if (type != 1 && type != 5) return false;
+  return s.size() > header + 1 && (static_cast<unsigned char>(s[header + 1]) & 0x80) != 0;
+}
+
+std::vector<std::string> tello_datagrams(std::string_view au, std::size_t datagram_size) {
+  assert(datagram_size >= 2);
+  std::vector<std::string> out;
+  const std::vector<Nal> nals = find_nals(au);
+  std::size_t rest = 0;
+  // Leading parameter sets (SPS 7, PPS 8, access unit delimiter 9): one datagram each.
+  for (std::size_t i = 0; i < nals.size(); ++i) {
+    const int type = nals[i].payload < au.size() ? (static_cast<unsigned char>(au[nals[i].payload]) & 0x1f) : 0;
+    if (type != 7 && type != 8 && type != 9) break;
+    const std::size_t end = i + 1 < nals.size() ? nals[i + 1].code_begin : au.size();
+    if (end - nals[i].code_begin >= datagram_size) break;  // too big to stand alone as "short"
+    out.emplace_back(au.substr(nals[i].code_begin, end - nals[i].code_begin));
+    rest = end;
+  }
+  std::string_view body = au.substr(rest);
+  while (body.size() > datagram_size) {
+    out.emplace_back(body.substr(0, datagram_size));
+    body.remove_prefix(datagram_size);
+  }
+  if (body.size() == datagram_size) {  // keep the last datagram short
+    out.emplace_back(body.substr(0, datagram_size - 1));
+    body.remove_prefix(datagram_size - 1);
+  }
+  if (!body.empty()) out.emplace_back(body);
+  return out;
+}
+
+}  // namespace shelfcross::sdk
