@@ -6,7 +6,7 @@
 // vehicle's state (the Tello's own vision/IMU estimate is taken as exact here; sensor models
 // belong to verification/).
 //
-// Behaviour (shared/tello/PROTOCOL.md):
+// Behaviour (docs/tello_sdk.md):
 //  - Nothing is answered before `command` (SDK mode); `command` -> "ok".
 //  - `takeoff` (landed only): motors idle for takeoff_spinup_s, climb at takeoff_climb_mps to
 //    takeoff_height_m above the floor, hold, "ok" takeoff_reply_delay_s after settling (~4 s).

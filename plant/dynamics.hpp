@@ -1,5 +1,5 @@
 #pragma once
-// Rigid-body 6-DOF dynamics of the Tello-class quadrotor: paper eq. 9 (METHOD.md section 5)
+// Rigid-body 6-DOF dynamics of the Tello-class quadrotor: paper eq. 9 (docs/method.md section 5)
 // stated without Euler angles, plus first-order motors, drag and wind (plant::ModelSwitches).
 //
 // Frames: W world (x forward, y left, z up, origin on the floor); B body (x forward, y left,

@@ -39,7 +39,7 @@ struct ModelSwitches {
 /// How the defaults below were derived (all SI). Kept as named constants so the arithmetic is
 /// visible and checked by the compiler rather than copied as opaque numbers.
 namespace tello_derivation {
-inline constexpr double kMass_kg = 0.080;          // METHOD.md Table 4 (Tello with battery)
+inline constexpr double kMass_kg = 0.080;          // docs/method.md Table 4 (Tello with battery)
 inline constexpr double kGravity_mps2 = 9.80665;   // standard gravity
 inline constexpr double kSizeX_m = 0.098, kSizeY_m = 0.0925, kSizeZ_m = 0.041;  // Table 4
 // Propellers inside the 98 x 92.5 mm outline: tips reach the outline and the two props of a
@@ -72,7 +72,7 @@ inline constexpr double kTorqueCoeff = kThrustCoeff * kCP * kPropDiameter_m / (2
 // Maximum: thrust-to-weight 2 -> Om_max = sqrt(2) Om_hover = 5491 rad/s; idle 1200 rad/s
 // (10 % of hover thrust per rotor).
 // Drag, fitted so that steady level flight at the Tello's speed-mode limits matches
-// PROTOCOL.md / Table 4: 9 deg tilt -> 4 m/s (slow) and 25 deg tilt -> 8 m/s (fast, the
+// docs/tello_sdk.md / Table 4: 9 deg tilt -> 4 m/s (slow) and 25 deg tilt -> 8 m/s (fast, the
 // top speed). Body-frame drag F = -k_lin v - k_quad |v| v per axis, k_lin isotropic (rotor
 // induced drag), k_quad,z = k_quad,x * (98 x 92.5) / (92.5 x 41) (top vs frontal area). The
 // 2 x 2 system (force balance at both points) solved numerically gives the numbers below;
@@ -83,7 +83,7 @@ inline constexpr double kQuadDragZ = kQuadDragXY * (kSizeX_m * kSizeY_m) / (kSiz
 }  // namespace tello_derivation
 
 struct VehicleParams {
-  double mass_kg = tello_derivation::kMass_kg;                 ///< METHOD.md Table 4
+  double mass_kg = tello_derivation::kMass_kg;                 ///< docs/method.md Table 4
   double gravity_mps2 = tello_derivation::kGravity_mps2;
   Eigen::Vector3d size_m = Eigen::Vector3d(0.098, 0.0925, 0.041);  ///< x, y, z incl. propellers
   /// Ixx Iyy Izz: central box + four rotor point masses (tello_derivation)
@@ -125,22 +125,22 @@ struct WindParams {
 };
 
 /// The Tello's onboard autopilot as an SDK user experiences it. rc-to-velocity gains and time
-/// constants have no published identification (PROTOCOL.md gives plausible ranges); campaigns
+/// constants have no published identification (docs/tello_sdk.md gives plausible ranges); campaigns
 /// disperse them.
 struct AutopilotParams {
   double rate_hz = 500.0;               ///< inner-loop rate; the plant's input-hold interval (integer Hz)
   double rc_horizontal_mps_at_100 = 1.0;  ///< slow mode speed at full stick (PROTOCOL: 1..4 m/s)
   double rc_vertical_mps_at_100 = 1.0;
-  double rc_yaw_radps_at_100 = 1.5;     ///< PROTOCOL.md: about 1.5 rad/s at full yaw stick
+  double rc_yaw_radps_at_100 = 1.5;     ///< docs/tello_sdk.md: about 1.5 rad/s at full yaw stick
   double fast_mode_speed_factor = 2.0;  ///< fast mode multiplies horizontal speed
   double velocity_time_constant_s = 0.5;  ///< first-order response of horizontal velocity to rc (0.3..0.7 s)
   double vertical_time_constant_s = 0.4;
   double yaw_time_constant_s = 0.3;
-  double tilt_limit_slow_rad = 0.15707963267948966;  ///< 9 deg (PROTOCOL.md)
-  double tilt_limit_fast_rad = 0.43633231299858238;  ///< 25 deg (PROTOCOL.md)
-  double takeoff_height_m = 1.0;        ///< PROTOCOL.md: 0.8..1.2 m
+  double tilt_limit_slow_rad = 0.15707963267948966;  ///< 9 deg (docs/tello_sdk.md)
+  double tilt_limit_fast_rad = 0.43633231299858238;  ///< 25 deg (docs/tello_sdk.md)
+  double takeoff_height_m = 1.0;        ///< docs/tello_sdk.md: 0.8..1.2 m
   double takeoff_reply_delay_s = 0.5;   ///< hold after reaching height before "ok"
-  double land_speed_mps = 0.5;          ///< 1 m in ~2 s: PROTOCOL.md's "land about 2 s"
+  double land_speed_mps = 0.5;          ///< 1 m in ~2 s: docs/tello_sdk.md's "land about 2 s"
   double watchdog_s = 15.0;             ///< auto-land without any command
   // --- added by the plant's author ---
   /// Speed mode: false = slow (the Tello's default; 9 deg), true = fast (25 deg, horizontal

@@ -1,6 +1,6 @@
 #pragma once
 // The Tello SDK's command text, parsed into typed commands with the SDK's range rules
-// (PROTOCOL.md). The one grammar of the SDK in shelfcross: the simulated firmware
+// (docs/tello_sdk.md). The one grammar of the SDK in shelfcross: the simulated firmware
 // (plant::Autopilot), the `shelfcross plant` command files and the Tello emulator parse with
 // it; the driver (flight_sw/tello/sdk_driver) checks every text it sends with
 // classify_command, which is this parser plus the canonical form.
@@ -77,7 +77,7 @@ CommandKind kind_of(Verb verb);
 /// printable ASCII only and `text == to_text(*parse(text))` (tokens separated by one space, no
 /// leading or trailing space or line end, integers without '+' or leading zeros, no "-0").
 /// Otherwise nothing, and `why` (if given) says what is wrong: parse()'s reason, or the
-/// canonical text expected. The ranges are parse()'s (PROTOCOL.md): up/down/left/right/
+/// canonical text expected. The ranges are parse()'s (docs/tello_sdk.md): up/down/left/right/
 /// forward/back 20..500 cm; cw/ccw 1..360 deg; flip l r f b; go x y z in -500..500 not all
 /// within -20..20, speed 10..100; curve coordinates -500..500, speed 10..60, arc radius
 /// 0.5..10 m (the circle through the origin and both points); speed 10..100; rc four integers
@@ -87,7 +87,7 @@ std::optional<CommandKind> classify_command(std::string_view text, std::string* 
 /// "rc a b c d" for sticks already in range (asserted).
 std::string rc_text(int a, int b, int c, int d);
 
-/// How long to wait for a command's reply (PROTOCOL.md: about 7 s; 20 s for takeoff).
+/// How long to wait for a command's reply (docs/tello_sdk.md: about 7 s; 20 s for takeoff).
 struct ReplyTimeouts {
   TimeNs default_ns = 7 * kNsPerSecond;
   TimeNs takeoff_ns = 20 * kNsPerSecond;

@@ -1,5 +1,5 @@
 #pragma once
-// The Tello's state record (UDP port 8890) as text, SDK 1.3 and 2.0 (shared/tello/PROTOCOL.md):
+// The Tello's state record (UDP port 8890) as text, SDK 1.3 and 2.0 (docs/tello_sdk.md):
 //   "mid:-1;x:-100;y:-100;z:-100;mpry:-1,-1,-1;pitch:0;roll:0;yaw:0;vgx:0;vgy:0;vgz:0;
 //    templ:55;temph:57;tof:6553;h:0;bat:5;baro:118.26;time:0;agx:-4.00;agy:1.00;agz:-997.00;\r\n"
 //

@@ -1,5 +1,5 @@
 #pragma once
-// The Tello's video framing (PROTOCOL.md, Video): raw H.264 Annex-B on UDP port 11111, each
+// The Tello's video framing (docs/tello_sdk.md, Video): raw H.264 Annex-B on UDP port 11111, each
 // access unit (one picture, with SPS and PPS before a key frame) cut into 1460-byte datagrams
 // with a shorter last one, so a receiver finds a frame's end at its first short datagram. Both
 // sides of the rule live here: tello_datagrams cuts (the drone's side, used by the simulated

@@ -172,7 +172,7 @@ EmulatorFaults sdk_faults(const LinkSettings& l) {
   return f;
 }
 
-// The addresses of the in-memory link: the Tello's own (PROTOCOL.md) and a computer on its
+// The addresses of the in-memory link: the Tello's own (docs/tello_sdk.md) and a computer on its
 // Wi-Fi, so that the driver's and the receiver's sender checks run as they do in flight.
 const tello::Endpoint kDroneCommand{"192.168.10.1", 8889};
 const tello::Endpoint kDroneState{"192.168.10.1", 8890};

@@ -76,7 +76,7 @@ struct CosimSettings {
   double trajectory_rate_hz = 50.0;   ///< trajectory.csv and plot sampling
   double vehicle_margin_m = 0.0;      ///< added around the vehicle box for contacts
   double battery_start_pct = 100.0;
-  double endurance_s = 780.0;         ///< 13 min hover from full (METHOD.md Table 4): linear drain
+  double endurance_s = 780.0;         ///< 13 min hover from full (docs/method.md Table 4): linear drain
   double render_noise_stddev = 2.0;   ///< camera sensor noise, grey levels
   int motion_blur_samples = 1;        ///< 1: no blur
   double settling_fraction = 0.02;    ///< band: fraction of the initial error ...

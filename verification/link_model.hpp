@@ -5,7 +5,7 @@
 // sends. Each effect draws from its own stream (shelfcross/random.hpp), so changing one
 // setting does not shift the draws of another.
 //
-// Defaults follow shared/tello/PROTOCOL.md: users report 0.3 to 1 s of video lag, most of it
+// Defaults follow docs/tello_sdk.md: users report 0.3 to 1 s of video lag, most of it
 // receiver-side buffering; a receiver that always decodes the newest frame (as tello_pilot
 // does) sees about the encoder + Wi-Fi + decoder delay, taken here as 0.2 s mean.
 

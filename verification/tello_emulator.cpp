@@ -454,7 +454,7 @@ void TelloEmulator::deliver(TimeNs t, const IncomingCommand& c) {
         ++counters_.injected_errors;
       }
       // The drone received a command and answered it: that counts for its 15 s no-command
-      // watchdog like any other ("any command counts", PROTOCOL.md). The simulated firmware
+      // watchdog like any other ("any command counts", docs/tello_sdk.md). The simulated firmware
       // only learns of a datagram through a command, so it is handed the one command with no
       // effect but an immediate answer, a read, whose answer is dropped.
       try {

@@ -1,7 +1,7 @@
 #pragma once
 // The Tello SDK emulator behind `shelfcross tello-sim`: a simulated Tello on real UDP sockets,
 // so that an unmodified Tello client (tello_pilot, any SDK script) flies the co-simulation's
-// world in real time. It behaves as shared/tello/PROTOCOL.md says a Tello does:
+// world in real time. It behaves as docs/tello_sdk.md says a Tello does:
 //   - commands arrive on bind_ip:command_port; every reply goes to the address and port the
 //     command came from; nothing is answered before `command` (SimulatedTello's firmware
 //     decides every reply: ranges, real error strings, deferred manoeuvre replies, no reply to

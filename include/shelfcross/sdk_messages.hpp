@@ -1,6 +1,6 @@
 #pragma once
 // The messages between the flight software and a Tello-class vehicle: exactly what any
-// client of the Tello text SDK gets and sends (see shared/tello/PROTOCOL.md), nothing more.
+// client of the Tello text SDK gets and sends (see docs/tello_sdk.md), nothing more.
 // Ground truth never travels in these types.
 //
 // Units: SI inside (m, m/s, rad, s). The SDK's cm, dm/s, degrees and -100..100 sticks exist
@@ -26,7 +26,7 @@ struct SdkCommand {
 };
 
 /// One reply datagram as received, trailing "\r\n" removed: "ok", "error Not joystick",
-/// "87", "3dm", ... Replies carry no tag naming their command (PROTOCOL.md).
+/// "87", "3dm", ... Replies carry no tag naming their command (docs/tello_sdk.md).
 struct SdkReply {
   TimeNs t_ns = 0;  ///< receive time
   std::string text;

@@ -8,7 +8,7 @@
 namespace shelfcross::plant {
 namespace {
 
-// The paper's test shelf (METHOD.md Table 3), 3 m ahead of the origin, facing it.
+// The paper's test shelf (docs/method.md Table 3), 3 m ahead of the origin, facing it.
 // post_y: 0.82, 0.48, 0.00, -0.34, -0.82; beam_z: 0.30, 0.64, 0.98, 1.32, 1.66.
 Warehouse test_warehouse() {
   Warehouse w;

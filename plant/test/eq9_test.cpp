@@ -1,4 +1,4 @@
-// The right-hand side against paper eq. 9 (METHOD.md section 5) written independently with
+// The right-hand side against paper eq. 9 (docs/method.md section 5) written independently with
 // Euler angles, term by term, and the physics that fixes the signs: hover equilibrium, free
 // fall, the gyroscopic sign, conservation of energy and angular momentum.
 

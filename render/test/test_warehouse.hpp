@@ -1,5 +1,5 @@
 #pragma once
-// The paper's test shelf (METHOD.md, Table 3) as a Warehouse, for render/ tests: 4 x 4 cells,
+// The paper's test shelf (docs/method.md, Table 3) as a Warehouse, for render/ tests: 4 x 4 cells,
 // columns 0.34, 0.48, 0.34, 0.48 m, rows 0.34 m, depth 0.34 m, base height 0.30 m, 6 cm tags,
 // 10 cm DICT_4X4_50 markers on 0.22 m boxes in a few cells, shelf origin at x = 3 m.
 

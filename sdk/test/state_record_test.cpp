@@ -11,7 +11,7 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-// The three real samples of shared/tello/PROTOCOL.md.
+// The three real samples of docs/tello_sdk.md.
 constexpr const char* kSdk13 =
     "pitch:1;roll:5;yaw:0;vgx:0;vgy:0;vgz:0;templ:43;temph:46;tof:10;h:0;bat:83;baro:150.12;time:0;"
     "agx:15.00;agy:-97.00;agz:-988.00;";

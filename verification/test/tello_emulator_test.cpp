@@ -355,7 +355,7 @@ TEST_F(TelloEmulatorTest, InjectedCommandLossAndReplyFaults) {
 }
 
 // A refused manoeuvre ("error Not joystick") is still a command the drone received: it
-// counts for the 15 s no-command watchdog, as any command does (PROTOCOL.md). Refusals are
+// counts for the 15 s no-command watchdog, as any command does (docs/tello_sdk.md). Refusals are
 // drawn (seeded, p = 0.9): the first seed of 1..10 whose draws give a takeoff and then more
 // than 15 s of nothing but refused commands is flown to the end.
 TEST_F(TelloEmulatorTest, RefusedCommandsCountForTheWatchdog) {
