@@ -132,7 +132,7 @@ struct ControlGains {
   double search_yaw_rate_radps = 0.3;       ///< yaw sweep while no tag is in view
   double back_off_speed_mps = 0.2;          ///< backing away to see a grid fragment whole
   double crossing_speed_mps = 0.3;          ///< open-loop forward speed through the cell
-  /// Approach path perpendicular to the face (METHOD.md section 3): the forward speed xdot_0
+  /// Approach path perpendicular to the face (docs/method.md section 3): the forward speed xdot_0
   /// is flown only while the line of sight to the cell is within this angle of its normal;
   /// outside it the vehicle holds its range while the lateral law brings it onto the normal.
   double approach_cone_rad = 0.12;
@@ -203,7 +203,7 @@ struct MissionParams {
 
 /// The warehouse as the operator describes it: shelf_count shelves of the known geometry in a
 /// row, parallel, facing the same way, one behind the other along the approach direction
-/// (METHOD.md section 1). Their absolute positions stay unknown: each is found visually.
+/// (docs/method.md section 1). Their absolute positions stay unknown: each is found visually.
 struct WarehouseLayout {
   int shelf_count = 1;
   double shelf_spacing_m = 0.0;  ///< front face to front face along the normal (> depth)

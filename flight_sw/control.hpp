@@ -1,5 +1,5 @@
 #pragma once
-// Control laws (paper section 4-4, METHOD.md section 4) and the conversion of SI velocity
+// Control laws (paper section 4-4, docs/method.md section 4) and the conversion of SI velocity
 // commands to the SDK's rc sticks.
 //
 // Commands are in the body frame B (x forward, y left, z up) and yaw rate counter-clockwise

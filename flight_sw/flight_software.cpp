@@ -720,7 +720,7 @@ bool FlightSoftware::reacquire(const cv::Mat& bgr) {
   return false;
 }
 
-// The crossing line (open loop, METHOD.md section 3): straight, at constant speed, from the
+// The crossing line (open loop, docs/method.md section 3): straight, at constant speed, from the
 // last visual position through the cell's centre at mid-depth, so that a residual lateral or
 // vertical offset y0 at range r leaves only y0 (depth/2) / (r + depth/2) at either face
 // instead of growing along a heading that looks at the front face's centre.

@@ -21,7 +21,7 @@
 //   --distance past the back face flown (timed)--> Land --ok--> Done
 // Several shelves (config.layout.shelf_count > 1, a row at shelf_spacing_m): after each
 // inventory but the last, the target is the empty cell nearest the next shelf's optimal
-// viewpoint (METHOD.md section 1); the crossing's end hands over to FindShelf for the next shelf
+// viewpoint (docs/method.md section 1); the crossing's end hands over to FindShelf for the next shelf
 // (the spacing lets it see that shelf whole from there), and only the last crossing lands.
 // Conventional strategies (config.strategy.mode over_tops / around_ends): TakeInventory
 // --inventory full--> Transfer: waypoints planned in the grid frame G from the last visual pose

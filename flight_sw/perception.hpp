@@ -1,5 +1,5 @@
 #pragma once
-// Perception (paper section 3, METHOD.md section 2): colour tags, the front-shelf test of
+// Perception (paper section 3, docs/method.md section 2): colour tags, the front-shelf test of
 // eq. 1, the stair classification of the tag grid (eq. 2 with the limits of eq. 3 and 4),
 // ArUco markers and their cells.
 //

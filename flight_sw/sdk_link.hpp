@@ -1,5 +1,5 @@
 #pragma once
-// The command side of the Tello SDK as PROTOCOL.md describes it: one non-rc command
+// The command side of the Tello SDK as docs/tello_sdk.md describes it: one non-rc command
 // outstanding at a time (replies carry no tag), a gap between non-rc commands, a reply
 // timeout per command; rc commands need no reply and go out at once. Time is the stamp of
 // the input being handled; nothing here reads a clock.

@@ -21,7 +21,7 @@ struct PaperRow {
   const char* label;
   double distance_m, time_s;
 };
-// METHOD.md section 6, Table 2 (simulated five-shelf warehouse, mean over runs).
+// docs/method.md section 6, Table 2 (simulated five-shelf warehouse, mean over runs).
 const PaperRow kPaper[] = {{"through_cells", "through empty cells (this method)", 14.0, 240.0},
                            {"over_tops", "over the shelf tops", 22.0, 300.0},
                            {"around_ends", "around the shelf sides", 28.0, 360.0}};
@@ -95,7 +95,7 @@ std::string comparison_table_markdown(const std::vector<StrategyRow>& rows) {
        << " | " << opt(r.mean_recall, 4) << " |\n";
   }
   md << "\nMean distance and time over the successful runs (a failed run ends early); recall over every run. "
-        "Lower bound: one-sided Clopper-Pearson at 95 %. Paper: METHOD.md section 6, Table 2.\n";
+        "Lower bound: one-sided Clopper-Pearson at 95 %. Paper: docs/method.md section 6, Table 2.\n";
   return md.str();
 }
 

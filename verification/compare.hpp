@@ -37,7 +37,7 @@ struct StrategyRow {
   std::optional<double> mean_distance_m;    ///< over the successful runs (a failed run stops early)
   std::optional<double> mean_time_s;        ///< over the successful runs
   std::optional<double> mean_recall;        ///< inventory recall over every run
-  double paper_distance_m = 0.0;            ///< METHOD.md section 6, Table 2
+  double paper_distance_m = 0.0;            ///< docs/method.md section 6, Table 2
   double paper_time_s = 0.0;
 };
 

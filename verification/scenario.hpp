@@ -49,7 +49,7 @@ struct Scenario {
   Warehouse warehouse;  ///< boxes resolved to explicit placements
   CameraIntrinsics camera;
   CameraMount camera_mount;
-  double frame_rate_hz = 30.0;  ///< the video stream (PROTOCOL.md: 30 fps)
+  double frame_rate_hz = 30.0;  ///< the video stream (docs/tello_sdk.md: 30 fps)
   plant::VehicleParams vehicle;
   plant::WindParams wind;
   plant::AutopilotParams autopilot;

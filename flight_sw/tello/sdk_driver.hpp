@@ -1,5 +1,5 @@
 #pragma once
-// The Tello text-SDK driver over UDP (shared/tello/PROTOCOL.md): the command socket (commands
+// The Tello text-SDK driver over UDP (docs/tello_sdk.md): the command socket (commands
 // out, replies in, from one local port) and the state socket (the 10 Hz state records).
 // Single-threaded: the owner calls service() whenever one of fds() is readable or a short
 // poll timeout passes; service() reads every pending datagram, fires timers and sends what is

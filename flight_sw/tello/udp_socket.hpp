@@ -1,7 +1,7 @@
 #pragma once
 // A non-blocking IPv4 UDP socket (POSIX), the one networking primitive of the Tello driver.
 // Every receive reports the sender, so callers can drop datagrams that do not come from the
-// drone (PROTOCOL.md: replies come from drone_ip:8889; state and video from drone_ip).
+// drone (docs/tello_sdk.md: replies come from drone_ip:8889; state and video from drone_ip).
 
 #include <cstdint>
 #include <optional>

@@ -1,12 +1,12 @@
 #pragma once
 // The Tello's video: raw H.264 Annex-B on UDP port 11111, each frame cut into 1460-byte
-// datagrams with a shorter last one (PROTOCOL.md). A receiver thread reassembles the
+// datagrams with a shorter last one (docs/tello_sdk.md). A receiver thread reassembles the
 // datagrams of one frame (up to the first short datagram that ends more than parameter sets), decodes them at once with the
 // low-delay H264Decoder, converts the picture to BGR and puts it in a single-slot mailbox:
 // a newer frame replaces one not yet taken, so the taker always gets the newest frame and
 // never a backlog.
 //
-// Damage: a lost datagram corrupts pictures until the next key frame (PROTOCOL.md). Signs
+// Damage: a lost datagram corrupts pictures until the next key frame (docs/tello_sdk.md). Signs
 // of damage: a decoder error or concealment flag, a frame that does not begin with a start
 // code (its first datagram was lost), a frame that decodes to no picture, an over-long frame,
 // a frame whose short last datagram was lost (found when the next frame's first datagram
