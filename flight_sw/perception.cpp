@@ -2,6 +2,7 @@
 #include "shelfcross/aruco_dictionaries.hpp"
 
 #include <algorithm>
+#include <functional>
 #include <cassert>
 #include <cmath>
 #include <limits>
@@ -484,8 +485,38 @@ void analyse_shelf(const cv::Mat& bgr, TagDetector& detector, const FlightConfig
   for (const TagBlob& b : view.tags) pts.push_back(b.centre_px);
   view.grid = classify_grid(pts, grid_limits(config.shelf, view.px_per_m),
                             config.perception.grid_orthogonality_tolerance_rad);
-  if (!view.grid.valid) return;
   const int expect_rows = config.shelf.levels() + 1, expect_cols = config.shelf.columns() + 1;
+  const size_t expect = static_cast<size_t>(expect_rows * expect_cols);
+  // A shelf behind, seen from afar: eq. 1 keeps its tags when r / (r + d) > sqrt(0.45) (from
+  // 3.5 m, a shelf up to 1.7 m behind), and the grid then holds more tags than the known
+  // shelf has. The front shelf's tags are the nearer ones: with the vehicle turned by up to
+  // psi, they lie within r +- (W/2) sin(psi) and those of a shelf d behind beyond
+  // r + d - (W/2) sin(psi), so for d > W sin(psi) (1.2 m > 1.7 m x sin 20 deg = 0.58 m) the
+  // known number of largest tags are the front shelf's. They are kept only if they then
+  // classify as the whole known grid; otherwise the view stays as it was (not full).
+  if (!(view.grid.valid && view.grid.rows == expect_rows && view.grid.columns == expect_cols) && view.tags.size() > expect) {
+    std::vector<double> areas;
+    for (const TagBlob& b : view.tags) areas.push_back(b.area_px);
+    std::nth_element(areas.begin(), areas.begin() + static_cast<std::ptrdiff_t>(expect - 1), areas.end(), std::greater<>());
+    const double smallest_kept = areas[expect - 1];
+    std::vector<TagBlob> front;
+    for (const TagBlob& b : view.tags) {
+      if (b.area_px >= smallest_kept) front.push_back(b);
+    }
+    if (front.size() == expect) {
+      std::vector<cv::Point2d> front_pts;
+      for (const TagBlob& b : front) front_pts.push_back(b.centre_px);
+      const double px_per_m = tag_scale_px_per_m(front, config.shelf);
+      TagGrid grid = classify_grid(front_pts, grid_limits(config.shelf, px_per_m),
+                                   config.perception.grid_orthogonality_tolerance_rad);
+      if (grid.valid && grid.rows == expect_rows && grid.columns == expect_cols) {
+        view.tags = std::move(front);
+        view.px_per_m = px_per_m;
+        view.grid = std::move(grid);
+      }
+    }
+  }
+  if (!view.grid.valid) return;
   view.full = view.grid.rows == expect_rows && view.grid.columns == expect_cols &&
               static_cast<int>(view.tags.size()) == expect_rows * expect_cols;
 }
