@@ -165,8 +165,7 @@ void FlightSoftware::on_frame(const CameraFrame& f) {
   // picture steers the loops; beyond, it is video but not a view: the vehicle hovers on it.
   const int damage = f.damaged || f.damage_events > 0 ? std::max(1, f.damage_events) : 0;
   if (damage > 0) ++telemetry_.damaged_frames;
-  decision_frame_ = damage <= config_.perception.decide_max_damage_events;
-  whole_frame_ = damage == 0;
+  const Picture pic{f.bgr, now_ns_, damage, damage <= config_.perception.decide_max_damage_events};
   if (damage > config_.perception.steer_max_damage_events) {
     ++telemetry_.unflown_frames;
     if (airborne_phase() && phase_ != Phase::Cross && phase_ != Phase::Transfer) {
@@ -180,10 +179,10 @@ void FlightSoftware::on_frame(const CameraFrame& f) {
     case Phase::WaitVideo:
       command_takeoff_if_ready();
       return;
-    case Phase::FindShelf: find_shelf(f.bgr); break;
-    case Phase::GoToViewpoint: go_to_viewpoint(f.bgr, false); break;
-    case Phase::TakeInventory: take_inventory(f.bgr, damage == 0); break;
-    case Phase::Approach: approach(f.bgr); break;
+    case Phase::FindShelf: find_shelf(pic); break;
+    case Phase::GoToViewpoint: go_to_viewpoint(pic, false); break;
+    case Phase::TakeInventory: take_inventory(pic); break;
+    case Phase::Approach: approach(pic); break;
     default: break;
   }
   last_control_ns_ = now_ns_;
@@ -406,18 +405,19 @@ void FlightSoftware::update_view_telemetry() {
 
 // ---- Phase behaviours ----
 
-void FlightSoftware::find_shelf(const cv::Mat& bgr) {
+void FlightSoftware::find_shelf(const Picture& pic) {
+  const cv::Mat& bgr = pic.bgr;
   analyse_shelf(bgr, tag_detector_, config_, view_);
   update_view_telemetry();
   const ControlGains& g = config_.control;
   const CameraIntrinsics& k = config_.camera;
-  if (view_.full && !decision_frame_) {  // to be confirmed on a nearly whole picture
+  if (view_.full && !pic.decides) {  // to be confirmed on a nearly whole picture
     set_velocity({});
     return;
   }
   if (view_.full) {
     enter(Phase::GoToViewpoint, "whole shelf in view");
-    go_to_viewpoint(bgr, true);
+    go_to_viewpoint(pic, true);
     return;
   }
   VelocityCommand v;
@@ -442,7 +442,8 @@ void FlightSoftware::find_shelf(const cv::Mat& bgr) {
   set_velocity(v);
 }
 
-void FlightSoftware::go_to_viewpoint(const cv::Mat& bgr, bool view_fresh) {
+void FlightSoftware::go_to_viewpoint(const Picture& pic, bool view_fresh) {
+  const cv::Mat& bgr = pic.bgr;
   if (!view_fresh) {
     analyse_shelf(bgr, tag_detector_, config_, view_);
     update_view_telemetry();
@@ -489,16 +490,17 @@ void FlightSoftware::go_to_viewpoint(const cv::Mat& bgr, bool view_fresh) {
   const bool there = e1.norm() < m.viewpoint_position_tolerance_m &&
                      std::abs(pose->yaw_rad) < m.viewpoint_yaw_tolerance_rad;
   if (!there) settled_frames_ = 0;
-  else if (decision_frame_) ++settled_frames_;  // a damaged picture neither counts nor resets
+  else if (pic.decides) ++settled_frames_;  // a damaged picture neither counts nor resets
   if (settled_frames_ >= m.viewpoint_settle_frames) {
     hover();
     enter(Phase::TakeInventory, "at the optimal viewpoint: reading the shelf");
   }
 }
 
-void FlightSoftware::take_inventory(const cv::Mat& bgr, bool whole) {
+void FlightSoftware::take_inventory(const Picture& pic) {
+  const cv::Mat& bgr = pic.bgr;
   hover();
-  if (!decision_frame_) return;  // a guessed band may hold a marker, or shift the grid labels
+  if (!pic.decides) return;  // a guessed band may hold a marker, or shift the grid labels
   analyse_shelf(bgr, tag_detector_, config_, view_);
   update_view_telemetry();
   if (!view_.full) return;
@@ -513,7 +515,7 @@ void FlightSoftware::take_inventory(const cv::Mat& bgr, bool whole) {
     marker_detector_.detect(bgr, markers_);
   }
   telemetry_.markers_seen = static_cast<int>(markers_.size());
-  inventory_.observe(assign_markers(view_, markers_, config_), whole);
+  inventory_.observe(assign_markers(view_, markers_, config_), pic.whole());
   // Closed after inventory_frames full views, of which enough whole ones to decide which
   // cells are empty (damaged ones only vote for boxes); the timeout bounds the wait.
   if (inventory_.frames() < config_.perception.inventory_frames || !inventory_.empty_decidable()) return;
@@ -605,7 +607,8 @@ void FlightSoftware::start_tracker(const cv::Mat& bgr, const cv::Rect2d& box) {
 
 // Looks for the target's four corner tags around `predicted`: tags in a window around it,
 // eq. 1 inside the window, each corner the nearest tag to where the box puts it.
-bool FlightSoftware::measure_target(const cv::Mat& bgr, const cv::Rect2d& predicted) {
+bool FlightSoftware::measure_target(const Picture& pic, const cv::Rect2d& predicted) {
+  const cv::Mat& bgr = pic.bgr;
   const PerceptionParams& p = config_.perception;
   const double grow_x = p.roi_expand * predicted.width, grow_y = p.roi_expand * predicted.height;
   const cv::Rect roi(cv::Point(static_cast<int>(std::floor(predicted.x - grow_x)),
@@ -636,7 +639,7 @@ bool FlightSoftware::measure_target(const cv::Mat& bgr, const cv::Rect2d& predic
     // nearest over many pictures counts. A front corner tag cut by the picture's border looks
     // small too: blobs touching the border, or within two tag sides of the box's edge, where
     // the predicted box may put a corner, are left out.)
-    if (decision_frame_ && growth > 0.8 && growth < 1.25) {
+    if (pic.decides && growth > 0.8 && growth < 1.25) {
       const double front_side_px = tag_side_px_ * growth;
       const cv::Rect2d inner(predicted.x + 2.0 * front_side_px, predicted.y + 2.0 * front_side_px,
                              predicted.width - 4.0 * front_side_px, predicted.height - 4.0 * front_side_px);
@@ -745,7 +748,7 @@ bool FlightSoftware::measure_target(const cv::Mat& bgr, const cv::Rect2d& predic
   for (size_t k = 0; k < 4; ++k) corner_px_[k] = img[k];
   pose_K_ = pose;
   pose_t_ns_ = now_ns_;
-  if (decision_frame_) {  // the crossing is judged on poses from nearly whole pictures only
+  if (pic.decides) {  // the crossing is judged on poses from nearly whole pictures only
     decision_pose_K_ = pose;
     decision_pose_t_ns_ = now_ns_;
   }
@@ -772,7 +775,8 @@ std::optional<double> FlightSoftware::cell_height_m(double v_px, double range_m)
   return state_->height_m + range_m * std::tan(elevation);
 }
 
-bool FlightSoftware::reacquire(const cv::Mat& bgr) {
+bool FlightSoftware::reacquire(const Picture& pic) {
+  const cv::Mat& bgr = pic.bgr;
   // The target is a cell of the (possibly partial) grid near the last box: the nearest one
   // whose corner tags give a plausible pose of the right level (measure_target's tests), so
   // that a neighbour above or below is passed over.
@@ -795,7 +799,7 @@ bool FlightSoftware::reacquire(const cv::Mat& bgr) {
   std::stable_sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   for (const auto& [d, idx] : candidates) {
     for (size_t k = 0; k < 4; ++k) corner_px_[k] = view_.tags[static_cast<size_t>(idx[k])].centre_px;
-    if (measure_target(bgr, box_px_)) {
+    if (measure_target(pic, box_px_)) {
       start_tracker(bgr, box_px_);
       return true;
     }
@@ -803,7 +807,8 @@ bool FlightSoftware::reacquire(const cv::Mat& bgr) {
   return false;
 }
 
-bool FlightSoftware::check_identity(const cv::Mat& bgr, const PoseEstimate& pose) {
+bool FlightSoftware::check_identity(const Picture& pic, const PoseEstimate& pose) {
+  const cv::Mat& bgr = pic.bgr;
   // Every tag and every marker of the picture (eq. 1 is applied against the pose inside the
   // check), at the cost of a whole-frame search, paid only while the target is unidentified.
   frame_tags_.clear();
@@ -847,9 +852,9 @@ bool FlightSoftware::check_identity(const cv::Mat& bgr, const PoseEstimate& pose
 // autopilot's velocity lag: 0.2 + 0.5 s assumed). Once D has grown by 0.8 m, a lag wrong by
 // 0.35 s moves the estimate by at most 0.25 m/s x 0.35 s / 0.8 m = 11 %; it is refined as D
 // grows. Clamped to 0.5..2; 1 until then.
-void FlightSoftware::estimate_forward_gain(const PoseEstimate& pose) {
+void FlightSoftware::estimate_forward_gain(const Picture& pic, const PoseEstimate& pose) {
   constexpr double kLag_s = 0.7, kMinCommanded_m = 0.8;
-  if (!decision_frame_) return;
+  if (!pic.decides) return;
   if (!gain_start_) {
     gain_start_ = std::make_pair(now_ns_, pose.p_FB_m().x());
     return;
@@ -891,7 +896,8 @@ void FlightSoftware::reread_shelf(const std::string& why) {
   enter(Phase::FindShelf, why + ": re-reading the shelf from the viewpoint");
 }
 
-void FlightSoftware::approach(const cv::Mat& bgr) {
+void FlightSoftware::approach(const Picture& pic) {
+  const cv::Mat& bgr = pic.bgr;
   const ControlGains& g = config_.control;
   // The forward displacement commanded so far: the last command held since the last frame.
   if (last_approach_ns_) {
@@ -909,7 +915,7 @@ void FlightSoftware::approach(const cv::Mat& bgr) {
     telemetry_.tracker_ok = tracker_ && tracker_->update(bgr, predicted);
     if (!telemetry_.tracker_ok) predicted = box_px_;
   }
-  const bool found = measure_target(bgr, predicted);
+  const bool found = measure_target(pic, predicted);
   telemetry_.tracked_box_px = box_px_;
   const double dt = control_dt_s();
   if (found) {
@@ -928,7 +934,7 @@ void FlightSoftware::approach(const cv::Mat& bgr) {
     telemetry_.pose_in_cell_frame = true;
     // Unidentified (continuity lost): judge this picture; a contradiction ends the approach.
     // Whole pictures only: a guessed band can put a tag beyond the grid's edge or hide one.
-    if (identity_ != CellIdentity::Confirmed && whole_frame_ && !check_identity(bgr, pose)) return;
+    if (identity_ != CellIdentity::Confirmed && pic.whole() && !check_identity(pic, pose)) return;
     const cv::Point2d c = centre_of(box_px_);
     const double range_m = std::max(0.05, -pose.X_FC.translation().x());
     const double e_z = (k.cy_px - c.y) * range_m / k.fy_px;   // eq. 11
@@ -969,9 +975,9 @@ void FlightSoftware::approach(const cv::Mat& bgr) {
     // About to lose the tags: the crossing will be judged on the last nearly whole picture,
     // so only such pictures move the vehicle now (it hovers on damaged ones), and the last
     // one before the tags leave is at most a frame old.
-    if (near_edge_ && !decision_frame_) v = {};
+    if (near_edge_ && !pic.decides) v = {};
     set_velocity(v);
-    estimate_forward_gain(pose);
+    estimate_forward_gain(pic, pose);
     telemetry_.e_z_m = e_z;
     telemetry_.e_psi_rad = e_psi;
     telemetry_.psi_cell_rad = psi;
@@ -981,7 +987,7 @@ void FlightSoftware::approach(const cv::Mat& bgr) {
     telemetry_.holding_short = hold;
     return;
   }
-  if (!decision_frame_ && !back_off_since_ns_) {
+  if (!pic.decides && !back_off_since_ns_) {
     // Not found in a damaged picture: the tags may sit in a guessed band. Nothing is decided
     // (no crossing, no re-acquisition) until a nearly whole picture shows where they are.
     if (!lost_since_ns_) lost_since_ns_ = now_ns_;
@@ -1049,7 +1055,7 @@ void FlightSoftware::approach(const cv::Mat& bgr) {
     telemetry_.event = "target lost: hovering to re-acquire";
   }
   hover();
-  if (reacquire(bgr)) {
+  if (reacquire(pic)) {
     lost_since_ns_.reset();
     telemetry_.event = "target re-acquired";
   }

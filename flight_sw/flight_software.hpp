@@ -101,6 +101,16 @@ struct ClockTick {
 
 using Input = std::variant<CameraFrame, StateRecord, SdkReply, ClockTick>;
 
+/// One picture as the phases see it: the image and what it is worth, decided once when it
+/// arrives (flight_sw/README.md, "Damaged pictures") and handed to every step that uses it.
+struct Picture {
+  const cv::Mat& bgr;
+  TimeNs t_ns = 0;         ///< its stamp (receive time)
+  int damage_events = 0;   ///< lost bands since its key frame; 0: whole
+  bool decides = true;     ///< damage_events <= perception.decide_max_damage_events
+  bool whole() const { return damage_events == 0; }
+};
+
 enum class Phase {
   Idle,
   EnterSdk,
@@ -225,23 +235,23 @@ class FlightSoftware {
   void on_completion(const SdkLink::Completion& c);
   void supervise();
   // Phase behaviours on a frame
-  void find_shelf(const cv::Mat& bgr);
-  void go_to_viewpoint(const cv::Mat& bgr, bool view_fresh);
-  void take_inventory(const cv::Mat& bgr, bool whole);
-  void approach(const cv::Mat& bgr);
+  void find_shelf(const Picture& pic);
+  void go_to_viewpoint(const Picture& pic, bool view_fresh);
+  void take_inventory(const Picture& pic);
+  void approach(const Picture& pic);
   // Approach helpers
   bool select_target(const cv::Mat& bgr);
-  bool measure_target(const cv::Mat& bgr, const cv::Rect2d& predicted);
-  bool reacquire(const cv::Mat& bgr);
+  bool measure_target(const Picture& pic, const cv::Rect2d& predicted);
+  bool reacquire(const Picture& pic);
   std::optional<double> cell_height_m(double v_px, double range_m) const;
   void start_tracker(const cv::Mat& bgr, const cv::Rect2d& box);
   /// The target's identity on a picture where it is not confirmed (target_tracker.hpp):
   /// confirmed, kept unknown, or the shelf re-read (returns false: the approach is over).
-  bool check_identity(const cv::Mat& bgr, const PoseEstimate& pose_K);
+  bool check_identity(const Picture& pic, const PoseEstimate& pose_K);
   /// The target is in doubt: forget it and re-read the shelf from the optimal viewpoint, or
   /// abort (land where it hovers, in front of the shelf) after mission.identity_rereads.
   void reread_shelf(const std::string& why);
-  void estimate_forward_gain(const PoseEstimate& pose_K);
+  void estimate_forward_gain(const Picture& pic, const PoseEstimate& pose_K);
   // Actions
   void enter(Phase phase, const std::string& event);
   void command_takeoff_if_ready();
@@ -305,8 +315,6 @@ class FlightSoftware {
   std::optional<PoseEstimate> decision_pose_K_;  ///< last pose from a nearly whole picture
   std::optional<double> target_height_m_;  ///< target cell centre above the take-off point (state h)
   TimeNs decision_pose_t_ns_ = 0;
-  bool decision_frame_ = true;
-  bool whole_frame_ = true;     ///< the frame being handled has no lost band (identity checks)  ///< the frame being handled may decide (decide_max_damage_events)
   TimeNs lateral_active_ns_ = 0;        ///< last time the lateral law commanded a speed
   std::optional<TimeNs> hold_since_ns_;  ///< holding short of the shelf to settle
   bool near_edge_ = false;              ///< a corner tag was about to leave the view
