@@ -633,7 +633,7 @@ bool FlightSoftware::measure_target(const Picture& pic, const cv::Rect2d& predic
   if (tag_side_px_ > 0.0 && growth > 0.5 && growth < 2.0) {
     const double front_area = tag_side_px_ * tag_side_px_ * sx * sy;
     // The room behind the shelf, seen through the target cell: a tag of a shelf behind inside
-    // the box (shrunk by a tag side: not a corner tag) lies f s / sqrt(area) from the camera,
+    // the box (shrunk by two tag sides: not a corner tag) lies f s / sqrt(area) from the camera,
     // the front tags f s / (side sqrt(sx sy)); the nearest such tag over the approach bounds
     // where the crossing may end. (A tag cut by a bar looks smaller, hence farther: only the
     // nearest over many pictures counts. A front corner tag cut by the picture's border looks
