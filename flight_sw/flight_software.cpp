@@ -633,14 +633,16 @@ bool FlightSoftware::measure_target(const Picture& pic, const cv::Rect2d& predic
   if (tag_side_px_ > 0.0 && growth > 0.5 && growth < 2.0) {
     const double front_area = tag_side_px_ * tag_side_px_ * sx * sy;
     // The room behind the shelf, seen through the target cell: a tag of a shelf behind inside
-    // the box (shrunk by two tag sides: not a corner tag) lies f s / sqrt(area) from the camera,
-    // the front tags f s / (side sqrt(sx sy)); the nearest such tag over the approach bounds
-    // where the crossing may end. (A tag cut by a bar looks smaller, hence farther: only the
-    // nearest over many pictures counts. A front corner tag cut by the picture's border looks
-    // small too: blobs touching the border, or within two tag sides of the box's edge, where
-    // the predicted box may put a corner, are left out.)
-    if (pic.decides && growth > 0.8 && growth < 1.25) {
+    // the box (shrunk by two tag sides: not a corner tag) lies f s / sqrt(area) from the camera
+    // along its axis, the front tags' plane -x_C - tag_offset (the last pose); the nearest such
+    // tag over the approach bounds where the crossing may end. (A tag cut by a bar looks
+    // smaller, hence farther: only the nearest over many pictures counts. A front corner tag
+    // cut by the picture's border looks small too: blobs touching the border, or within two tag
+    // sides of the box's edge, where the predicted box may put a corner, are left out. Not while
+    // the corner tags leave the view: cut, they no longer give the front's scale.)
+    if (pic.decides && pose_K_ && !near_edge_ && growth > 0.8 && growth < 1.25) {
       const double front_side_px = tag_side_px_ * growth;
+      const double front_range_m = -pose_K_->X_FC.translation().x() - config_.shelf.tag_offset_m;
       const cv::Rect2d inner(predicted.x + 2.0 * front_side_px, predicted.y + 2.0 * front_side_px,
                              predicted.width - 4.0 * front_side_px, predicted.height - 4.0 * front_side_px);
       const double f_s = config_.camera.fx_px * config_.shelf.tag_size_m;
@@ -648,7 +650,7 @@ bool FlightSoftware::measure_target(const Picture& pic, const cv::Rect2d& predic
         const cv::Rect& b = t.bbox_px;
         const bool at_border = b.x <= 0 || b.y <= 0 || b.br().x >= bgr.cols || b.br().y >= bgr.rows;
         if (t.area_px >= p.area_ratio_threshold * front_area || at_border || !inner.contains(t.centre_px)) continue;
-        const double behind_m = f_s / std::sqrt(t.area_px) - f_s / front_side_px;
+        const double behind_m = f_s / std::sqrt(t.area_px) - front_range_m;
         // The shelf's own back face (its tags face forward too) is depth_m behind: those, with
         // the area's ranging error (about 10 %), measure up to depth + 0.15 m.
         if (behind_m > config_.shelf.depth_m + 0.15 && (!behind_m_ || behind_m < *behind_m_)) behind_m_ = behind_m;
