@@ -34,6 +34,8 @@
 //               crossing_margin_m crossing_yaw_tolerance_rad crossing_attempts cross_range_max_m
 //               beyond_distance_m edge_margin_px settle_s settle_z_m settle_psi_rad
 //               settle_hold_s pose_fresh_s pose_jump_m pose_jump_rad pose_jump_window_s
+//               identity_continuity_s identity_confirm_s identity_rereads stop_distance_m
+//               min_beyond_distance_m
 //   layout:     shelf_count shelf_spacing_m (required when shelf_count > 1)
 //   strategy:   mode (through_cells | over_tops | around_ends) top_clearance_m end_clearance_m
 //               transfer_speed_mps transfer_kp transfer_yaw_kp waypoint_tolerance_m transfer_leg_s
@@ -199,6 +201,23 @@ struct MissionParams {
   double pose_jump_m = 0.06;
   double pose_jump_rad = 0.12;
   double pose_jump_window_s = 0.5;
+  /// The target's identity (target_tracker.hpp): lost with the pose continuity, it is
+  /// re-established while backing off along the cell normal (the view widening until an edge
+  /// or a known marker is in it); not within identity_confirm_s, or contradicted, the shelf is
+  /// re-read from the optimal viewpoint and the target chosen anew; the identity_rereads+1-th
+  /// such doubt aborts the mission (landing where it hovers, in front of the shelf).
+  /// Continuity: a pose within pose_jump_window_s of the last identified one keeps the
+  /// identity; up to this time, only with the box found within 0.3 of its width of where it
+  /// was last identified (flight_software.cpp, measure_target).
+  double identity_continuity_s = 1.0;
+  double identity_confirm_s = 10.0;
+  /// The crossing's end with a shelf seen behind: the vehicle's front plus this (its drift after
+  /// the stop: crossing speed x velocity lag, 0.375 m/s x 0.7 s, and the timing's error) stays
+  /// short of the nearest tag behind; a crossing that would end less than
+  /// min_beyond_distance_m past the back face is not flown (landing in front instead).
+  double stop_distance_m = 0.4;
+  double min_beyond_distance_m = 0.1;
+  int identity_rereads = 2;
 };
 
 /// The warehouse as the operator describes it: shelf_count shelves of the known geometry in a

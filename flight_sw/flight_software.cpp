@@ -1,6 +1,7 @@
 #include "flight_sw/flight_software.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <numbers>
 
@@ -48,6 +49,13 @@ std::string cell_text(CellIndex c) {
 }
 
 cv::Point2d centre_of(const cv::Rect2d& r) { return {r.x + 0.5 * r.width, r.y + 0.5 * r.height}; }
+
+// A length for logs: metres with two decimals.
+std::string format_m(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.2f", v);
+  return b;
+}
 
 /// The tracked box: the bounding box of the corner tags' centres grown by half a tag side
 /// on every side. (cv::boundingRect of the centres as float points: the smallest integer
@@ -157,7 +165,7 @@ void FlightSoftware::on_frame(const CameraFrame& f) {
   // picture steers the loops; beyond, it is video but not a view: the vehicle hovers on it.
   const int damage = f.damaged || f.damage_events > 0 ? std::max(1, f.damage_events) : 0;
   if (damage > 0) ++telemetry_.damaged_frames;
-  decision_frame_ = damage <= config_.perception.decide_max_damage_events;
+  const Picture pic{f.bgr, now_ns_, damage, damage <= config_.perception.decide_max_damage_events};
   if (damage > config_.perception.steer_max_damage_events) {
     ++telemetry_.unflown_frames;
     if (airborne_phase() && phase_ != Phase::Cross && phase_ != Phase::Transfer) {
@@ -171,10 +179,10 @@ void FlightSoftware::on_frame(const CameraFrame& f) {
     case Phase::WaitVideo:
       command_takeoff_if_ready();
       return;
-    case Phase::FindShelf: find_shelf(f.bgr); break;
-    case Phase::GoToViewpoint: go_to_viewpoint(f.bgr, false); break;
-    case Phase::TakeInventory: take_inventory(f.bgr, damage == 0); break;
-    case Phase::Approach: approach(f.bgr); break;
+    case Phase::FindShelf: find_shelf(pic); break;
+    case Phase::GoToViewpoint: go_to_viewpoint(pic, false); break;
+    case Phase::TakeInventory: take_inventory(pic); break;
+    case Phase::Approach: approach(pic); break;
     default: break;
   }
   last_control_ns_ = now_ns_;
@@ -397,18 +405,19 @@ void FlightSoftware::update_view_telemetry() {
 
 // ---- Phase behaviours ----
 
-void FlightSoftware::find_shelf(const cv::Mat& bgr) {
+void FlightSoftware::find_shelf(const Picture& pic) {
+  const cv::Mat& bgr = pic.bgr;
   analyse_shelf(bgr, tag_detector_, config_, view_);
   update_view_telemetry();
   const ControlGains& g = config_.control;
   const CameraIntrinsics& k = config_.camera;
-  if (view_.full && !decision_frame_) {  // to be confirmed on a nearly whole picture
+  if (view_.full && !pic.decides) {  // to be confirmed on a nearly whole picture
     set_velocity({});
     return;
   }
   if (view_.full) {
     enter(Phase::GoToViewpoint, "whole shelf in view");
-    go_to_viewpoint(bgr, true);
+    go_to_viewpoint(pic, true);
     return;
   }
   VelocityCommand v;
@@ -417,7 +426,12 @@ void FlightSoftware::find_shelf(const cv::Mat& bgr) {
     cv::Point2d c(0, 0);
     for (const TagBlob& t : view_.tags) c += t.centre_px;
     c *= 1.0 / static_cast<double>(view_.tags.size());
-    v.vx_B_mps = -g.back_off_speed_mps;
+    // Backing away helps only while the shelf is too close to fit the view: once its largest
+    // tag is no bigger than a front tag seen from 1.2 times the optimal viewpoint's range
+    // (side f s / (1.2 D)), what keeps the grid from being whole is not the range (tags of a
+    // shelf behind, a turned view) and backing on would only meet the wall behind.
+    const double far_side_px = k.fx_px * config_.shelf.tag_size_m / (1.2 * -viewpoint_G_m_.x());
+    v.vx_B_mps = std::sqrt(view_.largest_tag_area_px) > far_side_px ? -g.back_off_speed_mps : 0.0;
     v.yaw_rate_radps = std::clamp(g.viewpoint_yaw_kp * std::atan((k.cx_px - c.x) / k.fx_px),
                                   -g.yaw_rate_max_radps, g.yaw_rate_max_radps);
     v.vz_mps = std::clamp(g.viewpoint_kp * (k.cy_px - c.y) / k.fy_px, -g.z_speed_max_mps,
@@ -428,7 +442,8 @@ void FlightSoftware::find_shelf(const cv::Mat& bgr) {
   set_velocity(v);
 }
 
-void FlightSoftware::go_to_viewpoint(const cv::Mat& bgr, bool view_fresh) {
+void FlightSoftware::go_to_viewpoint(const Picture& pic, bool view_fresh) {
+  const cv::Mat& bgr = pic.bgr;
   if (!view_fresh) {
     analyse_shelf(bgr, tag_detector_, config_, view_);
     update_view_telemetry();
@@ -475,16 +490,17 @@ void FlightSoftware::go_to_viewpoint(const cv::Mat& bgr, bool view_fresh) {
   const bool there = e1.norm() < m.viewpoint_position_tolerance_m &&
                      std::abs(pose->yaw_rad) < m.viewpoint_yaw_tolerance_rad;
   if (!there) settled_frames_ = 0;
-  else if (decision_frame_) ++settled_frames_;  // a damaged picture neither counts nor resets
+  else if (pic.decides) ++settled_frames_;  // a damaged picture neither counts nor resets
   if (settled_frames_ >= m.viewpoint_settle_frames) {
     hover();
     enter(Phase::TakeInventory, "at the optimal viewpoint: reading the shelf");
   }
 }
 
-void FlightSoftware::take_inventory(const cv::Mat& bgr, bool whole) {
+void FlightSoftware::take_inventory(const Picture& pic) {
+  const cv::Mat& bgr = pic.bgr;
   hover();
-  if (!decision_frame_) return;  // a guessed band may hold a marker, or shift the grid labels
+  if (!pic.decides) return;  // a guessed band may hold a marker, or shift the grid labels
   analyse_shelf(bgr, tag_detector_, config_, view_);
   update_view_telemetry();
   if (!view_.full) return;
@@ -499,7 +515,7 @@ void FlightSoftware::take_inventory(const cv::Mat& bgr, bool whole) {
     marker_detector_.detect(bgr, markers_);
   }
   telemetry_.markers_seen = static_cast<int>(markers_.size());
-  inventory_.observe(assign_markers(view_, markers_, config_), whole);
+  inventory_.observe(assign_markers(view_, markers_, config_), pic.whole());
   // Closed after inventory_frames full views, of which enough whole ones to decide which
   // cells are empty (damaged ones only vote for boxes); the timeout bounds the wait.
   if (inventory_.frames() < config_.perception.inventory_frames || !inventory_.empty_decidable()) return;
@@ -566,6 +582,16 @@ bool FlightSoftware::select_target(const cv::Mat& bgr) {
   box_px_ = corner_box(q, side);
   tag_side_px_ = side;
   start_tracker(bgr, box_px_);
+  // Chosen on a full view, where every cell's grid position is counted from the edges.
+  identity_ = CellIdentity::Confirmed;
+  identity_vouched_ns_ = now_ns_;
+  vouched_box_px_ = box_px_;
+  behind_m_.reset();
+  gain_start_.reset();
+  commanded_m_.clear();
+  last_approach_ns_.reset();
+  unidentified_since_ns_.reset();
+  telemetry_.target_identity = identity_;
   return true;
 }
 
@@ -581,7 +607,8 @@ void FlightSoftware::start_tracker(const cv::Mat& bgr, const cv::Rect2d& box) {
 
 // Looks for the target's four corner tags around `predicted`: tags in a window around it,
 // eq. 1 inside the window, each corner the nearest tag to where the box puts it.
-bool FlightSoftware::measure_target(const cv::Mat& bgr, const cv::Rect2d& predicted) {
+bool FlightSoftware::measure_target(const Picture& pic, const cv::Rect2d& predicted) {
+  const cv::Mat& bgr = pic.bgr;
   const PerceptionParams& p = config_.perception;
   const double grow_x = p.roi_expand * predicted.width, grow_y = p.roi_expand * predicted.height;
   const cv::Rect roi(cv::Point(static_cast<int>(std::floor(predicted.x - grow_x)),
@@ -593,10 +620,46 @@ bool FlightSoftware::measure_target(const cv::Mat& bgr, const cv::Rect2d& predic
   // still puts a sample on every corner tag (exact for tags wider than the stride).
   const int stride = std::clamp(static_cast<int>(0.4 * tag_side_px_), 2, 8);
   tag_detector_.detect(bgr, roi, roi_tags_, stride);
-  keep_front_shelf(roi_tags_, p.area_ratio_threshold);
   // Where the box puts each corner: the old corners moved and scaled with the box.
   const cv::Point2d old_c = centre_of(box_px_), new_c = centre_of(predicted);
   const double sx = predicted.width / box_px_.width, sy = predicted.height / box_px_.height;
+  // Eq. 1 against the target's own corner tags (their side last measured, grown with the box):
+  // the window alone is no reference, since once the target's tags have left it (lost, or
+  // leaving the view) the largest tag in it may be one of a shelf behind, which eq. 1 against
+  // itself would keep. A front tag has about (side sqrt(sx sy))^2 pixels; a tag of a shelf d
+  // behind, seen from range r, (r / (r + d))^2 of that.
+  // (Only while the prediction is sane: the box tracker's growth, extrapolated, can blow up.)
+  const double growth = std::sqrt(sx * sy);
+  if (tag_side_px_ > 0.0 && growth > 0.5 && growth < 2.0) {
+    const double front_area = tag_side_px_ * tag_side_px_ * sx * sy;
+    // The room behind the shelf, seen through the target cell: a tag of a shelf behind inside
+    // the box (shrunk by two tag sides: not a corner tag) lies f s / sqrt(area) from the camera
+    // along its axis, the front tags' plane -x_C - tag_offset (the last pose); the nearest such
+    // tag over the approach bounds where the crossing may end. (A tag cut by a bar looks
+    // smaller, hence farther: only the nearest over many pictures counts. A front corner tag
+    // cut by the picture's border looks small too: blobs touching the border, or within two tag
+    // sides of the box's edge, where the predicted box may put a corner, are left out. Not while
+    // the corner tags leave the view: cut, they no longer give the front's scale.)
+    if (pic.decides && pose_K_ && !near_edge_ && growth > 0.8 && growth < 1.25) {
+      const double front_side_px = tag_side_px_ * growth;
+      const double front_range_m = -pose_K_->X_FC.translation().x() - config_.shelf.tag_offset_m;
+      const cv::Rect2d inner(predicted.x + 2.0 * front_side_px, predicted.y + 2.0 * front_side_px,
+                             predicted.width - 4.0 * front_side_px, predicted.height - 4.0 * front_side_px);
+      const double f_s = config_.camera.fx_px * config_.shelf.tag_size_m;
+      for (const TagBlob& t : roi_tags_) {
+        const cv::Rect& b = t.bbox_px;
+        const bool at_border = b.x <= 0 || b.y <= 0 || b.br().x >= bgr.cols || b.br().y >= bgr.rows;
+        if (t.area_px >= p.area_ratio_threshold * front_area || at_border || !inner.contains(t.centre_px)) continue;
+        const double behind_m = f_s / std::sqrt(t.area_px) - front_range_m;
+        // The shelf's own back face (its tags face forward too) is depth_m behind: those, with
+        // the area's ranging error (about 10 %), measure up to depth + 0.15 m.
+        if (behind_m > config_.shelf.depth_m + 0.15 && (!behind_m_ || behind_m < *behind_m_)) behind_m_ = behind_m;
+      }
+    }
+    telemetry_.behind_tags_dropped += static_cast<int>(std::erase_if(
+        roi_tags_, [&](const TagBlob& t) { return t.area_px < p.area_ratio_threshold * front_area; }));
+  }
+  keep_front_shelf(roi_tags_, p.area_ratio_threshold);
   const double gate = p.corner_gate * std::min(predicted.width, predicted.height);
   std::array<int, 4> pick{-1, -1, -1, -1};
   for (size_t k = 0; k < 4; ++k) {
@@ -659,10 +722,35 @@ bool FlightSoftware::measure_target(const cv::Mat& bgr, const cv::Rect2d& predic
       return false;
     }
   }
+  // Identity by continuity: this pose follows the last identified one (or the full view the
+  // target was chosen on). Within pose_jump_window_s the jump test above compared the two.
+  // Beyond it, up to identity_continuity_s (pictures too damaged to use, a tag missed for a
+  // few frames), the box must be found where it was last identified, within 0.3 of its width:
+  // a box slid one column moves by (w_i + w_j) / 2 over a box of w_i + tag, at least 0.7 of
+  // its width on the test shelf, while the yaw loop holds the target's box at the image centre
+  // and the vehicle drifts sideways by V_y dt (8 cm in 1 s, 0.2 of a 0.4 m box at any range).
+  // A longer gap, or a box found elsewhere, leaves the target unidentified until a picture
+  // confirms it (check_identity). (The level is checked on every pose against the state height.)
+  const cv::Rect2d box_now = corner_box({img[0], img[1], img[2], img[3]}, side);
+  const double gap_s = ns_to_seconds(now_ns_ - identity_vouched_ns_);
+  const bool continuous =
+      gap_s <= mp.pose_jump_window_s ||
+      (gap_s <= mp.identity_continuity_s && vouched_box_px_ &&
+       cv::norm(centre_of(box_now) - centre_of(*vouched_box_px_)) < 0.3 * vouched_box_px_->width &&
+       std::abs(box_now.width / vouched_box_px_->width - 1.0) < 0.2);
+  if (identity_ == CellIdentity::Confirmed && continuous) {
+    identity_vouched_ns_ = now_ns_;
+    vouched_box_px_ = box_now;
+  } else if (identity_ == CellIdentity::Confirmed) {
+    identity_ = CellIdentity::Unknown;
+    telemetry_.event = "target continuity lost: identity to be confirmed";
+  }
+  if (identity_ != CellIdentity::Confirmed && !unidentified_since_ns_) unidentified_since_ns_ = now_ns_;
+  telemetry_.target_identity = identity_;
   for (size_t k = 0; k < 4; ++k) corner_px_[k] = img[k];
   pose_K_ = pose;
   pose_t_ns_ = now_ns_;
-  if (decision_frame_) {  // the crossing is judged on poses from nearly whole pictures only
+  if (pic.decides) {  // the crossing is judged on poses from nearly whole pictures only
     decision_pose_K_ = pose;
     decision_pose_t_ns_ = now_ns_;
   }
@@ -689,7 +777,8 @@ std::optional<double> FlightSoftware::cell_height_m(double v_px, double range_m)
   return state_->height_m + range_m * std::tan(elevation);
 }
 
-bool FlightSoftware::reacquire(const cv::Mat& bgr) {
+bool FlightSoftware::reacquire(const Picture& pic) {
+  const cv::Mat& bgr = pic.bgr;
   // The target is a cell of the (possibly partial) grid near the last box: the nearest one
   // whose corner tags give a plausible pose of the right level (measure_target's tests), so
   // that a neighbour above or below is passed over.
@@ -712,7 +801,7 @@ bool FlightSoftware::reacquire(const cv::Mat& bgr) {
   std::stable_sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   for (const auto& [d, idx] : candidates) {
     for (size_t k = 0; k < 4; ++k) corner_px_[k] = view_.tags[static_cast<size_t>(idx[k])].centre_px;
-    if (measure_target(bgr, box_px_)) {
+    if (measure_target(pic, box_px_)) {
       start_tracker(bgr, box_px_);
       return true;
     }
@@ -720,50 +809,104 @@ bool FlightSoftware::reacquire(const cv::Mat& bgr) {
   return false;
 }
 
-// The crossing line (open loop, docs/method.md section 3): straight, at constant speed, from the
-// last visual position through the cell's centre at mid-depth, so that a residual lateral or
-// vertical offset y0 at range r leaves only y0 (depth/2) / (r + depth/2) at either face
-// instead of growing along a heading that looks at the front face's centre.
-Eigen::Vector3d FlightSoftware::crossing_direction_K(const PoseEstimate& pose) const {
-  const Eigen::Vector3d aim(0.5 * config_.shelf.depth_m, 0.0, 0.0);
-  return (aim - pose.p_FB_m()).normalized();
-}
-
-bool FlightSoftware::crossing_allowed(const PoseEstimate& pose, TimeNs pose_t_ns, std::string& why) const {
-  const MissionParams& m = config_.mission;
-  const Eigen::Vector2d opening = cell_opening_m(config_.shelf, *target_);
-  const double psi = std::abs(pose.yaw_rad);
-  // Footprint across the opening of a vehicle turned by psi (its heading is held).
-  const double footprint = m.vehicle_size_m.y() * std::cos(psi) + m.vehicle_size_m.x() * std::sin(psi);
-  const double tol_y = 0.5 * (opening.x() - footprint) - m.crossing_margin_m;
-  const double tol_z = 0.5 * (opening.y() - m.vehicle_size_m.z()) - m.crossing_margin_m;
-  const Eigen::Vector3d p = pose.p_FB_m();
-  const Eigen::Vector3d d = crossing_direction_K(pose);
-  // Where the crossing line meets the front and back faces.
-  const auto at = [&](double x) -> Eigen::Vector3d { return p + d * ((x - p.x()) / d.x()); };
-  const Eigen::Vector3d front = at(0.0), back = at(config_.shelf.depth_m);
-  // The pose is honest only if it is recent (frames may drop) and the vehicle was not moving
-  // sideways when it was taken: the video latency hides up to V_y (latency + tau) of motion.
-  const bool fresh = ns_to_seconds(now_ns_ - pose_t_ns) <= m.pose_fresh_s;
-  const bool still = ns_to_seconds(pose_t_ns - lateral_active_ns_) >= m.settle_s;
-  if (!fresh) {
-    why = "last pose too old";
-  } else if (!still) {
-    why = "still moving sideways";
-  } else if (psi > m.crossing_yaw_tolerance_rad) {
-    why = "heading off the cell normal";
-  } else if (d.x() <= 0.0 || std::abs(front.y()) > tol_y || std::abs(back.y()) > tol_y) {
-    why = "off-centre laterally";
-  } else if (std::abs(front.z()) > tol_z || std::abs(back.z()) > tol_z) {
-    why = "off-centre vertically";
+bool FlightSoftware::check_identity(const Picture& pic, const PoseEstimate& pose) {
+  const cv::Mat& bgr = pic.bgr;
+  // Every tag and every marker of the picture (eq. 1 is applied against the pose inside the
+  // check), at the cost of a whole-frame search, paid only while the target is unidentified.
+  frame_tags_.clear();
+  tag_detector_.detect(bgr, cv::Rect(0, 0, bgr.cols, bgr.rows), frame_tags_);
+  frame_markers_.clear();
+  if (fast()) {
+    const double range_m = std::max(0.1, -pose.X_FC.translation().x());
+    marker_detector_.detect_in(bgr, cv::Rect(0, 0, bgr.cols, bgr.rows),
+                               config_.shelf.marker_size_m * config_.camera.fx_px / range_m,
+                               config_.perception.marker_area_ratio_threshold, frame_markers_);
   } else {
+    marker_detector_.detect(bgr, frame_markers_);
+  }
+  ++telemetry_.identity_checks;
+  const IdentityCheck check = check_cell_identity(*target_, pose, frame_tags_, frame_markers_, inventory_, config_);
+  if (check.verdict == CellIdentity::Confirmed) {
+    identity_ = CellIdentity::Confirmed;
+    identity_vouched_ns_ = now_ns_;
+    vouched_box_px_ = box_px_;
+    unidentified_since_ns_.reset();
+    telemetry_.target_identity = identity_;
+    telemetry_.event = "target identity confirmed: " + check.why;
     return true;
   }
-  return false;
+  if (check.verdict == CellIdentity::Contradicted) {
+    ++telemetry_.identity_contradictions;
+    reread_shelf("target identity contradicted (" + check.why + ")");
+    return false;
+  }
+  if (unidentified_since_ns_ && ns_to_seconds(now_ns_ - *unidentified_since_ns_) > config_.mission.identity_confirm_s) {
+    reread_shelf("target not identified within identity_confirm_s");
+    return false;
+  }
+  return true;
 }
 
-void FlightSoftware::approach(const cv::Mat& bgr) {
+// The vehicle's forward speed per commanded speed, from the visual poses of the approach: the
+// distance flown along x_K since the first pose of the approach over the forward displacement
+// commanded in the same time, D(t) = integral of the commanded vx_B, taken lag_s earlier (the
+// pose shows the vehicle a video latency ago, and the vehicle follows the command after the
+// autopilot's velocity lag: 0.2 + 0.5 s assumed). Once D has grown by 0.8 m, a lag wrong by
+// 0.35 s moves the estimate by at most 0.25 m/s x 0.35 s / 0.8 m = 11 %; it is refined as D
+// grows. Clamped to 0.5..2; 1 until then.
+void FlightSoftware::estimate_forward_gain(const Picture& pic, const PoseEstimate& pose) {
+  constexpr double kLag_s = 0.7, kMinCommanded_m = 0.8;
+  if (!pic.decides) return;
+  if (!gain_start_) {
+    gain_start_ = std::make_pair(now_ns_, pose.p_FB_m().x());
+    return;
+  }
+  const auto commanded_at = [&](TimeNs t_ns) {  // D at t_ns, held before the first sample
+    double d = 0.0;
+    for (const auto& [t, dd] : commanded_m_) {
+      if (t > t_ns) break;
+      d = dd;
+    }
+    return d;
+  };
+  const TimeNs lag_ns = seconds_to_ns(kLag_s);
+  const double commanded = commanded_at(now_ns_ - lag_ns) - commanded_at(gain_start_->first - lag_ns);
+  if (commanded < kMinCommanded_m) return;
+  forward_gain_ = std::clamp((pose.p_FB_m().x() - gain_start_->second) / commanded, 0.5, 2.0);
+  telemetry_.forward_gain = forward_gain_;
+}
+
+void FlightSoftware::reread_shelf(const std::string& why) {
+  ++telemetry_.shelf_rereads;
+  if (++rereads_ > config_.mission.identity_rereads) {
+    land(Outcome::Aborted, "target cell not identified: " + why);
+    return;
+  }
+  target_.reset();
+  telemetry_.target.reset();
+  pose_K_.reset();
+  decision_pose_K_.reset();
+  identity_ = CellIdentity::Unknown;
+  telemetry_.target_identity = identity_;
+  unidentified_since_ns_.reset();
+  hold_since_ns_.reset();
+  near_edge_ = false;
+  hover();
+  // FindShelf backs away from a fragment until the whole grid is in view, GoToViewpoint flies
+  // to the optimal viewpoint, and TakeInventory (its frames already read) chooses the target
+  // anew on a full view.
+  enter(Phase::FindShelf, why + ": re-reading the shelf from the viewpoint");
+}
+
+void FlightSoftware::approach(const Picture& pic) {
+  const cv::Mat& bgr = pic.bgr;
   const ControlGains& g = config_.control;
+  // The forward displacement commanded so far: the last command held since the last frame.
+  if (last_approach_ns_) {
+    const double d = commanded_m_.empty() ? 0.0 : commanded_m_.back().second;
+    commanded_m_.emplace_back(now_ns_, d + velocity_.vx_B_mps * ns_to_seconds(now_ns_ - *last_approach_ns_));
+  }
+  last_approach_ns_ = now_ns_;
   const CameraIntrinsics& k = config_.camera;
   cv::Rect2d predicted = box_px_;
   if (fast()) {
@@ -774,7 +917,7 @@ void FlightSoftware::approach(const cv::Mat& bgr) {
     telemetry_.tracker_ok = tracker_ && tracker_->update(bgr, predicted);
     if (!telemetry_.tracker_ok) predicted = box_px_;
   }
-  const bool found = measure_target(bgr, predicted);
+  const bool found = measure_target(pic, predicted);
   telemetry_.tracked_box_px = box_px_;
   const double dt = control_dt_s();
   if (found) {
@@ -791,6 +934,9 @@ void FlightSoftware::approach(const cv::Mat& bgr) {
     const PoseEstimate& pose = *pose_K_;
     telemetry_.pose = pose;
     telemetry_.pose_in_cell_frame = true;
+    // Unidentified (continuity lost): judge this picture; a contradiction ends the approach.
+    // Whole pictures only: a guessed band can put a tag beyond the grid's edge or hide one.
+    if (identity_ != CellIdentity::Confirmed && pic.whole() && !check_identity(pic, pose)) return;
     const cv::Point2d c = centre_of(box_px_);
     const double range_m = std::max(0.05, -pose.X_FC.translation().x());
     const double e_z = (k.cy_px - c.y) * range_m / k.fy_px;   // eq. 11
@@ -822,11 +968,18 @@ void FlightSoftware::approach(const cv::Mat& bgr) {
         hold_since_ns_ && ns_to_seconds(now_ns_ - *hold_since_ns_) > m.settle_hold_s;
     const bool hold = !in_cone || (settling && !settle_given_up);
     v.vx_B_mps = hold ? 0.0 : g.forward_speed_mps;                                 // eq. 10
+    // An unidentified target is never approached: back off along the normal (the other loops
+    // keeping the box centred) so that the view widens until an edge or a known marker shows
+    // which cell it is, no farther than the optimal viewpoint's range.
+    if (identity_ != CellIdentity::Confirmed) {
+      v.vx_B_mps = -pose.p_FB_m().x() < -viewpoint_G_m_.x() ? -g.back_off_speed_mps : 0.0;
+    }
     // About to lose the tags: the crossing will be judged on the last nearly whole picture,
     // so only such pictures move the vehicle now (it hovers on damaged ones), and the last
     // one before the tags leave is at most a frame old.
-    if (near_edge_ && !decision_frame_) v = {};
+    if (near_edge_ && !pic.decides) v = {};
     set_velocity(v);
+    estimate_forward_gain(pic, pose);
     telemetry_.e_z_m = e_z;
     telemetry_.e_psi_rad = e_psi;
     telemetry_.psi_cell_rad = psi;
@@ -836,7 +989,7 @@ void FlightSoftware::approach(const cv::Mat& bgr) {
     telemetry_.holding_short = hold;
     return;
   }
-  if (!decision_frame_ && !back_off_since_ns_) {
+  if (!pic.decides && !back_off_since_ns_) {
     // Not found in a damaged picture: the tags may sit in a guessed band. Nothing is decided
     // (no crossing, no re-acquisition) until a nearly whole picture shows where they are.
     if (!lost_since_ns_) lost_since_ns_ = now_ns_;
@@ -847,16 +1000,35 @@ void FlightSoftware::approach(const cv::Mat& bgr) {
   // judged on the last pose from a nearly whole picture.
   if (decision_pose_K_ && near_edge_ && -decision_pose_K_->p_FB_m().x() <= config_.mission.cross_range_max_m) {
     const PoseEstimate& pose = *decision_pose_K_;
-    std::string why;
-    if (crossing_allowed(pose, decision_pose_t_ns_, why)) {
-      const double distance = -pose.p_FB_m().x() + config_.shelf.depth_m +
-                              0.5 * config_.mission.vehicle_size_m.x() +
-                              config_.mission.beyond_distance_m;
+    CrossingGateInput gate;
+    gate.pose_age_s = ns_to_seconds(now_ns_ - decision_pose_t_ns_);
+    gate.still_for_s = ns_to_seconds(decision_pose_t_ns_ - lateral_active_ns_);
+    gate.identity = identity_;
+    const std::optional<std::string> refusal = crossing_refusal(config_, *target_, pose, gate);
+    const std::string why = refusal.value_or("");
+    if (!refusal) {
+      // Past the back face by beyond_distance_m, or less where a shelf stands behind: the
+      // vehicle's front, plus what it drifts after the stop (stop_distance_m), must stay short
+      // of the nearest tag seen behind through the cell.
+      const MissionParams& mp = config_.mission;
+      double beyond_m = mp.beyond_distance_m;
+      if (behind_m_) {
+        beyond_m = std::min(beyond_m, *behind_m_ - config_.shelf.depth_m - mp.vehicle_size_m.x() - mp.stop_distance_m);
+      }
+      if (beyond_m < mp.min_beyond_distance_m) {
+        land(Outcome::Aborted, "no room behind the shelf to stop after crossing (tags " + format_m(*behind_m_) + " m behind)");
+        return;
+      }
+      const double distance = -pose.p_FB_m().x() + config_.shelf.depth_m + 0.5 * mp.vehicle_size_m.x() + beyond_m;
       // Along the crossing line at crossing_speed_mps, heading held (yaw rate 0); the line in
       // K turned into the body frame by the heading: v_B = R_z(-yaw) v_K.
-      const Eigen::Vector3d d = crossing_direction_K(pose);
-      cross_duration_ns_ = seconds_to_ns(distance / (d.x() * g.crossing_speed_mps));
-      enter(Phase::Cross, "corner tags left the view: crossing " + cell_text(*target_));
+      const Eigen::Vector3d d = crossing_direction_K(config_.shelf, pose);
+      // Timed at the speed the vehicle really flies: the commanded one times the gain measured
+      // in the approach (the rc-to-speed gain of a Tello varies by tens of percent).
+      cross_duration_ns_ = seconds_to_ns(distance / (d.x() * g.crossing_speed_mps * forward_gain_));
+      enter(Phase::Cross, "corner tags left the view: crossing " + cell_text(*target_) + " (" + format_m(beyond_m) +
+                              " m past the back face; speed gain " + format_m(forward_gain_) +
+                              (behind_m_ ? "; tags " + format_m(*behind_m_) + " m behind)" : ")"));
       const double cy = std::cos(pose.yaw_rad), sy = std::sin(pose.yaw_rad);
       set_velocity({g.crossing_speed_mps * (cy * d.x() + sy * d.y()),
                     g.crossing_speed_mps * (-sy * d.x() + cy * d.y()), g.crossing_speed_mps * d.z(), 0.0});
@@ -885,7 +1057,7 @@ void FlightSoftware::approach(const cv::Mat& bgr) {
     telemetry_.event = "target lost: hovering to re-acquire";
   }
   hover();
-  if (reacquire(bgr)) {
+  if (reacquire(pic)) {
     lost_since_ns_.reset();
     telemetry_.event = "target re-acquired";
   }

@@ -85,6 +85,7 @@
 #include "flight_sw/navigation.hpp"
 #include "flight_sw/perception.hpp"
 #include "flight_sw/sdk_link.hpp"
+#include "flight_sw/target_tracker.hpp"
 #include "shelfcross/camera.hpp"
 #include "shelfcross/sdk_messages.hpp"
 
@@ -99,6 +100,16 @@ struct ClockTick {
 };
 
 using Input = std::variant<CameraFrame, StateRecord, SdkReply, ClockTick>;
+
+/// One picture as the phases see it: the image and what it is worth, decided once when it
+/// arrives (flight_sw/README.md, "Damaged pictures") and handed to every step that uses it.
+struct Picture {
+  const cv::Mat& bgr;
+  TimeNs t_ns = 0;         ///< its stamp (receive time)
+  int damage_events = 0;   ///< lost bands since its key frame; 0: whole
+  bool decides = true;     ///< damage_events <= perception.decide_max_damage_events
+  bool whole() const { return damage_events == 0; }
+};
 
 enum class Phase {
   Idle,
@@ -172,6 +183,12 @@ struct Telemetry {
   bool holding_short = false;  ///< forward speed held at 0 (off the normal, or settling)
   int rejected_poses = 0;      ///< implausible jumps of the target's pose, ignored
   int wrong_level_poses = 0;   ///< of which on another level's tags (state height disagrees)
+  CellIdentity target_identity = CellIdentity::Unknown;  ///< target_tracker.hpp
+  int identity_checks = 0;     ///< pictures judged while the target was unidentified
+  int identity_contradictions = 0;  ///< of which disagreed with the target (re-read from the viewpoint)
+  int shelf_rereads = 0;       ///< shelf re-read from the viewpoint because the target was in doubt
+  double forward_gain = 1.0;   ///< measured forward speed per commanded (crossing timing)
+  int behind_tags_dropped = 0; ///< tags in the target's window too small for the front shelf (eq. 1 against the tracked tags)
   Eigen::Vector3d e1_G_m = Eigen::Vector3d::Zero();  ///< to the optimal viewpoint
   VelocityCommand velocity;    ///< last commanded
   RcSticks rc;                 ///< last sent
@@ -218,18 +235,23 @@ class FlightSoftware {
   void on_completion(const SdkLink::Completion& c);
   void supervise();
   // Phase behaviours on a frame
-  void find_shelf(const cv::Mat& bgr);
-  void go_to_viewpoint(const cv::Mat& bgr, bool view_fresh);
-  void take_inventory(const cv::Mat& bgr, bool whole);
-  void approach(const cv::Mat& bgr);
+  void find_shelf(const Picture& pic);
+  void go_to_viewpoint(const Picture& pic, bool view_fresh);
+  void take_inventory(const Picture& pic);
+  void approach(const Picture& pic);
   // Approach helpers
   bool select_target(const cv::Mat& bgr);
-  bool measure_target(const cv::Mat& bgr, const cv::Rect2d& predicted);
-  bool reacquire(const cv::Mat& bgr);
+  bool measure_target(const Picture& pic, const cv::Rect2d& predicted);
+  bool reacquire(const Picture& pic);
   std::optional<double> cell_height_m(double v_px, double range_m) const;
   void start_tracker(const cv::Mat& bgr, const cv::Rect2d& box);
-  bool crossing_allowed(const PoseEstimate& pose_K, TimeNs pose_t_ns, std::string& why) const;
-  Eigen::Vector3d crossing_direction_K(const PoseEstimate& pose_K) const;
+  /// The target's identity on a picture where it is not confirmed (target_tracker.hpp):
+  /// confirmed, kept unknown, or the shelf re-read (returns false: the approach is over).
+  bool check_identity(const Picture& pic, const PoseEstimate& pose_K);
+  /// The target is in doubt: forget it and re-read the shelf from the optimal viewpoint, or
+  /// abort (land where it hovers, in front of the shelf) after mission.identity_rereads.
+  void reread_shelf(const std::string& why);
+  void estimate_forward_gain(const Picture& pic, const PoseEstimate& pose_K);
   // Actions
   void enter(Phase phase, const std::string& event);
   void command_takeoff_if_ready();
@@ -293,13 +315,27 @@ class FlightSoftware {
   std::optional<PoseEstimate> decision_pose_K_;  ///< last pose from a nearly whole picture
   std::optional<double> target_height_m_;  ///< target cell centre above the take-off point (state h)
   TimeNs decision_pose_t_ns_ = 0;
-  bool decision_frame_ = true;  ///< the frame being handled may decide (decide_max_damage_events)
   TimeNs lateral_active_ns_ = 0;        ///< last time the lateral law commanded a speed
   std::optional<TimeNs> hold_since_ns_;  ///< holding short of the shelf to settle
   bool near_edge_ = false;              ///< a corner tag was about to leave the view
   std::optional<TimeNs> lost_since_ns_;
   std::optional<TimeNs> back_off_since_ns_;
   int crossing_refusals_ = 0;           ///< off-centre arrivals at the cell so far
+  // Identity (target_tracker.hpp): confirmed on the full view the target was chosen on and kept
+  // while every accepted pose follows the last identified one (mission.identity_continuity_s).
+  CellIdentity identity_ = CellIdentity::Unknown;
+  TimeNs identity_vouched_ns_ = 0;      ///< the last picture that kept or confirmed it
+  std::optional<cv::Rect2d> vouched_box_px_;  ///< the target's box on that picture
+  std::optional<TimeNs> unidentified_since_ns_;
+  int rereads_ = 0;
+  std::vector<TagBlob> frame_tags_;     ///< identity check buffers
+  std::optional<double> behind_m_;      ///< nearest tag behind the target seen through it, from the front tags, m
+  // Forward speed per commanded speed (estimate_forward_gain), for timing the crossing.
+  std::optional<std::pair<TimeNs, double>> gain_start_;  ///< (t, x_K) of the approach's first pose
+  std::vector<std::pair<TimeNs, double>> commanded_m_;  ///< (t, forward displacement commanded)
+  std::optional<TimeNs> last_approach_ns_;
+  double forward_gain_ = 1.0;
+  std::vector<MarkerSighting> frame_markers_;
   // Crossing
   TimeNs cross_duration_ns_ = 0;
   // Shelves

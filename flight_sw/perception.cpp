@@ -2,6 +2,7 @@
 #include "shelfcross/aruco_dictionaries.hpp"
 
 #include <algorithm>
+#include <functional>
 #include <cassert>
 #include <cmath>
 #include <limits>
@@ -32,11 +33,22 @@ void TagDetector::detect(const cv::Mat& bgr, cv::Rect roi, std::vector<TagBlob>&
   assert(bgr.type() == CV_8UC3);
   roi &= cv::Rect(0, 0, bgr.cols, bgr.rows);
   if (roi.empty()) return;
+  const size_t first = out.size();
   if (params_.pipeline == PerceptionPipeline::reference) {
     detect_reference(bgr, roi, out);
   } else {
     detect_fast(bgr, roi, out, stride > 0 ? stride : params_.tag_seed_stride_px);
   }
+  // A tag is a solid square: its centroid pixel has the tag colour. A box face whose colour
+  // the hue window reaches (cardboard, hue about 15, under a yellow tag's window 12..48) is a
+  // ring around its marker's white sheet, so its centroid is not; dropped here, it can
+  // neither pass as a tag nor, as the largest blob, push the real tags out through eq. 1.
+  const auto solid = [&](const TagBlob& b) {
+    const int x = std::clamp(static_cast<int>(std::lround(b.centre_px.x)), 0, bgr.cols - 1);
+    const int y = std::clamp(static_cast<int>(std::lround(b.centre_px.y)), 0, bgr.rows - 1);
+    return is_tag_colour(bgr.ptr<std::uint8_t>(y) + 3 * x);
+  };
+  out.erase(std::stable_partition(out.begin() + static_cast<std::ptrdiff_t>(first), out.end(), solid), out.end());
 }
 
 void TagDetector::detect_reference(const cv::Mat& bgr, cv::Rect roi, std::vector<TagBlob>& out) {
@@ -193,10 +205,20 @@ GridLimits grid_limits(double w, double h) {
 GridLimits grid_limits(const KnownShelf& shelf, double px_per_m) {
   const auto [w_min, w_max] = std::minmax_element(shelf.column_pitch_m.begin(), shelf.column_pitch_m.end());
   const auto [h_min, h_max] = std::minmax_element(shelf.row_pitch_m.begin(), shelf.row_pitch_m.end());
-  GridLimits l = grid_limits(*w_max * px_per_m, *h_max * px_per_m);
-  l.theta_lim_rad = std::min({l.theta_lim_rad,
-                              std::acos(std::min(1.0, l.dy_lim_px / (*h_min * px_per_m))),
-                              std::acos(std::min(1.0, l.dx_lim_px / (*w_min * px_per_m)))});
+  // Eq. 3-4 generalised (issue 17). A row's chain must take its co-row neighbour, up to W
+  // away (the widest column), at |dy| = W sin(theta), and never a point of the next row, whose
+  // offset h cos(theta) - w sin(theta) (the diagonal neighbour) vanishes first for the lowest
+  // row h_min over the widest column: theta < atan(h_min / W). Columns alike:
+  // theta < atan(w_min / H). So theta_L = min(atan(h_min / W), atan(w_min / H)) and the windows
+  // are the co-line offsets at theta_L: dy_lim = W sin(theta_L), dx_lim = H sin(theta_L).
+  // For a uniform grid this is eq. 3-4 exactly (w >= h: theta_L = atan(h / w),
+  // dy_lim = w h / sqrt(w^2 + h^2), dx_lim = h^2 / sqrt(w^2 + h^2)); eq. 3 with the largest
+  // pitches alone gave rows of 0.30 m under columns of 0.52 m (W H / sqrt(W^2 + H^2) = 0.33 m
+  // with H = 0.42 m) a row window wider than a row: theta_L = 0, every view refused.
+  GridLimits l;
+  l.theta_lim_rad = std::min(std::atan(*h_min / *w_max), std::atan(*w_min / *h_max));
+  l.dy_lim_px = *w_max * px_per_m * std::sin(l.theta_lim_rad);
+  l.dx_lim_px = *h_max * px_per_m * std::sin(l.theta_lim_rad);
   return l;
 }
 
@@ -484,8 +506,38 @@ void analyse_shelf(const cv::Mat& bgr, TagDetector& detector, const FlightConfig
   for (const TagBlob& b : view.tags) pts.push_back(b.centre_px);
   view.grid = classify_grid(pts, grid_limits(config.shelf, view.px_per_m),
                             config.perception.grid_orthogonality_tolerance_rad);
-  if (!view.grid.valid) return;
   const int expect_rows = config.shelf.levels() + 1, expect_cols = config.shelf.columns() + 1;
+  const size_t expect = static_cast<size_t>(expect_rows * expect_cols);
+  // A shelf behind, seen from afar: eq. 1 keeps its tags when r / (r + d) > sqrt(0.45) (from
+  // 3.5 m, a shelf up to 1.7 m behind), and the grid then holds more tags than the known
+  // shelf has. The front shelf's tags are the nearer ones: with the vehicle turned by up to
+  // psi, they lie within r +- (W/2) sin(psi) and those of a shelf d behind beyond
+  // r + d - (W/2) sin(psi), so for d > W sin(psi) (1.2 m > 1.7 m x sin 20 deg = 0.58 m) the
+  // known number of largest tags are the front shelf's. They are kept only if they then
+  // classify as the whole known grid; otherwise the view stays as it was (not full).
+  if (!(view.grid.valid && view.grid.rows == expect_rows && view.grid.columns == expect_cols) && view.tags.size() > expect) {
+    std::vector<double> areas;
+    for (const TagBlob& b : view.tags) areas.push_back(b.area_px);
+    std::nth_element(areas.begin(), areas.begin() + static_cast<std::ptrdiff_t>(expect - 1), areas.end(), std::greater<>());
+    const double smallest_kept = areas[expect - 1];
+    std::vector<TagBlob> front;
+    for (const TagBlob& b : view.tags) {
+      if (b.area_px >= smallest_kept) front.push_back(b);
+    }
+    if (front.size() == expect) {
+      std::vector<cv::Point2d> front_pts;
+      for (const TagBlob& b : front) front_pts.push_back(b.centre_px);
+      const double px_per_m = tag_scale_px_per_m(front, config.shelf);
+      TagGrid grid = classify_grid(front_pts, grid_limits(config.shelf, px_per_m),
+                                   config.perception.grid_orthogonality_tolerance_rad);
+      if (grid.valid && grid.rows == expect_rows && grid.columns == expect_cols) {
+        view.tags = std::move(front);
+        view.px_per_m = px_per_m;
+        view.grid = std::move(grid);
+      }
+    }
+  }
+  if (!view.grid.valid) return;
   view.full = view.grid.rows == expect_rows && view.grid.columns == expect_cols &&
               static_cast<int>(view.tags.size()) == expect_rows * expect_cols;
 }

@@ -100,12 +100,11 @@ struct GridLimits {
 ///   theta_L = atan(min(w,h) / max(w,h)).
 GridLimits grid_limits(double w, double h);
 
-/// Limits for the known (possibly non-uniform) shelf at `px_per_m`. Eq. 3 takes the largest
-/// column and row pitches (the farthest co-row / co-column neighbour must stay inside the
-/// window, W sin(theta) <= dy_lim); a smaller pitch brings the neighbour of the other family
-/// closer (its offset is h_min cos(theta) across rows, w_min cos(theta) across columns), so
-/// theta_L is lowered to min(eq. 4, acos(dy_lim / h_min), acos(dx_lim / w_min)). For a
-/// uniform grid this is eq. 4 exactly.
+/// Limits for the known (possibly non-uniform) shelf at `px_per_m`: eq. 3-4 generalised,
+/// theta_L = min(atan(h_min / w_max), atan(w_min / h_max)) (the flattest diagonal of a cell,
+/// where a point of the next row or column first comes level), dy_lim = w_max sin(theta_L),
+/// dx_lim = h_max sin(theta_L) (the farthest co-row / co-column neighbour at theta_L). For a
+/// uniform grid this is eq. 3-4 exactly.
 GridLimits grid_limits(const KnownShelf& shelf, double px_per_m);
 
 /// The result of the stair classification of a set of points.

@@ -62,9 +62,11 @@ StrategyRow summarize_strategy(const std::string& strategy, const std::vector<Ru
   row.paper_distance_m = paper_row(strategy).distance_m;
   row.paper_time_s = paper_row(strategy).time_s;
   std::vector<double> distance, time, recall;
+  std::vector<std::string> outcomes;
   for (const RunRecord& r : runs) {
     if (r.index >= runs_requested) continue;
     ++row.runs;
+    outcomes.push_back(r.outcome);
     const json m = json::parse(r.metrics_json);
     if (m.contains("inventory") && m["inventory"].value("recall", json()).is_number()) {
       recall.push_back(m["inventory"]["recall"].get<double>());
@@ -76,6 +78,11 @@ StrategyRow summarize_strategy(const std::string& strategy, const std::vector<Ru
   }
   row.success_rate = row.runs ? static_cast<double>(row.successes) / static_cast<double>(row.runs) : 0.0;
   row.success_lower_95 = row.runs ? clopper_pearson_lower(row.successes, row.runs, 0.95) : 0.0;
+  const SafetySummary safety = summarize_safety(outcomes);
+  row.contacts = safety.contacts;
+  row.contact_upper_95 = safety.contact_upper_95;
+  row.safe_aborts = safety.safe_aborts;
+  row.inventory_errors = safety.inventory_errors;
   if (!distance.empty()) row.mean_distance_m = summarize(distance).mean;
   if (!time.empty()) row.mean_time_s = summarize(time).mean;
   if (!recall.empty()) row.mean_recall = summarize(recall).mean;
@@ -85,17 +92,20 @@ StrategyRow summarize_strategy(const std::string& strategy, const std::vector<Ru
 std::string comparison_table_markdown(const std::vector<StrategyRow>& rows) {
   std::ostringstream md;
   md << "| path strategy | runs | mean distance (m) | paper | mean time (s) | paper | success rate | "
-        "95 % lower bound | inventory recall |\n"
-     << "|---|---|---|---|---|---|---|---|---|\n";
+        "95 % lower bound | contacts | contact 95 % upper bound | safe aborts | inventory errors | inventory recall |\n"
+     << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   const auto opt = [](const std::optional<double>& v, int decimals) { return v ? fixed(*v, decimals) : std::string("-"); };
   for (const StrategyRow& r : rows) {
     md << "| " << paper_row(r.strategy).label << " | " << r.runs << " | " << opt(r.mean_distance_m, 2) << " | "
        << fixed(r.paper_distance_m, 0) << " | " << opt(r.mean_time_s, 1) << " | " << fixed(r.paper_time_s, 0) << " | "
        << r.successes << "/" << r.runs << " = " << fixed(r.success_rate, 3) << " | " << fixed(r.success_lower_95, 3)
-       << " | " << opt(r.mean_recall, 4) << " |\n";
+       << " | " << r.contacts << " | " << fixed(r.contact_upper_95, 4) << " | " << r.safe_aborts << " | "
+       << r.inventory_errors << " | " << opt(r.mean_recall, 4) << " |\n";
   }
   md << "\nMean distance and time over the successful runs (a failed run ends early); recall over every run. "
-        "Lower bound: one-sided Clopper-Pearson at 95 %. Paper: docs/method.md section 6, Table 2.\n";
+        "Lower bound: one-sided Clopper-Pearson at 95 %. Safety apart from success: contacts (a shelf or a "
+        "wall touched) with their one-sided 95 % Clopper-Pearson upper bound, safe aborts (gave up, landed "
+        "without contact), inventory errors. Paper: docs/method.md section 6, Table 2.\n";
   return md.str();
 }
 
@@ -194,6 +204,10 @@ json run_comparison(const Scenario& nominal, std::int64_t runs, std::uint64_t se
                      {"successes", r.successes},
                      {"success_rate", r.success_rate},
                      {"success_lower_95", r.success_lower_95},
+                     {"contacts", r.contacts},
+                     {"contact_upper_95", r.contact_upper_95},
+                     {"safe_aborts", r.safe_aborts},
+                     {"inventory_errors", r.inventory_errors},
                      {"mean_distance_m", opt(r.mean_distance_m)},
                      {"mean_time_s", opt(r.mean_time_s)},
                      {"mean_inventory_recall", opt(r.mean_recall)},

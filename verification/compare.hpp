@@ -34,6 +34,10 @@ struct StrategyRow {
   std::int64_t successes = 0;
   double success_rate = 0.0;
   double success_lower_95 = 0.0;            ///< one-sided Clopper-Pearson
+  std::int64_t contacts = 0;                ///< runs that touched a shelf or a wall (statistics.hpp)
+  double contact_upper_95 = 1.0;            ///< one-sided Clopper-Pearson upper bound
+  std::int64_t safe_aborts = 0;             ///< gave up and landed without contact
+  std::int64_t inventory_errors = 0;
   std::optional<double> mean_distance_m;    ///< over the successful runs (a failed run stops early)
   std::optional<double> mean_time_s;        ///< over the successful runs
   std::optional<double> mean_recall;        ///< inventory recall over every run

@@ -53,6 +53,10 @@ const std::vector<DispersionParameter>& dispersion_parameters() {
       {"not_joystick_probability", 0.0, 1.0},
       {"video_stall_start_s", 0.0, 3600.0},
       {"video_stall_duration_s", 0.0, 3600.0},
+      {"shelf_behind_distance_m", 0.1, 20.0},
+      {"shelf_behind_lateral_m", -5.0, 5.0},
+      {"ambient_scale", 0.0, 3.0},
+      {"light_azimuth_rad", -2.0 * kPi, 2.0 * kPi},
   };
   return table;
 }
@@ -87,6 +91,28 @@ RunSetup disperse(const Scenario& nominal, std::uint64_t run_seed) {
   if (has("light_scale")) {
     s->warehouse.lighting.ambient *= value("light_scale");
     s->warehouse.lighting.directional *= value("light_scale");
+  }
+  // Uneven light: the ambient part alone scaled (less ambient, harder shading and shadows
+  // across the shelf), and the directional light turned about z_W to the drawn azimuth,
+  // keeping its elevation: direction (cos a, sin a) |d_xy|, d_z.
+  if (has("ambient_scale")) s->warehouse.lighting.ambient = std::min(1.0, s->warehouse.lighting.ambient * value("ambient_scale"));
+  if (has("light_azimuth_rad")) {
+    Eigen::Vector3d& d = s->warehouse.lighting.direction_W;
+    const double horizontal = std::max(d.head<2>().norm(), 0.1 * std::abs(d.z()));
+    d = {horizontal * std::cos(value("light_azimuth_rad")), horizontal * std::sin(value("light_azimuth_rad")), d.z()};
+  }
+  // The shelf behind (shelf 1 of a scenario with two shelves or more): its front face placed
+  // this far behind shelf 0's front face along shelf 0's normal x_S, and moved sideways along
+  // y_S by the lateral draw (added to where the file puts it). Its heading is shelf 0's.
+  if (s->warehouse.shelves.size() >= 2 && (has("shelf_behind_distance_m") || has("shelf_behind_lateral_m"))) {
+    const Eigen::Isometry3d X_WS = shelf_pose_W(s->warehouse.shelves.front());
+    ShelfSpec& behind = s->warehouse.shelves[1];
+    Eigen::Vector3d p_S = X_WS.inverse() * behind.origin_W_m;
+    if (has("shelf_behind_distance_m")) p_S.x() = value("shelf_behind_distance_m");
+    if (has("shelf_behind_lateral_m")) p_S.y() += value("shelf_behind_lateral_m");
+    p_S.z() = 0.0;
+    behind.origin_W_m = X_WS * p_S;
+    behind.yaw_rad = s->warehouse.shelves.front().yaw_rad;
   }
   if (has("box_fill_ratio")) {
     RandomStream stream(run_seed, StreamId::box_placement);

@@ -31,6 +31,14 @@
 //                           distribution (cosim_settings.hpp, kMeasuredStepLatency): the
 //                           draw is a quantile q, the step time its inverse CDF at q; so
 //                           {uniform: {min: 0, max: 1}} draws from the measured distribution
+//   shelf_behind_distance_m shelf 1's front face this far behind shelf 0's      [0.1, 20]
+//                           (along shelf 0's normal; shelf 1 takes shelf 0's heading)
+//   shelf_behind_lateral_m  shelf 1 moved along shelf 0's y_S, added             [-5, 5]
+//                           (both: only with two shelves or more; refused otherwise)
+//   ambient_scale           the ambient light alone, times (uneven light: harder [0, 3]
+//                           shading); capped at 1
+//   light_azimuth_rad       the directional light's azimuth (direction in x_W y_W [-2pi, 2pi]
+//                           turned to it, elevation kept)
 // Values outside a distribution's support cannot be drawn; a distribution whose support
 // leaves the allowed range (a normal on a bounded parameter, say) is refused at load time.
 

@@ -92,11 +92,43 @@ std::string latency_sweep_section(const Scenario& scenario, const std::vector<Ru
 
 }  // namespace
 
+std::string safety_section(const SafetySummary& s) {
+  const auto percent = [](double v, int decimals) { return fixed(100.0 * v, decimals) + " %"; };
+  std::ostringstream md;
+  md << "## Safety apart from mission success\n\n"
+     << "| | runs | rate | one-sided 95 % bound (Clopper-Pearson) |\n|---|---|---|---|\n"
+     << "| contacts (shelf or wall) | " << s.contacts << " of " << s.runs << " | "
+     << percent(s.contact_rate, 2) << " | below " << percent(s.contact_upper_95, 2) << " |\n"
+     << "| of which with a shelf | " << s.shelf_contacts << " | | |\n"
+     << "| safe aborts (gave up, landed without contact) | " << s.safe_aborts << " | "
+     << percent(s.runs ? static_cast<double>(s.safe_aborts) / static_cast<double>(s.runs) : 0.0, 2) << " | |\n"
+     << "| inventory errors (flown safely, wrong inventory) | " << s.inventory_errors << " | | |\n"
+     << "| other failures (timeout, software fault) | " << s.other_failures << " | | |\n\n"
+     << "A contact is the safety failure; an abort is only a lost mission. The contact bound is the "
+        "largest contact probability consistent with these runs at 95 % confidence.\n\n";
+  return md.str();
+}
+
 json write_campaign_report(const std::filesystem::path& dir) {
   ResultsStore store = ResultsStore::open_existing(dir / "results.sqlite");
   const Scenario scenario = parse_scenario(store.meta().scenario_yaml, (dir / "results.sqlite").string() + " (scenario)");
   const std::vector<RunRecord> runs = store.runs();
-  const json summary = summarize_campaign(runs, store.meta().runs_requested);
+  json summary = summarize_campaign(runs, store.meta().runs_requested);
+  // Safety apart from mission success (issue 17): contacts with their upper bound, safe aborts,
+  // inventory errors, over the same runs as the success rate.
+  std::vector<std::string> outcomes;
+  for (const RunRecord& r : runs) {
+    if (r.index < store.meta().runs_requested) outcomes.push_back(r.outcome);
+  }
+  const SafetySummary safety = summarize_safety(outcomes);
+  summary["safety"] = {{"runs", safety.runs},
+                       {"contacts", safety.contacts},
+                       {"shelf_contacts", safety.shelf_contacts},
+                       {"contact_rate", safety.contact_rate},
+                       {"contact_upper_95", safety.contact_upper_95},
+                       {"safe_aborts", safety.safe_aborts},
+                       {"inventory_errors", safety.inventory_errors},
+                       {"other_failures", safety.other_failures}};
   std::ofstream(dir / "summary.json") << summary.dump(2) << "\n";
 
   // The approach responses are measured on the first shelf (the metrics' target is its cell).
@@ -197,6 +229,7 @@ json write_campaign_report(const std::filesystem::path& dir) {
   md << "| successes | " << summary["successes"].get<std::int64_t>() << " |\n";
   md << "| success rate | " << fixed(summary["success_rate"].get<double>(), 4) << " |\n";
   md << "| one-sided 95 % lower bound (Clopper-Pearson) | " << fixed(summary["success_lower_95"].get<double>(), 4) << " |\n\n";
+  md << safety_section(safety);
   md << "## Outcomes\n\n| outcome | runs |\n|---|---|\n";
   for (const auto& [name, n] : summary["outcomes"].items()) md << "| " << name << " | " << n.get<std::int64_t>() << " |\n";
   md << "\n## Metrics\n\n| metric | runs | mean | p50 | p95 | p99 | max |\n|---|---|---|---|---|---|---|\n";

@@ -631,6 +631,9 @@ void visit_scenario(V& v, Scenario& s, Context& ctx) {
   v.section("start", [&](auto& p) { visit_start(p, s); }, Need::required);
   v.section("cosim", [&](auto& c) { visit_cosim(c, s.cosim); });
   v.distributions("dispersions", s.dispersions);
+  v.check("dispersions", s.warehouse.shelves.size() >= 2 || (!s.dispersions.contains("shelf_behind_distance_m") &&
+                                                             !s.dispersions.contains("shelf_behind_lateral_m")),
+          "shelf_behind_distance_m and shelf_behind_lateral_m move shelf 1: the warehouse needs two shelves");
 }
 
 Scenario read(const config::Document& doc) {

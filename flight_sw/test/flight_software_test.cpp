@@ -42,6 +42,12 @@ struct Options {
   int damage_group_frames = 0;
   int damage_first_frame = 1;
   int damage_shift_px = 0;
+  /// >= 0: this long into the approach the video goes blank for slide_blank_s, and meanwhile
+  /// the vehicle is moved by slide_W_m (a gust, a drift the flight software never saw): the
+  /// target's box, re-acquired where it was in the picture, then sits on another cell.
+  double slide_after_approach_s = -1.0;
+  double slide_blank_s = 1.0;
+  Eigen::Vector3d slide_W_m = Eigen::Vector3d::Zero();
 };
 
 /// The damage of one frame handed over and what the flight software did on it.
@@ -98,8 +104,16 @@ class Harness {
       } else if (t_next == t_frame) {
         ++frame_k;
         if (fsw_.phase() == Phase::Approach && !approach_t_) approach_t_ = t_;
-        const bool blank = o_.blank_frames || (o_.blank_after_approach_s >= 0.0 && approach_t_ &&
-                                               t_ - *approach_t_ > seconds_to_ns(o_.blank_after_approach_s));
+        bool blank = o_.blank_frames || (o_.blank_after_approach_s >= 0.0 && approach_t_ &&
+                                         t_ - *approach_t_ > seconds_to_ns(o_.blank_after_approach_s));
+        if (o_.slide_after_approach_s >= 0.0 && approach_t_ && t_ - *approach_t_ > seconds_to_ns(o_.slide_after_approach_s)) {
+          const bool in_gap = t_ - *approach_t_ <= seconds_to_ns(o_.slide_after_approach_s + o_.slide_blank_s);
+          blank = blank || in_gap;
+          if (!slid_) {
+            p_WB_ += o_.slide_W_m;
+            slid_ = true;
+          }
+        }
         if (video_on_ && o_.frames_on(t_)) {
           CameraFrame f;
           f.t_ns = t_;
@@ -120,6 +134,7 @@ class Harness {
   }
 
   FlightSoftware& fsw() { return fsw_; }
+  bool slid() const { return slid_; }
   const std::vector<SdkCommand>& commands() const { return log_; }
   std::vector<std::string> non_rc() const {
     std::vector<std::string> v;
@@ -225,6 +240,7 @@ class Harness {
   testing::Drawer drawer_;
   TimeNs t_ = 0;
   std::optional<TimeNs> approach_t_;
+  bool slid_ = false;
   Eigen::Vector3d p_WB_;
   double yaw_ = 0.0;
   bool video_on_ = false, airborne_ = false, landing_ = false;
@@ -448,6 +464,30 @@ void expect_through_cell_2_3(const Harness& h, std::optional<Eigen::Vector2d> en
 }
 
 // ---- The whole mission ----
+
+// Issue 17: the vehicle is carried one column aside (to the wide column L2 C2, which holds box
+// 4) while the video is blank during the approach; the target's box is re-acquired where it
+// was in the picture, i.e. on the neighbouring cell, whose corner tags give a plausible pose of
+// the right level. The flight software must not settle on it: the target is unidentified, the
+// vehicle backs off until a picture contradicts it, re-reads the shelf from the viewpoint and
+// crosses the true target, L2 C3.
+TEST(FlightSoftware, ReacquisitionOnTheNeighbouringColumnIsNeverCrossed) {
+  Options o;
+  o.slide_after_approach_s = 3.0;
+  o.slide_blank_s = 1.0;
+  o.slide_W_m = Eigen::Vector3d(0.0, 0.41, 0.0);  // L2 C3's centre (y -0.17 m) to L2 C2's (0.24 m)
+  Harness h(o);
+  h.run(120.0);
+  FlightSoftware& fsw = h.fsw();
+  ASSERT_TRUE(h.slid());
+  ASSERT_TRUE(fsw.finished()) << phase_name(fsw.phase()) << ": " << fsw.telemetry().event;
+  EXPECT_GE(fsw.telemetry().identity_checks, 1);
+  EXPECT_GE(fsw.telemetry().shelf_rereads, 1);
+  EXPECT_EQ(fsw.result().outcome, Outcome::Crossed) << fsw.result().reason;
+  ASSERT_TRUE(fsw.telemetry().target);
+  EXPECT_EQ(*fsw.telemetry().target, (CellIndex{2, 3}));
+  expect_through_cell_2_3(h);
+}
 
 TEST(FlightSoftware, WholeMissionInventoriesAndCrossesTheEmptyCell) {
   Harness h;

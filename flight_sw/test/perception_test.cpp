@@ -43,15 +43,17 @@ TEST(GridLimits, NonUniformShelfUsesLargestPitchesAndSmallerNeighbours) {
   EXPECT_NEAR(l.dx_lim_px, 19.6526, 1e-3);
   EXPECT_NEAR(l.dy_lim_px, 27.7448, 1e-3);
   EXPECT_NEAR(l.theta_lim_rad, 35.3112 * kDeg, 1e-6);
-  // Rows of 0.2 m under columns of 0.5 m: eq. 3 with the largest pitches (0.5, 0.4)...
+  // Rows of 0.2 m under columns of 0.5 m: the flattest diagonal is the 0.2 m row's over the
+  // 0.5 m column, theta_L = atan(0.2 / 0.5) = 21.8 deg (eq. 3 with the largest pitches alone
+  // put the row window, 0.31 m, above the 0.2 m row: no rotation at all was classified).
   KnownShelf mixed;
   mixed.column_pitch_m = {0.5, 0.5};
   mixed.row_pitch_m = {0.4, 0.2};
   const GridLimits m = grid_limits(mixed, 1.0);
-  const double dy = 0.5 * 0.4 / std::hypot(0.5, 0.4);
-  EXPECT_NEAR(m.dy_lim_px, dy, 1e-12);
-  // ...but the 0.2 m row brings the next row within dy_lim: theta_L = acos(dy / 0.2) = 0.
-  EXPECT_NEAR(m.theta_lim_rad, std::acos(std::min(1.0, dy / 0.2)), 1e-12);
+  EXPECT_NEAR(m.theta_lim_rad, std::atan(0.2 / 0.5), 1e-12);
+  EXPECT_NEAR(m.dy_lim_px, 0.5 * std::sin(std::atan(0.2 / 0.5)), 1e-12);
+  EXPECT_NEAR(m.dx_lim_px, 0.4 * std::sin(std::atan(0.2 / 0.5)), 1e-12);
+  EXPECT_LT(m.dy_lim_px, 0.2 * std::cos(m.theta_lim_rad) + 1e-12);  // the next row stays out
 }
 
 // A grid of posts x beams in metres, scaled to pixels and rotated by theta in the image.
@@ -106,6 +108,8 @@ TEST(StairClassification, LabelsUpToJustUnderTheLimitAndRefusesBeyond) {
       shelf_of({0.4, 0.4, 0.4}, {0.4, 0.4}),         // square cells: limit 45 deg
       shelf_of({0.5, 0.5, 0.5, 0.5}, {0.3, 0.3, 0.3}),  // wide cells (w > h)
       shelf_of({0.3, 0.3, 0.3}, {0.45, 0.45, 0.45}),    // tall cells (w < h)
+      shelf_of({0.36, 0.52, 0.40}, {0.30, 0.38, 0.34, 0.42, 0.30}),  // scenarios/stress/grid_5x3_yellow.yaml
+      shelf_of({0.34, 0.48, 0.40, 0.34, 0.48, 0.40}, {0.30, 0.34, 0.30, 0.38, 0.30, 0.34}),  // grid_6x6_mixed
   };
   for (const KnownShelf& s : shelves) {
     const double limit = grid_limits(s, 1.0).theta_lim_rad;

@@ -36,6 +36,12 @@ TEST(CompareTable, RowFromRuns) {
   const std::string md = comparison_table_markdown({row});
   EXPECT_NE(md.find("| over the shelf tops | 3 | 22.00 | 22 | 85.0 | 300 | 2/3 = 0.667 |"), std::string::npos) << md;
   EXPECT_THROW(summarize_strategy("sideways", runs, 3), std::invalid_argument);
+  // Safety apart from success: run 2's collision is a contact, with its upper bound (the 0.95
+  // quantile of Beta(2, 2), 3 p^2 - 2 p^3 = 0.95: p = 0.86465).
+  EXPECT_EQ(row.contacts, 1);
+  EXPECT_DOUBLE_EQ(row.contact_upper_95, clopper_pearson_upper(1, 3, 0.95));
+  EXPECT_EQ(row.safe_aborts, 0);
+  EXPECT_NE(md.find(" | 1 | 0.8646 | 0 | 0 | 0.7500 |"), std::string::npos) << md;
 }
 
 TEST(CompareTable, NoSuccessLeavesMeansEmpty) {

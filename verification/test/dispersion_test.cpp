@@ -58,6 +58,35 @@ TEST(Dispersion, AppliesDrawsToTruthAndBeliefs) {
   EXPECT_DOUBLE_EQ(d.cosim.link.frame_drop_probability, 0.2);
 }
 
+// Issue 17's stress family: the shelf behind (shelf 1) placed by its draws in shelf 0's frame,
+// uneven light; the shelf-behind parameters need two shelves.
+TEST(Dispersion, PlacesTheShelfBehindAndTurnsTheLight) {
+  const std::string row = std::string(SHELFCROSS_SOURCE_DIR) + "/scenarios/stress/row_shelf_behind.yaml";
+  Scenario s = load_scenario(row);
+  std::string text = write_scenario(s);
+  text = text.substr(0, text.find("dispersions:")) +
+         "dispersions:\n  shelf_behind_distance_m: {choice: {values: [1.5]}}\n"
+         "  shelf_behind_lateral_m: {choice: {values: [-0.3]}}\n"
+         "  ambient_scale: {choice: {values: [0.5]}}\n"
+         "  light_azimuth_rad: {choice: {values: [1.5707963267948966]}}\n";
+  s = parse_scenario(text, "row.yaml");
+  const Scenario& d = *disperse(s, 3).scenario;
+  const Eigen::Vector3d& front = s.warehouse.shelves[0].origin_W_m;
+  EXPECT_DOUBLE_EQ(d.warehouse.shelves[1].origin_W_m.x(), front.x() + 1.5);
+  EXPECT_DOUBLE_EQ(d.warehouse.shelves[1].origin_W_m.y(), s.warehouse.shelves[1].origin_W_m.y() - 0.3);
+  EXPECT_EQ(d.warehouse.shelves[0].origin_W_m, front);
+  EXPECT_EQ(d.warehouse.shelves[1].yaw_rad, d.warehouse.shelves[0].yaw_rad);
+  EXPECT_DOUBLE_EQ(d.warehouse.lighting.ambient, 0.5 * s.warehouse.lighting.ambient);
+  const Eigen::Vector3d& l0 = s.warehouse.lighting.direction_W;
+  const Eigen::Vector3d& l = d.warehouse.lighting.direction_W;
+  EXPECT_NEAR(l.x(), 0.0, 1e-12);
+  EXPECT_NEAR(l.y(), l0.head<2>().norm(), 1e-12);
+  EXPECT_DOUBLE_EQ(l.z(), l0.z());
+  // One shelf: refused with the line of the dispersions.
+  EXPECT_THROW(with_dispersions("dispersions:\n  shelf_behind_distance_m: {choice: {values: [1.5]}}\n"),
+               config::ConfigError);
+}
+
 TEST(Dispersion, BoxPlacementIsRedrawnPerRun) {
   const Scenario s = with_dispersions("dispersions:\n  box_fill_ratio: {uniform: {min: 0.5, max: 0.5}}\n");
   const RunSetup a = disperse(s, 1), b = disperse(s, 2), a2 = disperse(s, 1);

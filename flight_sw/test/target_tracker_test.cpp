@@ -1,0 +1,237 @@
+// The target tracker's identity check (issue 17) on drawn frames: a tracked box that slid one
+// column or one level is not the target, and the crossing is refused on it; the true cell seen
+// the same way is confirmed; tags of a shelf behind, seen through the cells, change nothing.
+
+#include <gtest/gtest.h>
+
+#include "flight_sw/navigation.hpp"
+#include "flight_sw/perception.hpp"
+#include "flight_sw/target_tracker.hpp"
+#include "shelf_drawing.hpp"
+
+namespace shelfcross::flight_sw {
+namespace {
+
+// The default scenario's ten boxes (scenarios/paper_test_shelf.yaml): empty cells L1C3, L2C2,
+// L3C1, L3C3, L4C2, L4C4.
+const std::vector<testing::DrawnBox> kBoxes{{1, 1, 3},  {1, 2, 7},  {1, 4, 12}, {2, 1, 18}, {2, 3, 21},
+                                            {2, 4, 25}, {3, 2, 30}, {3, 4, 34}, {4, 1, 41}, {4, 3, 47}};
+
+Inventory inventory_of(const std::vector<testing::DrawnBox>& boxes) {
+  Inventory inv(0, 4, 4, 1);
+  std::vector<std::pair<CellIndex, int>> seen;
+  for (const auto& b : boxes) seen.push_back({CellIndex{b.level, b.column}, b.id});
+  inv.observe(seen, true);
+  return inv;
+}
+
+// What the tracker measured: the camera `range_m` in front of the physical cell `seen` (body on
+// its normal, heading 0), the box on that cell's four corner tags; the pose is solved as if the
+// box were `believed`. Returns the identity verdict and the crossing gate's answer for a pose
+// otherwise fit to cross (fresh, still).
+struct Outcome {
+  IdentityCheck check;
+  std::optional<std::string> refusal;
+};
+
+Outcome judge(const testing::Scene& scene, CellIndex seen, CellIndex believed, double range_m) {
+  const testing::DrawnShelf& shelf = scene.shelves[0];
+  FlightConfig config;
+  const Eigen::Vector3d centre_S(0.0, 0.5 * (testing::post_y(shelf, seen.column - 1) + testing::post_y(shelf, seen.column)),
+                                 0.5 * (testing::beam_z(shelf, seen.level - 1) + testing::beam_z(shelf, seen.level)));
+  const Eigen::Vector3d p_WB = testing::shelf_to_world(shelf, centre_S) + Eigen::Vector3d(-range_m, 0.0, 0.0);
+  const Eigen::Isometry3d X_WC = testing::camera_pose_W(p_WB, 0.0);
+  const cv::Mat img = testing::Drawer(config.camera, true).draw(scene, X_WC);
+  TagDetector detector(config.perception);
+  std::vector<TagBlob> tags;
+  detector.detect(img, cv::Rect(0, 0, img.cols, img.rows), tags);
+  MarkerDetector markers_detector(config.shelf.aruco_dictionary);
+  std::vector<MarkerSighting> markers;
+  markers_detector.detect(img, markers);
+  // The seen cell's corner tags in the picture: the detected tag nearest each projected corner.
+  const Eigen::Isometry3d X_CW = X_WC.inverse();
+  std::vector<cv::Point2d> corners;
+  for (const cv::Point3d& o : cell_corner_tags_K(config.shelf, seen)) {
+    const Eigen::Vector3d p_C = X_CW * testing::shelf_to_world(shelf, centre_S + Eigen::Vector3d(o.x, o.y, o.z));
+    std::vector<cv::Point2d> proj;
+    cv::projectPoints(std::vector<cv::Point3d>{{p_C.x(), p_C.y(), p_C.z()}}, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0),
+                      cv::Matx33d(config.camera.fx_px, 0, config.camera.cx_px, 0, config.camera.fy_px,
+                                  config.camera.cy_px, 0, 0, 1),
+                      cv::Vec<double, 5>(config.camera.k1, config.camera.k2, config.camera.p1, config.camera.p2,
+                                         config.camera.k3),
+                      proj);
+    const TagBlob* best = nullptr;
+    for (const TagBlob& t : tags) {
+      if (!best || cv::norm(t.centre_px - proj[0]) < cv::norm(best->centre_px - proj[0])) best = &t;
+    }
+    EXPECT_NE(best, nullptr);
+    EXPECT_LT(cv::norm(best->centre_px - proj[0]), 3.0) << "corner tag not detected";
+    corners.push_back(best->centre_px);
+  }
+  const auto obj = cell_corner_tags_K(config.shelf, believed);
+  const auto pose = estimate_pose({obj.begin(), obj.end()}, corners, config.camera, config.mount);
+  EXPECT_TRUE(pose.has_value());
+  Outcome out;
+  out.check = check_cell_identity(believed, *pose, tags, markers, inventory_of(shelf.boxes), config);
+  CrossingGateInput gate;
+  gate.pose_age_s = 0.0;
+  gate.still_for_s = 10.0;
+  gate.identity = out.check.verdict;
+  out.refusal = crossing_refusal(config, believed, *pose, gate);
+  return out;
+}
+
+testing::Scene paper_scene() {
+  testing::Scene scene;
+  scene.shelves = {testing::paper_shelf({3.0, 0.0, 0.0})};
+  scene.shelves[0].boxes = kBoxes;
+  return scene;
+}
+
+// The true cell: confirmed from 1.2 m out (a neighbour's marker or an edge in view); at 0.8 m
+// the neighbours' markers have left the view and no edge is in it, so a picture alone cannot
+// tell (Unknown: the identity then rests on continuity from the full view), but it never
+// contradicts the truth.
+TEST(CellIdentity, TrueCellIsConfirmedAndMayBeCrossed) {
+  const testing::Scene scene = paper_scene();
+  for (const CellIndex cell : {CellIndex{2, 2}, CellIndex{3, 3}, CellIndex{1, 3}}) {
+    const Outcome close = judge(scene, cell, cell, 0.8);
+    EXPECT_NE(close.check.verdict, CellIdentity::Contradicted) << close.check.why;
+    EXPECT_EQ(close.check.nodes_missing, 0);
+    for (double range : {1.2, 1.8}) {
+      const Outcome o = judge(scene, cell, cell, range);
+      EXPECT_EQ(o.check.verdict, CellIdentity::Confirmed)
+          << "L" << cell.level << "C" << cell.column << " at " << range << " m: " << o.check.why;
+      EXPECT_EQ(o.check.markers_disagreeing, 0);
+      EXPECT_EQ(o.check.beyond_occupied, 0);
+      EXPECT_FALSE(o.refusal.has_value()) << *o.refusal;
+    }
+  }
+}
+
+// The tracked box slid one column: the target is L2 C2 (wide, empty), the box sits on L2 C3
+// (narrow, box 21), or the target is L3 C3 (narrow, empty) and the box sits on L3 C4 (wide).
+TEST(CellIdentity, BoxSlidOneColumnIsRefused) {
+  const testing::Scene scene = paper_scene();
+  for (const auto& [seen, believed] : {std::pair{CellIndex{2, 3}, CellIndex{2, 2}}, std::pair{CellIndex{3, 4}, CellIndex{3, 3}},
+                                        std::pair{CellIndex{3, 2}, CellIndex{3, 1}}, std::pair{CellIndex{1, 2}, CellIndex{1, 3}}}) {
+    for (double range : {0.8, 1.2, 1.8}) {
+      const Outcome o = judge(scene, seen, believed, range);
+      EXPECT_EQ(o.check.verdict, CellIdentity::Contradicted)
+          << "seen L" << seen.level << "C" << seen.column << " believed C" << believed.column << " at " << range
+          << " m: " << o.check.why;
+      ASSERT_TRUE(o.refusal.has_value());
+      EXPECT_NE(o.refusal->find("not identified"), std::string::npos) << *o.refusal;
+    }
+  }
+}
+
+// The tracked box slid one level: the target is L2 C2, the box sits on L3 C2 (box 30), or the
+// target is L4 C4 and the box sits on L3 C4 (box 34).
+TEST(CellIdentity, BoxSlidOneLevelIsRefused) {
+  const testing::Scene scene = paper_scene();
+  for (const auto& [seen, believed] : {std::pair{CellIndex{3, 2}, CellIndex{2, 2}}, std::pair{CellIndex{3, 4}, CellIndex{4, 4}},
+                                        std::pair{CellIndex{2, 3}, CellIndex{1, 3}}}) {
+    for (double range : {0.8, 1.2, 1.8}) {
+      const Outcome o = judge(scene, seen, believed, range);
+      EXPECT_EQ(o.check.verdict, CellIdentity::Contradicted)
+          << "seen L" << seen.level << "C" << seen.column << " believed L" << believed.level << " at " << range
+          << " m: " << o.check.why;
+      ASSERT_TRUE(o.refusal.has_value());
+      EXPECT_NE(o.refusal->find("not identified"), std::string::npos) << *o.refusal;
+    }
+  }
+}
+
+// A uniform grid (every column and level alike, so a slid box gives a pose as good as the
+// target's) and no box next to the target: only the edges can tell. Close in, with no edge in
+// view, the check must say Unknown (never Confirmed); farther out the edge contradicts.
+TEST(CellIdentity, UniformGridWithoutMarkersIsNeverConfirmedWrongly) {
+  testing::Scene scene;
+  testing::DrawnShelf s = testing::paper_shelf({3.0, 0.0, 0.0});
+  s.geometry.column_pitch_m = {0.40, 0.40, 0.40, 0.40};
+  s.geometry.row_pitch_m = {0.40, 0.40, 0.40, 0.40};
+  s.boxes = {};
+  scene.shelves = {s};
+  FlightConfig config;
+  config.shelf = s.geometry;
+  for (double range : {0.7, 1.2, 2.0, 2.4}) {
+    // Box on L2 C3, believed L2 C2. Out to 2.0 m neither edge is in view (Unknown); at 2.4 m
+    // the grid's right edge and the place beyond its left edge are.
+    const testing::DrawnShelf& shelf = scene.shelves[0];
+    const CellIndex seen{2, 3}, believed{2, 2};
+    const Eigen::Vector3d centre_S(0.0, 0.5 * (testing::post_y(shelf, 2) + testing::post_y(shelf, 3)),
+                                   0.5 * (testing::beam_z(shelf, 1) + testing::beam_z(shelf, 2)));
+    const Eigen::Isometry3d X_WC =
+        testing::camera_pose_W(testing::shelf_to_world(shelf, centre_S) + Eigen::Vector3d(-range, 0, 0), 0.0);
+    const cv::Mat img = testing::Drawer(config.camera, true).draw(scene, X_WC);
+    TagDetector detector(config.perception);
+    std::vector<TagBlob> tags;
+    detector.detect(img, cv::Rect(0, 0, img.cols, img.rows), tags);
+    ShelfView view;
+    // The corner tags: the four detected tags nearest the image centre quadrants' true corners.
+    const Eigen::Isometry3d X_CW = X_WC.inverse();
+    std::vector<cv::Point2d> corners;
+    for (const cv::Point3d& o : cell_corner_tags_K(config.shelf, seen)) {
+      const Eigen::Vector3d p_C = X_CW * testing::shelf_to_world(shelf, centre_S + Eigen::Vector3d(o.x, o.y, o.z));
+      const cv::Point2d guess(config.camera.cx_px + config.camera.fx_px * p_C.x() / p_C.z(),
+                              config.camera.cy_px + config.camera.fy_px * p_C.y() / p_C.z());
+      const TagBlob* best = &tags.front();
+      for (const TagBlob& t : tags) {
+        if (cv::norm(t.centre_px - guess) < cv::norm(best->centre_px - guess)) best = &t;
+      }
+      corners.push_back(best->centre_px);
+    }
+    const auto obj = cell_corner_tags_K(config.shelf, believed);
+    const auto pose = estimate_pose({obj.begin(), obj.end()}, corners, config.camera, config.mount);
+    ASSERT_TRUE(pose.has_value());
+    const IdentityCheck check = check_cell_identity(believed, *pose, tags, {}, Inventory(0, 4, 4, 1), config);
+    EXPECT_NE(check.verdict, CellIdentity::Confirmed) << range << " m: " << check.why;
+    if (range >= 2.4) {
+      EXPECT_EQ(check.verdict, CellIdentity::Contradicted) << check.why;
+    }
+    CrossingGateInput gate;
+    gate.still_for_s = 10.0;
+    gate.identity = check.verdict;
+    EXPECT_TRUE(crossing_refusal(config, believed, *pose, gate).has_value());
+  }
+}
+
+// A shelf of the same make 1.2 m behind, moved sideways by half a column: its tags, seen through
+// the empty cells and beside the front shelf, neither confirm a wrong cell nor contradict the
+// true one.
+TEST(CellIdentity, ShelfBehindChangesNoVerdict) {
+  testing::Scene scene = paper_scene();
+  testing::DrawnShelf behind = testing::paper_shelf({4.2, 0.2, 0.0});
+  behind.boxes = {{1, 2, 40}, {3, 3, 44}};
+  scene.shelves.push_back(behind);
+  for (double range : {1.2, 1.8}) {
+    const Outcome truth = judge(scene, {2, 2}, {2, 2}, range);
+    EXPECT_EQ(truth.check.verdict, CellIdentity::Confirmed) << range << " m: " << truth.check.why;
+    const Outcome slid = judge(scene, {2, 3}, {2, 2}, range);
+    EXPECT_EQ(slid.check.verdict, CellIdentity::Contradicted) << range << " m: " << slid.check.why;
+    EXPECT_TRUE(slid.refusal.has_value());
+  }
+}
+
+TEST(CrossingGate, RefusesAnUnidentifiedCellEvenPerfectlyCentred) {
+  FlightConfig config;
+  PoseEstimate pose;
+  pose.X_FB.translation() = Eigen::Vector3d(-0.6, 0.0, 0.0);
+  pose.X_FC.translation() = Eigen::Vector3d(-0.555, 0.0, 0.0);
+  CrossingGateInput gate;
+  gate.still_for_s = 10.0;
+  for (CellIdentity id : {CellIdentity::Unknown, CellIdentity::Contradicted}) {
+    gate.identity = id;
+    const auto r = crossing_refusal(config, {2, 2}, pose, gate);
+    ASSERT_TRUE(r.has_value());
+    EXPECT_NE(r->find("not identified"), std::string::npos);
+  }
+  gate.identity = CellIdentity::Confirmed;
+  EXPECT_FALSE(crossing_refusal(config, {2, 2}, pose, gate).has_value());
+  gate.pose_age_s = 1.0;
+  EXPECT_EQ(crossing_refusal(config, {2, 2}, pose, gate).value_or(""), "last pose too old");
+}
+
+}  // namespace
+}  // namespace shelfcross::flight_sw
