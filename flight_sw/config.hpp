@@ -201,6 +201,10 @@ struct MissionParams {
   double pose_jump_m = 0.06;
   double pose_jump_rad = 0.12;
   double pose_jump_window_s = 0.5;
+  /// The level check (every approach pose's cell height against the one measured when the
+  /// target was chosen, from the state record's height). Always on in flight; off only for
+  /// studies of what it prevents (a campaign over a lossy link then crosses at wrong levels).
+  bool level_check = true;
   /// The target's identity (target_tracker.hpp): lost with the pose continuity, it is
   /// re-established while backing off along the cell normal (the view widening until an edge
   /// or a known marker is in it); not within identity_confirm_s, or contradicted, the shelf is

@@ -712,7 +712,8 @@ bool FlightSoftware::measure_target(const Picture& pic, const cv::Rect2d& predic
   // as good a pose as the target's. The height check tells them apart: the height the cell's
   // image row puts it at (cell_height_m) must stay within 0.4 of the smallest row pitch of
   // the height found when the target was chosen; another level is a whole pitch away.
-  if (target_height_m_) {
+  // (mission.level_check off: for verification studies only, to show what the check prevents.)
+  if (mp.level_check && target_height_m_) {
     const cv::Point2d c = 0.25 * (img[0] + img[1] + img[2] + img[3]);
     const auto height_m = cell_height_m(c.y, -pose->X_FC.translation().x());
     const auto& rows = config_.shelf.row_pitch_m;

@@ -66,6 +66,9 @@ struct PilotSettings {
   /// The driver's stop-sticks rule (DriverConfig::stop_rc_repeats): "rc 0 0 0 0" this many
   /// times before a manoeuvre that follows deflected sticks; 0 switches the rule off.
   int stop_rc_repeats = 2;
+  /// The flight software's level check (flight_sw MissionParams::level_check); false switches
+  /// it off.
+  bool level_check = true;
   bool operator==(const PilotSettings&) const = default;
 };
 

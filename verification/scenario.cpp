@@ -599,7 +599,9 @@ void visit_cosim(V& v, CosimSettings& c) {
   v.field("settling_floor_yaw_rad", c.settling_floor_yaw_rad, kNonNegative);
   v.field("settling_floor_y_m", c.settling_floor_y_m, kNonNegative);
   v.section("link", [&](auto& l) { visit_link(l, c.link); });
-  v.section("pilot", [&](auto& p) { p.field("stop_rc_repeats", c.pilot.stop_rc_repeats, between(0, 10)); });
+  v.section("pilot", [&](auto& p) { p.field("stop_rc_repeats", c.pilot.stop_rc_repeats, between(0, 10));
+    p.field("level_check", c.pilot.level_check);
+  });
   v.field("inject_flight_software_exception_s", c.inject_flight_software_exception_s, between(-1.0, 3600.0));
   v.field("strategy", c.strategy);
   v.check("strategy", flight_sw::parse_strategy(c.strategy).has_value(),
