@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "verification/plot.hpp"
-#include "verification/statistics.hpp"
+#include "verification/success_bins.hpp"
 
 namespace shelfcross::verification {
 namespace {
@@ -25,7 +25,7 @@ std::string link_section(const std::vector<RunRecord>& runs, const std::filesyst
   using nlohmann::json;
   constexpr double kBin = 0.005;  // 0.5 % of the video datagrams
   std::map<std::string, std::int64_t> models;
-  std::map<long, std::pair<std::int64_t, std::int64_t>> bins;  // bin -> (runs, successes)
+  SuccessBins bins(kBin);
   for (const RunRecord& r : runs) {
     const json m = json::parse(r.metrics_json);
     const json l = m.value("link", json());
@@ -35,11 +35,7 @@ std::string link_section(const std::vector<RunRecord>& runs, const std::filesyst
     }
     ++models[l.value("model", std::string("?"))];
     const double sent = l.value("video_datagrams", 0.0);
-    if (sent <= 0) continue;
-    const double loss = l.value("video_datagrams_lost", 0.0) / sent;
-    auto& [n, ok] = bins[static_cast<long>(std::floor(loss / kBin))];
-    ++n;
-    ok += r.outcome == "success";
+    if (sent > 0) bins.add(l.value("video_datagrams_lost", 0.0) / sent, r.outcome == "success");
   }
   std::ostringstream md;
   md << "## The link\n\n";
@@ -50,16 +46,12 @@ std::string link_section(const std::vector<RunRecord>& runs, const std::filesyst
   md << "### Success rate against video datagram loss\n\nEach run's measured loss (video datagrams lost / "
         "sent), in "
      << fixed(kBin * 100, 1) << " % bins.\n\n| video datagram loss | runs | successes | success rate | 95 % lower bound |\n"
-        "|---|---|---|---|---|\n";
+        "|---|---|---|---|---|\n"
+     << bins.table_rows(100, 1, " %");
   std::vector<double> centre_pct, rate;
-  for (const auto& [bin, counts] : bins) {
-    const auto [n, ok] = counts;
-    const double lo = bin * kBin * 100, hi = (bin + 1) * kBin * 100;
-    const double p = static_cast<double>(ok) / static_cast<double>(n);
-    md << "| " << fixed(lo, 1) << "-" << fixed(hi, 1) << " % | " << n << " | " << ok << " | " << fixed(p, 3) << " | "
-       << fixed(clopper_pearson_lower(ok, n), 3) << " |\n";
-    centre_pct.push_back(0.5 * (lo + hi));
-    rate.push_back(p);
+  for (const SuccessBins::Bin& b : bins.bins()) {
+    centre_pct.push_back(50.0 * (b.lo + b.hi));
+    rate.push_back(b.rate());
   }
   Chart chart("Success rate against video datagram loss", "video datagrams lost (%)", "success rate");
   chart.set_y_limits(0.0, 1.05);

@@ -14,6 +14,7 @@
 #include "verification/results_store.hpp"
 #include "verification/scenario.hpp"
 #include "verification/statistics.hpp"
+#include "verification/success_bins.hpp"
 
 namespace shelfcross::verification {
 namespace {
@@ -43,29 +44,23 @@ std::string latency_sweep_section(const Scenario& scenario, const std::vector<Ru
                                   const std::filesystem::path& dir) {
   if (!scenario.dispersions.count("video_latency_mean_s") || runs.empty()) return "";
   constexpr double kBin_s = 0.05;
-  std::map<long, std::pair<std::int64_t, std::int64_t>> bins;  // bin -> (runs, successes)
+  SuccessBins bins(kBin_s);
   for (const RunRecord& r : runs) {
     const RunSetup setup = disperse(scenario, r.seed);
     const LinkSettings& l = setup.scenario->cosim.link;
-    const long bin = static_cast<long>(std::floor((l.video_latency_mean_s + l.compute_latency_s) / kBin_s));
-    auto& [n, ok] = bins[bin];
-    ++n;
-    ok += r.outcome == "success";
+    bins.add(l.video_latency_mean_s + l.compute_latency_s, r.outcome == "success");
   }
   std::ostringstream md;
   md << "## Success rate against latency\n\nTotal latency = the run's mean video latency + the flight software's "
         "compute latency (as drawn), in "
      << kBin_s * 1e3 << " ms bins.\n\n| total latency (ms) | runs | successes | success rate | 95 % lower bound |\n"
-        "|---|---|---|---|---|\n";
+        "|---|---|---|---|---|\n"
+     << bins.table_rows(1e3, 0);
   std::vector<double> centre_ms, rate;
   std::optional<double> last_90_ms, first_below_50_ms;
   bool all_90 = true;  // every bin so far at 90 % or more
-  for (const auto& [bin, counts] : bins) {
-    const auto [n, ok] = counts;
-    const double lo = bin * kBin_s * 1e3, hi = (bin + 1) * kBin_s * 1e3;
-    const double p = static_cast<double>(ok) / static_cast<double>(n);
-    md << "| " << fixed(lo, 0) << "-" << fixed(hi, 0) << " | " << n << " | " << ok << " | " << fixed(p, 3) << " | "
-       << fixed(clopper_pearson_lower(ok, n), 3) << " |\n";
+  for (const SuccessBins::Bin& b : bins.bins()) {
+    const double lo = b.lo * 1e3, hi = b.hi * 1e3, p = b.rate();
     centre_ms.push_back(0.5 * (lo + hi));
     rate.push_back(p);
     all_90 = all_90 && p >= 0.9;
