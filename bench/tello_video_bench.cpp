@@ -5,7 +5,7 @@
 // handed over; a frame whose last datagram is lost ends when the next frame's first arrives).
 // A second benchmark times the decoder and the conversion alone on the same frames.
 //
-//   build/release/flight_sw/tello/bench/tello_video_bench
+//   build/release/bench/shelfcross_bench --benchmark_filter='Receiver|DecodeAndConvert'
 #include <poll.h>
 
 #include <benchmark/benchmark.h>
