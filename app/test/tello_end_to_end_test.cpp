@@ -219,25 +219,37 @@ TEST_F(TelloEndToEnd, PilotFliesTheEmulatorTakesInventoryCrossesAndLands) {
 // the level check 2 of 4 touched the box above the target. One CI flight then lost its `land`
 // and flew on into the wall behind the shelf; with the driver's stop before a manoeuvre, 8 of 8
 // further flights crossed and landed.)
+// At 5 % loss on every channel nearly every picture reaches the flight software
+// error-concealed (a lost datagram damages the rest of its 1 s group of pictures: 847 of 855
+// in one flight), and since issue 17's identity check the flight software mostly gives up
+// safely there rather than decide on such pictures: over the co-simulation's sdk link, 1 of 16
+// runs at 5 % video datagram loss crossed, 15 aborted, 0 contacts (commit 4d31c84,
+// lossy_level_check_on.yaml, closing note of session 5). What must hold at 5 %, flight after
+// flight: no contact, landed, nothing listed wrong in the inventory; a crossing when it comes.
 TEST_F(TelloEndToEnd, SameWithFivePercentLossOnEveryChannel) {
   const std::vector<std::string> faults{"--loss-commands", "0.05", "--loss-replies", "0.05", "--loss-state", "0.05",
                                         "--loss-video", "0.05"};
-  json report = fly(faults, "11");
-  if (report.at("crossed").is_null() && report.at("contact").is_null() && report.at("landed").get<bool>() &&
-      !HasFailure()) {
-    std::cout << "--- the first flight gave up safely; the second flight, seed 12\n";
-    expect_safe_inventory(report);
-    report = fly(faults, "12");
+  for (const char* seed : {"11", "12"}) {
+    SCOPED_TRACE(std::string("seed ") + seed);
+    const json report = fly(faults, seed);
+    EXPECT_TRUE(report.at("contact").is_null()) << report.dump(2);
+    EXPECT_TRUE(report.at("flew").get<bool>());
+    EXPECT_TRUE(report.at("landed").get<bool>());
+    EXPECT_TRUE(pilot_exit_ == 0 || pilot_exit_ == 1) << read_file(dir_ / "pilot.txt");  // crossed, or gave up
+    if (!report.at("crossed").is_null()) expect_crossed_without_contact(report);
+    std::cout << "--- seed " << seed << (report.at("crossed").is_null() ? ": gave up safely" : ": crossed") << "\n";
+    ASSERT_TRUE(fs::exists(dir_ / "inventory.json"));
+    const json inventory = json::parse(read_file(dir_ / "inventory.json"));
+    const std::set<Entry> truth = boxes(report.at("inventory_truth")), found = boxes(inventory.at("boxes"));
+    for (const Entry& b : found) EXPECT_TRUE(truth.count(b)) << "box listed but not there: id " << std::get<0>(b);
+    const json& c = report.at("counters");
+    EXPECT_GT(c.at("state_dropped").get<int>(), 0);
+    EXPECT_GT(c.at("video_datagrams_dropped").get<int>(), 0);
+    const json end = last_log_line("end");
+    ASSERT_TRUE(end.is_object());
+    const std::string video = end.at("video").get<std::string>();
+    EXPECT_EQ(video.find("handed_damaged=0 "), std::string::npos) << video;  // concealed frames were used
   }
-  expect_crossed_without_contact(report);
-  expect_safe_inventory(report);
-  const json& c = report.at("counters");
-  EXPECT_GT(c.at("state_dropped").get<int>(), 0);
-  EXPECT_GT(c.at("video_datagrams_dropped").get<int>(), 0);
-  const json end = last_log_line("end");
-  ASSERT_TRUE(end.is_object());
-  const std::string video = end.at("video").get<std::string>();
-  EXPECT_EQ(video.find("handed_damaged=0 "), std::string::npos) << video;  // concealed frames were used
 }
 
 #endif  // SHELFCROSS_TELLO_PILOT
