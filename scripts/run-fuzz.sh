@@ -22,7 +22,7 @@ for t in "${targets[@]}"; do
   status=0
   build/fuzz/fuzz/"${t}"_fuzz -max_total_time="$seconds" -print_final_stats=1 -rss_limit_mb=2048 \
     -artifact_prefix=build/fuzz/artifacts/"$t"- "$scratch/$t" fuzz/corpus/"$t" >"$scratch/$t.log" 2>&1 || status=$?
-  grep -aE "INFO: seed corpus|#[0-9]+ *(INITED|DONE)|stat::(number_of_executed_units|peak_rss)" "$scratch/$t.log" || true
+  grep -aE "INFO: seed corpus|#[0-9]+[[:space:]]+(INITED|DONE)|stat::(number_of_executed_units|peak_rss)" "$scratch/$t.log" || true
   if [ "$status" -ne 0 ]; then
     tail -n 80 "$scratch/$t.log"
     echo "fuzz: $t found a problem (above; the input is in build/fuzz/artifacts/)"
