@@ -6,3 +6,10 @@ bash scripts/install-deps.sh
 cmake --preset release
 cmake --build --preset release
 ctest --preset release -j "$(nproc)"
+# The parsers under libFuzzer (fuzz/README.md): each target about 30 s on its seed corpus, when
+# clang and libFuzzer's runtime are there (scripts/debian-packages.txt installs both).
+if command -v clang++ >/dev/null && compgen -G "/usr/lib/llvm-*/lib/clang/*/lib/linux/libclang_rt.fuzzer-x86_64.a" >/dev/null; then
+  bash scripts/run-fuzz.sh 30
+else
+  echo "run-tests: clang++ or libFuzzer's runtime (libclang-rt-14-dev) missing: fuzz targets not run"
+fi

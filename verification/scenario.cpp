@@ -12,6 +12,7 @@
 #include <map>
 #include <numbers>
 #include <set>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -62,6 +63,31 @@ const Bounds<double> kAnyFinite{};
 
 std::string format_double(double x);
 
+/// Well-formed UTF-8 (RFC 3629): no stray continuation or truncated sequence, no overlong
+/// form, no surrogate, nothing above U+10FFFF.
+bool valid_utf8(const std::string& text) {
+  const auto* p = reinterpret_cast<const unsigned char*>(text.data());
+  const auto* const end = p + text.size();
+  while (p < end) {
+    const unsigned c = *p++;
+    if (c < 0x80) continue;
+    int more = 0;
+    unsigned lo = 0x80, hi = 0xbf;  // the range of the first continuation byte
+    if (c >= 0xc2 && c <= 0xdf) more = 1;
+    else if (c == 0xe0) more = 2, lo = 0xa0;
+    else if (c >= 0xe1 && c <= 0xef) more = 2, hi = c == 0xed ? 0x9f : 0xbf;
+    else if (c == 0xf0) more = 3, lo = 0x90;
+    else if (c >= 0xf1 && c <= 0xf3) more = 3;
+    else if (c == 0xf4) more = 3, hi = 0x8f;
+    else return false;
+    if (end - p < more) return false;
+    for (int k = 0; k < more; ++k, lo = 0x80, hi = 0xbf)
+      if (p[k] < lo || p[k] > hi) return false;
+    p += more;
+  }
+  return true;
+}
+
 class Reader {
  public:
   static constexpr bool kReading = true;
@@ -70,6 +96,9 @@ class Reader {
   template <class T>
   void field(const char* key, T& v, const Bounds<T>& b = {}, Need need = Need::optional) const {
     v = need == Need::required ? map_.required<T>(key, b) : map_.optional<T>(key, v, b);
+    // Text is written back as YAML, which is UTF-8: other bytes would come back changed
+    // (yaml-cpp writes an invalid sequence as U+FFFD), breaking parse(write(s)) == s.
+    if constexpr (std::is_same_v<T, std::string>) check(key, valid_utf8(v), "the text is not valid UTF-8");
   }
   void vec3(const char* key, Eigen::Vector3d& v, const Bounds<double>& b = {},
             Need need = Need::optional) const {

@@ -343,6 +343,22 @@ TEST(Scenario, RefusesBadNameVersionAndSyntax) {
   expect_refused(replace_line(5, "    - origin_W_m: [30.0, 0.0, 0.0]"), 5, "inside the arena");
 }
 
+TEST(Scenario, RefusesTextThatIsNotUtf8) {
+  // Found by fuzz/scenario_fuzz: a shelf name with a byte that is not UTF-8 was accepted and
+  // written back as U+FFFD ("a\xffb" -> "a\uFFFDb"), so parse(write(s)) != s. Any string key
+  // is refused with its line instead: stray bytes, a truncated sequence, an overlong form, a
+  // surrogate.
+  for (const std::string bad : {"a\xff" "b", "a\xc3", "\xc0\xaf", "\xed\xa0\x80", "\xf4\x90\x80\x80"}) {
+    expect_refused(insert_line(6, "      name: \"x" + bad + "\""), 6, "not valid UTF-8");
+    expect_refused(insert_line(6, "      name: x" + bad), 6, "not valid UTF-8");
+  }
+  // UTF-8 text, multi-byte sequences up to four bytes, is kept and round-trips.
+  const std::string utf8 = "Regal \xc3\x84 \xe2\x82\xac \xf0\x9f\x93\xa6";
+  const Scenario s = parse_scenario(insert_line(6, "      name: \"" + utf8 + "\""), "utf8.yaml");
+  EXPECT_EQ(s.warehouse.shelves.at(0).name, utf8);
+  EXPECT_EQ(parse_scenario(write_scenario(s), "written.yaml"), s);
+}
+
 TEST(Scenario, MissingFileIsAConfigError) {
   try {
     load_scenario("/nonexistent/scenario.yaml");
