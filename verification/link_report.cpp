@@ -1,7 +1,6 @@
 #include "verification/link_report.hpp"
 
 #include <cmath>
-#include <iomanip>
 #include <map>
 #include <sstream>
 
@@ -11,15 +10,6 @@
 #include "verification/success_bins.hpp"
 
 namespace shelfcross::verification {
-namespace {
-
-std::string fixed(double v, int decimals) {
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(decimals) << v;
-  return s.str();
-}
-
-}  // namespace
 
 std::string link_section(const std::vector<RunRecord>& runs, const std::filesystem::path& dir) {
   using nlohmann::json;
@@ -45,7 +35,7 @@ std::string link_section(const std::vector<RunRecord>& runs, const std::filesyst
   if (bins.empty()) return md.str();
   md << "### Success rate against video datagram loss\n\nEach run's measured loss (video datagrams lost / "
         "sent), in "
-     << fixed(kBin * 100, 1) << " % bins.\n\n| video datagram loss | runs | successes | success rate | 95 % lower bound |\n"
+     << kBin * 100 << " % bins.\n\n| video datagram loss | runs | successes | success rate | 95 % lower bound |\n"
         "|---|---|---|---|---|\n"
      << bins.table_rows(100, 1, " %");
   std::vector<double> centre_pct, rate;
