@@ -28,7 +28,7 @@
 // Video (tello-sim) runs on a worker thread that owns the renderer and the encoder; in the
 // co-simulation (the constructor with a renderer) every capture is rendered and encoded
 // inline instead, so nothing is dropped for lack of time and a run stays deterministic.
-// On the worker thread: A frame whose capture
+// On the worker thread, a frame whose capture
 // time comes while the worker still renders or encodes the previous one is dropped (counted:
 // frames_dropped_busy), and so is a capture more than one frame period in the past when the
 // main loop reaches it (frames_dropped_late): the emulator never falls behind the wall clock,
