@@ -142,7 +142,7 @@ struct TelloEmulator::VideoWorker {
         encoder(sc.camera.width_px, sc.camera.height_px, std::max(1, static_cast<int>(std::lround(sc.frame_rate_hz))),
                 4 * (key_interval_frames > 0 ? key_interval_frames
                                              : std::max(1, static_cast<int>(std::lround(sc.frame_rate_hz)))),
-                23, std::min(slices, (sc.camera.height_px + 15) / 16)),
+                H264Encoder::kTelloQp, std::min(slices, (sc.camera.height_px + 15) / 16)),
         motion_blur(sc.cosim.motion_blur_samples > 1) {}
   std::unique_ptr<render::Renderer> renderer;
   H264Encoder encoder;

@@ -489,6 +489,54 @@ TEST(FlightSoftware, ReacquisitionOnTheNeighbouringColumnIsNeverCrossed) {
   expect_through_cell_2_3(h);
 }
 
+// Issues 15 and 17: the vehicle is carried one level up (a gust, an altitude step the video
+// never showed) while the video is blank during the approach; the target's box is re-acquired
+// where it was in the picture, i.e. on L3 C3, the cell above the target, which holds box 17.
+// Its corner tags give a plausible pose, and in the picture the box continues where the target
+// was. Two checks catch it: the level check (the cell's height from its image row and the
+// pose, against the state height of the target found when it was chosen) on the first pose,
+// and the identity check (the cell's place in the grid and its neighbours' boxes) once
+// continuity is lost. Either way the shelf is re-read from the viewpoint and the crossing is
+// through L2 C3.
+Options carried_one_level_up() {
+  Options o;
+  o.slide_after_approach_s = 3.0;
+  o.slide_blank_s = 1.0;
+  o.slide_W_m = Eigen::Vector3d(0.0, 0.0, 0.34);  // one row pitch: L2's centre (0.81 m) to L3's (1.15 m)
+  return o;
+}
+
+TEST(FlightSoftware, ReacquisitionOnTheLevelAboveIsNeverCrossed) {
+  Harness h(carried_one_level_up());
+  h.run(120.0);
+  FlightSoftware& fsw = h.fsw();
+  ASSERT_TRUE(h.slid());
+  ASSERT_TRUE(fsw.finished()) << phase_name(fsw.phase()) << ": " << fsw.telemetry().event;
+  EXPECT_GE(fsw.telemetry().wrong_level_poses, 1);
+  EXPECT_GE(fsw.telemetry().shelf_rereads, 1);
+  EXPECT_EQ(fsw.result().outcome, Outcome::Crossed) << fsw.result().reason;
+  ASSERT_TRUE(fsw.telemetry().target);
+  EXPECT_EQ(*fsw.telemetry().target, (CellIndex{2, 3}));
+  expect_through_cell_2_3(h);
+}
+
+// The same with the level check switched off (mission.level_check: false, for studies only):
+// the identity check alone catches the slide (defence in depth, since issue 17): no pose is
+// refused for its level, the identity is contradicted, and the crossing is still L2 C3.
+TEST(FlightSoftware, WithoutTheLevelCheckTheIdentityCheckCatchesTheLevelAbove) {
+  FlightConfig config;
+  config.mission.level_check = false;
+  Harness h(carried_one_level_up(), config);
+  h.run(120.0);
+  FlightSoftware& fsw = h.fsw();
+  ASSERT_TRUE(h.slid());
+  ASSERT_TRUE(fsw.finished()) << phase_name(fsw.phase()) << ": " << fsw.telemetry().event;
+  EXPECT_EQ(fsw.telemetry().wrong_level_poses, 0);
+  EXPECT_GE(fsw.telemetry().identity_contradictions, 1);
+  EXPECT_EQ(fsw.result().outcome, Outcome::Crossed) << fsw.result().reason;
+  expect_through_cell_2_3(h);
+}
+
 TEST(FlightSoftware, WholeMissionInventoriesAndCrossesTheEmptyCell) {
   Harness h;
   h.run(60.0);

@@ -318,7 +318,7 @@ namespace {
 // picture, so damage shows as bands, not as a wrecked picture).
 TEST(VideoReceiver, ConcealsAFivePercentLossyStreamFromTheFirstKeyFrame) {
   VideoRig rig;
-  H264Encoder encoder(kWidth, kHeight, 30, kKeyInterval, 23, 45);
+  H264Encoder encoder(kWidth, kHeight, 30, kKeyInterval, H264Encoder::kTelloQp, 45);
   RandomStream drops(5, StreamId::link_faults);
   int sent_frames = 0, psnr_checked = 0;
   double worst_psnr = 1e9;
