@@ -608,7 +608,6 @@ void FlightSoftware::start_tracker(const cv::Mat& bgr, const cv::Rect2d& box) {
 // Looks for the target's four corner tags around `predicted`: tags in a window around it,
 // eq. 1 inside the window, each corner the nearest tag to where the box puts it.
 bool FlightSoftware::measure_target(const Picture& pic, const cv::Rect2d& predicted) {
-  wrong_level_ = false;
   const cv::Mat& bgr = pic.bgr;
   const PerceptionParams& p = config_.perception;
   const double grow_x = p.roi_expand * predicted.width, grow_y = p.roi_expand * predicted.height;
@@ -721,7 +720,6 @@ bool FlightSoftware::measure_target(const Picture& pic, const cv::Rect2d& predic
     if (height_m && std::abs(*height_m - *target_height_m_) > 0.4 * *std::min_element(rows.begin(), rows.end())) {
       ++telemetry_.rejected_poses;
       ++telemetry_.wrong_level_poses;
-      wrong_level_ = true;
       return false;
     }
   }
@@ -921,15 +919,6 @@ void FlightSoftware::approach(const Picture& pic) {
     if (!telemetry_.tracker_ok) predicted = box_px_;
   }
   const bool found = measure_target(pic, predicted);
-  // The tracked box sits on another level's tags (the level check above): on a whole picture
-  // that contradicts the target's identity as surely as the identity check does, and the
-  // shelf is re-read from the viewpoint. Hovering until the target is "lost" would only end
-  // the mission. (A damaged picture's guessed band can shift tags: it decides nothing.)
-  if (!found && wrong_level_ && pic.whole()) {
-    ++telemetry_.identity_contradictions;
-    reread_shelf("the target's corner tags are another level's (the state height disagrees)");
-    return;
-  }
   telemetry_.tracked_box_px = box_px_;
   const double dt = control_dt_s();
   if (found) {
@@ -1072,9 +1061,6 @@ void FlightSoftware::approach(const Picture& pic) {
   if (reacquire(pic)) {
     lost_since_ns_.reset();
     telemetry_.event = "target re-acquired";
-  } else if (wrong_level_ && pic.whole()) {  // re-acquisition met only another level's tags
-    ++telemetry_.identity_contradictions;
-    reread_shelf("re-acquired on another level's corner tags (the state height disagrees)");
   }
 }
 

@@ -328,7 +328,6 @@ class FlightSoftware {
   std::optional<cv::Rect2d> vouched_box_px_;  ///< the target's box on that picture
   std::optional<TimeNs> unidentified_since_ns_;
   int rereads_ = 0;
-  bool wrong_level_ = false;            ///< the last measure_target found another level's corner tags
   std::vector<TagBlob> frame_tags_;     ///< identity check buffers
   std::optional<double> behind_m_;      ///< nearest tag behind the target seen through it, from the front tags, m
   // Forward speed per commanded speed (estimate_forward_gain), for timing the crossing.
