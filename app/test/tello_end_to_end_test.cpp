@@ -18,6 +18,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -28,6 +29,8 @@
 #include <vector>
 
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/videoio.hpp>
 
 namespace {
 
@@ -253,6 +256,81 @@ TEST_F(TelloEndToEnd, SameWithFivePercentLossOnEveryChannel) {
 }
 
 #endif  // SHELFCROSS_TELLO_PILOT
+
+// A third-party client, written as Tello hobby scripts are (djitellopy and the SDK's own
+// examples): a plain UDP socket for the commands and one for the state, and OpenCV's FFmpeg
+// capture on the video port decoding the raw H.264 stream. Nothing of shelfcross's driver,
+// receiver or SDK grammar is used: the emulator must serve any client that speaks the SDK.
+TEST(TelloSimThirdPartyClient, CommandStateAndAStreamOpenCvDecodes) {
+  const fs::path dir = fs::temp_directory_path() / ("shelfcross_tello_third_party_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const std::vector<int> p = free_udp_ports(5);
+  Child emulator({SHELFCROSS_PROGRAM, "tello-sim", "--scenario", std::string(SHELFCROSS_SOURCE_DIR) + "/scenarios/paper_test_shelf.yaml",
+                  "--nominal", "--bind-ip", "127.0.0.1", "--command-port", std::to_string(p[0]), "--client-state-port",
+                  std::to_string(p[1]), "--client-video-port", std::to_string(p[2]), "--state-source-port",
+                  std::to_string(p[3]), "--video-source-port", std::to_string(p[4]), "--max-seconds", "60"},
+                 dir / "emulator.txt");
+  for (int i = 0; i < 600 && read_file(dir / "emulator.txt").find("renderer:") == std::string::npos; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  const auto udp_socket = [](int port) {
+    const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    a.sin_port = htons(static_cast<uint16_t>(port));
+    EXPECT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+    timeval tv{2, 0};  // a failure guard: every expected datagram comes within milliseconds
+    ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+    return fd;
+  };
+  const int command_fd = udp_socket(0), state_fd = udp_socket(p[1]);
+  sockaddr_in drone{};
+  drone.sin_family = AF_INET;
+  drone.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  drone.sin_port = htons(static_cast<uint16_t>(p[0]));
+  const auto send_command = [&](const std::string& text) {
+    ::sendto(command_fd, text.data(), text.size(), 0, reinterpret_cast<const sockaddr*>(&drone), sizeof drone);
+    char buf[256];
+    const ssize_t n = ::recv(command_fd, buf, sizeof buf, 0);
+    return n > 0 ? std::string(buf, static_cast<size_t>(n)) : std::string("<no reply>");
+  };
+  EXPECT_EQ(send_command("command"), "ok");
+  const std::string battery = send_command("battery?");
+  EXPECT_GT(std::atoi(battery.c_str()), 0) << battery;
+  // The state record: "key:value;" pairs, SDK 2.0's keys among them.
+  char buf[2048];
+  const ssize_t n = ::recv(state_fd, buf, sizeof buf, 0);
+  ASSERT_GT(n, 0) << "no state record";
+  const std::string record(buf, static_cast<size_t>(n));
+  for (const char* key : {"pitch:", "roll:", "yaw:", "vgx:", "h:", "bat:", "baro:", "time:", "agx:"}) {
+    EXPECT_NE(record.find(key), std::string::npos) << key << " in " << record;
+  }
+  EXPECT_EQ(send_command("streamon"), "ok");
+  // How hobby scripts open the stream; the udp protocol's timeout (microseconds) and a bounded
+  // probe keep a broken stream from blocking the test.
+  ::setenv("OPENCV_FFMPEG_CAPTURE_OPTIONS", "analyzeduration;2000000|probesize;2000000", 1);
+  cv::VideoCapture capture("udp://127.0.0.1:" + std::to_string(p[2]) + "?timeout=5000000", cv::CAP_FFMPEG);
+  ASSERT_TRUE(capture.isOpened()) << read_file(dir / "emulator.txt");
+  cv::Mat frame;
+  int decoded = 0;
+  for (int k = 0; k < 60 && decoded < 10; ++k) {
+    if (capture.read(frame) && !frame.empty()) ++decoded;
+  }
+  EXPECT_EQ(decoded, 10);
+  EXPECT_EQ(frame.cols, 960);
+  EXPECT_EQ(frame.rows, 720);
+  // A picture of the warehouse, not a blank: the shelf's tags and boxes make it vary.
+  cv::Scalar mean, stddev;
+  cv::meanStdDev(frame, mean, stddev);
+  EXPECT_GT(stddev[0], 10.0);
+  EXPECT_EQ(send_command("streamoff"), "ok");
+  ::close(command_fd);
+  ::close(state_fd);
+  ::kill(emulator.pid, SIGTERM);
+  EXPECT_EQ(emulator.wait(std::chrono::seconds(30)), 0) << read_file(dir / "emulator.txt");
+  if (!::testing::Test::HasFailure()) fs::remove_all(dir);
+}
 
 using Result = shelfcross::app::test::ProgramResult;
 
