@@ -4,6 +4,8 @@
 #include <cassert>
 #include <cmath>
 
+#include <opencv2/core/hal/intrin.hpp>
+
 #include "shelfcross/random.hpp"
 
 namespace shelfcross::render {
@@ -39,6 +41,45 @@ void SensorNoise::apply(cv::Mat& image, std::uint64_t frame_seed) const {
     for (int c = 0; c < row_bytes; ++c) {
       const int v = p[c] + n[c];
       p[c] = static_cast<std::uint8_t>(v < 0 ? 0 : (v > 255 ? 255 : v));
+    }
+  }
+}
+
+void SensorNoise::apply_rgba_to_bgr(const cv::Mat& rgba, cv::Mat& bgr, std::uint64_t frame_seed) const {
+  assert(channels_ == 3 && rgba.type() == CV_8UC4 && rgba.rows == rows_ && rgba.cols == cols_);
+  bgr.create(rows_, cols_, CV_8UC3);
+  // The same window as apply().
+  const std::uint64_t h = mix64(frame_seed ^ 0xbb67ae8584caa73bULL);
+  const std::vector<std::int8_t>& field = fields_[h % kFields];
+  const int dx = static_cast<int>((h >> 8) % kMargin), dy = static_cast<int>((h >> 24) % kMargin);
+  auto add = [](int pixel, int noise) {
+    const int v = pixel + noise;
+    return static_cast<std::uint8_t>(v < 0 ? 0 : (v > 255 ? 255 : v));
+  };
+  for (int r = 0; r < rows_; ++r) {
+    const std::uint8_t* in = rgba.ptr<std::uint8_t>(r);
+    std::uint8_t* out = bgr.ptr<std::uint8_t>(r);
+    const std::int8_t* n = field.data() + (static_cast<size_t>(r + dy) * field_cols_ + dx) * 3;
+    int x = 0;
+#if CV_SIMD128
+    // 16 pixels at a time. Saturating u8 + s8: with x' = x - 128 (flip the top bit) the
+    // signed saturating sum x' + n, flipped back, is min(255, max(0, x + n)).
+    const cv::v_uint8x16 bias = cv::v_setall_u8(0x80);
+    for (; x + 16 <= cols_; x += 16) {
+      cv::v_uint8x16 R, G, B, A;
+      cv::v_load_deinterleave(in + 4 * x, R, G, B, A);
+      cv::v_int8x16 nb, ng, nr;
+      cv::v_load_deinterleave(n + 3 * x, nb, ng, nr);
+      auto sat = [&](const cv::v_uint8x16& p, const cv::v_int8x16& q) {
+        return cv::v_reinterpret_as_u8(cv::v_reinterpret_as_s8(p ^ bias) + q) ^ bias;
+      };
+      cv::v_store_interleave(out + 3 * x, sat(B, nb), sat(G, ng), sat(R, nr));
+    }
+#endif
+    for (; x < cols_; ++x) {
+      out[3 * x + 0] = add(in[4 * x + 2], n[3 * x + 0]);
+      out[3 * x + 1] = add(in[4 * x + 1], n[3 * x + 1]);
+      out[3 * x + 2] = add(in[4 * x + 0], n[3 * x + 2]);
     }
   }
 }

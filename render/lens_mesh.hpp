@@ -1,0 +1,128 @@
+#pragma once
+// The lens in the geometry: each frame, the static world's faces are culled, clipped, split
+// and projected on the CPU, so that the rasteriser draws the distorted image directly at the
+// output size (no undistorted render, no remap pass).
+//
+// Why straight chords are enough. A face is planar and convex, so its pinhole image in the
+// normalised plane (x, y) = (X/Z, Y/Z) of camera C is a convex polygon with straight edges;
+// the lens is the 2-D map D: (x, y) -> pixel (u, v) of camera_model.hpp. The rasteriser joins
+// projected vertices by straight chords, whereas D bends the segment a -> b into the curve
+// c(t) = D(a + t (b - a)). Linear interpolation of c gives
+//   |c(t) - chord(t)| <= t (1 - t) / 2 max |c''|  <=  |b - a|^2 / 8 * max ||D''||,
+// with ||D''|| = max over unit directions e of |d^2 D(p + s e) / ds^2| (pixels per squared
+// normalised unit), bounded here by max(|D_xx|, |D_yy|) + |D_xy| (vector norms). The lens
+// grid cuts the normalised plane into cells whose diagonal d satisfies d^2 / 8 * max_cell
+// ||D''|| <= tolerance_px; every face is split along the grid lines into convex pieces (each
+// inside one cell, so every edge and fan diagonal of a piece is at most d long) and
+// fan-triangulated. Every drawn edge thus lies within tolerance_px of the true curve, and so
+// does the interpolated interior (depth, texture coordinates). Vertices themselves are exact:
+// each is a point of the face, projected in double precision with camera_model's formula (the
+// one of cv::projectPoints), handed to GL as clip coordinates (x_ndc Z, y_ndc Z, z_clip, Z)
+// so that GL's perspective-correct interpolation uses the true depth Z.
+//
+// The cells are large where the lens is nearly linear (the centre of the default lens: about
+// 100 px) and small where it bends most (the corners: about 40 px). Split vertices on a grid
+// line are computed once and shared by both sides, and every intersection is computed from
+// its segment's end points in a canonical order, so pieces meet without cracks.
+//
+// Culling: every face is single-sided (drawn only when the camera is strictly on the side
+// its normal points to). The world is made of closed solids, one-sided tags with a backing,
+// and the inside of the room, so this only removes faces that are hidden anyway.
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "shelfcross/camera.hpp"
+
+namespace shelfcross::render {
+
+/// The lens grid over the part of the normalised plane that the image sees.
+struct LensGrid {
+  /// Grid lines in normalised coordinates, ascending; the first and last bound the region:
+  /// the undistorted footprint of the image (pixel areas, plus margin_px) as a box.
+  std::vector<double> x_lines, y_lines;
+  /// The bound max over cells of d_cell^2 / 8 * max_cell ||D''||, pixels (<= tolerance).
+  double chord_bound_px = 0.0;
+  /// Largest ||D''|| over the region, pixels per squared normalised unit.
+  double max_second_derivative_px = 0.0;
+};
+
+/// Builds the grid for a chord tolerance (output pixels). Throws RenderError for invalid
+/// intrinsics or a lens that cannot be inverted over the image or folds over in the region.
+LensGrid make_lens_grid(const CameraIntrinsics& K, double tolerance_px, double margin_px = 2.0);
+
+/// Splits the convex polygon `poly` (normalised coordinates, in order around its edge) along
+/// the grid's lines, dropping what lies outside the region: `pieces` receives the convex
+/// pieces' vertices one piece after the other and `sizes` their vertex counts (appended).
+void split_by_grid(const LensGrid& grid, const std::vector<Eigen::Vector2d>& poly,
+                   std::vector<Eigen::Vector2d>& pieces, std::vector<int>& sizes);
+
+/// One face of the static world: a planar convex quad, single-sided, flat-coloured, with
+/// texture coordinates at its corners if it is textured (the quad must then be a
+/// parallelogram: texture coordinates are affine on it).
+struct MeshFace {
+  std::array<Eigen::Vector3d, 4> corners_W_m;  ///< in order around the edge
+  Eigen::Vector3d normal_W = Eigen::Vector3d::Zero();  ///< drawn when the camera is on this side
+  Eigen::Vector3f rgb = Eigen::Vector3f::Zero();       ///< final sRGB-encoded colour
+  std::array<Eigen::Vector2f, 4> uv{};                 ///< atlas coordinates (textured faces)
+};
+
+/// A vertex as GL receives it: clip coordinates, face colour, texture coordinates.
+struct GpuVertex {
+  float clip[4];
+  float rgb[3];
+  float uv[2];
+};
+
+/// Faces in three groups, drawn in this order: the room (the inside of the arena box), the
+/// other flat faces, the textured (marker) faces.
+enum FaceGroup { kRoomFaces = 0, kFlatFaces = 1, kTexturedFaces = 2, kFaceGroups = 3 };
+
+class LensMesher {
+ public:
+  /// `supersample` s: the image is rasterised at s times the size, pixel u_s = s u + (s-1)/2
+  /// (the centre of the s x s block that becomes pixel u). Clip planes at Z = near_m, far_m.
+  LensMesher(const CameraIntrinsics& K, int supersample, double near_m, double far_m,
+             double tolerance_px);
+
+  void set_faces(FaceGroup group, std::vector<MeshFace> faces);
+
+  /// The triangles of one frame from camera pose X_WC: vertices() and indices(), the
+  /// indices of group g at [first_index(g), first_index(g + 1)).
+  void build(const Eigen::Isometry3d& X_WC);
+
+  const std::vector<GpuVertex>& vertices() const { return vertices_; }
+  const std::vector<std::uint32_t>& indices() const { return indices_; }
+  std::size_t first_index(int group) const { return group_start_[static_cast<std::size_t>(group)]; }
+  const LensGrid& grid() const { return grid_; }
+
+  /// The pixel (at the rasterised size) of a normalised point: exact, double precision.
+  Eigen::Vector2d pixel_of(const Eigen::Vector2d& xy) const;
+
+ private:
+  struct Face {
+    MeshFace face;
+    Eigen::Vector3d e1_dual_W, e2_dual_W;  // s = e1_dual . (p - c0), t = e2_dual . (p - c0)
+  };
+  void add_face(const Face& f, const Eigen::Isometry3d& X_CW, const Eigen::Vector3d& p_WC,
+                bool textured);
+
+  CameraIntrinsics K_;
+  int s_;
+  Eigen::Matrix4d clip_from_camera_;  // gl_clip_from_camera of the rasterised (x s) pinhole
+  double near_m_, far_m_;
+  LensGrid grid_;
+  std::array<std::vector<Face>, kFaceGroups> faces_;
+  std::vector<GpuVertex> vertices_;
+  std::vector<std::uint32_t> indices_;
+  std::array<std::size_t, kFaceGroups + 1> group_start_{};
+  // scratch
+  std::vector<Eigen::Vector3d> poly_C_, clipped_C_;
+  std::vector<Eigen::Vector2d> poly_n_, pieces_;
+  std::vector<int> sizes_;
+};
+
+}  // namespace shelfcross::render
