@@ -77,7 +77,7 @@ struct SplitScratch {
 
 }  // namespace
 
-LensGrid make_lens_grid(const CameraIntrinsics& K, double tolerance_px, double margin_px) {
+LensGrids make_lens_grids(const CameraIntrinsics& K, double tolerance_px, double margin_px) {
   if (K.width_px <= 0 || K.height_px <= 0 || !(K.fx_px > 0) || !(K.fy_px > 0) ||
       !(tolerance_px > 0)) {
     std::ostringstream os;
@@ -109,15 +109,21 @@ LensGrid make_lens_grid(const CameraIntrinsics& K, double tolerance_px, double m
   for (double v = v0; v < v1; v += 1.0) visit(u0, v), visit(u1, v);
   visit(u1, v1);
 
-  // ||D''|| bound and the Jacobian's sign on a lattice of 4-pixel pitch over the box (one
-  // pitch beyond it), by central differences (step 1e-4: rounding ~1e-5 px per unit^2).
+  // On a lattice of 4-pixel pitch over the box (and one pitch beyond it), by central
+  // differences (step 1e-4: rounding ~1e-5 px per unit^2), over 36 directions e:
+  //   Mf = max |D''(e, e)|, Mp = max |n(e) . D''(e, e)| with n(e) the unit normal of J e (the
+  //   image direction of e), Jmin = min |J e|; and the Jacobian's sign (no fold-over).
   const double step = 4.0 / std::max(K.fx_px, K.fy_px), h = 1e-4;
   const int nx = static_cast<int>(std::ceil((x_max - x_min) / step)) + 3;
   const int ny = static_cast<int>(std::ceil((y_max - y_min) / step)) + 3;
   const double ox = x_min - step, oy = y_min - step;
-  std::vector<double> col_max(static_cast<std::size_t>(nx), 0.0), row_max(static_cast<std::size_t>(ny), 0.0);
-  std::vector<double> bound(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny));
-  double overall = 0.0;
+  struct Stats {
+    double Mf = 0.0, Mp = 0.0, Jmin = std::numeric_limits<double>::infinity();
+    void merge(const Stats& o) { Mf = std::max(Mf, o.Mf), Mp = std::max(Mp, o.Mp), Jmin = std::min(Jmin, o.Jmin); }
+  };
+  std::vector<Stats> lattice(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny));
+  std::vector<Stats> col(static_cast<std::size_t>(nx)), row(static_cast<std::size_t>(ny));
+  LensGrids grids;
   for (int j = 0; j < ny; ++j) {
     for (int i = 0; i < nx; ++i) {
       const Vec2 p(ox + i * step, oy + j * step);
@@ -126,66 +132,82 @@ LensGrid make_lens_grid(const CameraIntrinsics& K, double tolerance_px, double m
       const Vec2 yp = pixel_1x(K, p + Vec2(0, h)), ym = pixel_1x(K, p - Vec2(0, h));
       const Vec2 pp = pixel_1x(K, p + Vec2(h, h)), pm = pixel_1x(K, p + Vec2(h, -h));
       const Vec2 mp = pixel_1x(K, p + Vec2(-h, h)), mm = pixel_1x(K, p + Vec2(-h, -h));
-      const double dxx = ((xp - 2.0 * c + xm) / (h * h)).norm();
-      const double dyy = ((yp - 2.0 * c + ym) / (h * h)).norm();
-      const double dxy = ((pp - pm - mp + mm) / (4.0 * h * h)).norm();
+      const Vec2 dxx = (xp - 2.0 * c + xm) / (h * h), dyy = (yp - 2.0 * c + ym) / (h * h);
+      const Vec2 dxy = (pp - pm - mp + mm) / (4.0 * h * h);
       const Vec2 jx = (xp - xm) / (2.0 * h), jy = (yp - ym) / (2.0 * h);
       if (!(jx.x() * jy.y() - jx.y() * jy.x() > 0.0)) {
-        const Vec2 uv = pixel_1x(K, p);
-        fail(uv.x(), uv.y(), "folds over (Jacobian not positive) in the region the image sees");
+        fail(c.x(), c.y(), "folds over (Jacobian not positive) in the region the image sees");
       }
-      const double b = std::max(dxx, dyy) + dxy;
-      bound[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(i)] = b;
-      col_max[static_cast<std::size_t>(i)] = std::max(col_max[static_cast<std::size_t>(i)], b);
-      row_max[static_cast<std::size_t>(j)] = std::max(row_max[static_cast<std::size_t>(j)], b);
-      overall = std::max(overall, b);
+      Stats st;
+      for (int k = 0; k < 36; ++k) {
+        const double th = M_PI * k / 36.0, ex = std::cos(th), ey = std::sin(th);
+        const Vec2 d2 = ex * ex * dxx + 2.0 * ex * ey * dxy + ey * ey * dyy;
+        const Vec2 je = ex * jx + ey * jy;
+        const double jn = je.norm();
+        st.Mf = std::max(st.Mf, d2.norm());
+        st.Mp = std::max(st.Mp, std::abs(je.x() * d2.y() - je.y() * d2.x()) / jn);
+        st.Jmin = std::min(st.Jmin, jn);
+      }
+      // The direction samples are 5 degrees apart: a 2 % allowance for the maxima between them.
+      st.Mf *= 1.02, st.Mp *= 1.02;
+      lattice[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(i)] = st;
+      col[static_cast<std::size_t>(i)].merge(st);
+      row[static_cast<std::size_t>(j)].merge(st);
+      grids.max_second_derivative_px = std::max(grids.max_second_derivative_px, st.Mf);
     }
   }
-  // Largest lattice value over [a, b] grown by one pitch (the lattice brackets the interval).
-  auto max_over = [&](const std::vector<double>& m, double origin, double a, double b) {
+  // Stats over the lattice points bracketing [a, b] (one pitch beyond each end).
+  auto over = [&](const std::vector<Stats>& m, double origin, double a, double b) {
     const int i0 = std::max(0, static_cast<int>(std::floor((a - origin) / step)) - 1);
     const int i1 = std::min(static_cast<int>(m.size()) - 1, static_cast<int>(std::ceil((b - origin) / step)) + 1);
-    double r = 0.0;
-    for (int i = i0; i <= i1; ++i) r = std::max(r, m[static_cast<std::size_t>(i)]);
+    Stats r;
+    for (int i = i0; i <= i1; ++i) r.merge(m[static_cast<std::size_t>(i)]);
     return r;
   };
-  // Columns of width w with w^2 <= 4 tol / max over the column, rows likewise: a cell then has
-  // (w^2 + h^2) / 8 * M_cell <= tol, since M_cell <= min(column max, row max).
-  auto lines = [&](double lo, double hi, const std::vector<double>& m, double origin) {
+  // The deviation bound of a segment of length L inside a region with statistics st:
+  //   interior (any component): L^2 / 8 Mf;
+  //   edges (across the chord only): L^2 / 8 (Mp + L Mf^2 / Jmin), the second term for the
+  //   chord's direction differing from J e along the segment by at most L Mf / Jmin radians.
+  auto deviation = [](bool edges, double L, const Stats& st) {
+    return edges ? L * L / 8.0 * (st.Mp + L * st.Mf * st.Mf / st.Jmin) : L * L / 8.0 * st.Mf;
+  };
+  // Columns of width w, rows of height h: a cell's diagonal is at most sqrt(2) max(w, h) and
+  // its statistics are bounded by its column's and by its row's, so a cell meets the
+  // tolerance when each column meets deviation(sqrt(2) w, column) <= tol, and each row alike.
+  auto lines = [&](bool edges, double lo, double hi, const std::vector<Stats>& m, double origin) {
     std::vector<double> out{lo};
     double a = lo;
     while (hi - a > 1e-12) {
       double w = hi - a;
-      double M = max_over(m, origin, a, a + w);
-      while (w * w * M > 4.0 * tolerance_px) {
-        w = 0.999 * std::sqrt(4.0 * tolerance_px / M);
-        M = max_over(m, origin, a, a + w);
-      }
+      while (deviation(edges, std::sqrt(2.0) * w, over(m, origin, a, a + w)) > tolerance_px) w *= 0.97;
       a = hi - a - w < 1e-12 ? hi : a + w;
       out.push_back(a);
     }
     return out;
   };
-  LensGrid g;
-  g.x_lines = lines(x_min, x_max, col_max, ox);
-  g.y_lines = lines(y_min, y_max, row_max, oy);
-  g.max_second_derivative_px = overall;
-  // The bound actually achieved, cell by cell, from the lattice.
-  for (std::size_t i = 0; i + 1 < g.x_lines.size(); ++i) {
-    for (std::size_t j = 0; j + 1 < g.y_lines.size(); ++j) {
-      const double w = g.x_lines[i + 1] - g.x_lines[i], hh = g.y_lines[j + 1] - g.y_lines[j];
-      const int i0 = std::max(0, static_cast<int>(std::floor((g.x_lines[i] - ox) / step)) - 1);
-      const int i1 = std::min(nx - 1, static_cast<int>(std::ceil((g.x_lines[i + 1] - ox) / step)) + 1);
-      const int j0 = std::max(0, static_cast<int>(std::floor((g.y_lines[j] - oy) / step)) - 1);
-      const int j1 = std::min(ny - 1, static_cast<int>(std::ceil((g.y_lines[j + 1] - oy) / step)) + 1);
-      double M = 0.0;
-      for (int jj = j0; jj <= j1; ++jj)
-        for (int ii = i0; ii <= i1; ++ii)
-          M = std::max(M, bound[static_cast<std::size_t>(jj) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(ii)]);
-      g.chord_bound_px = std::max(g.chord_bound_px, (w * w + hh * hh) / 8.0 * M);
+  for (LensGrid* g : {&grids.edges, &grids.interior}) {
+    const bool edges = g == &grids.edges;
+    g->x_lines = lines(edges, x_min, x_max, col, ox);
+    g->y_lines = lines(edges, y_min, y_max, row, oy);
+    // The bound achieved, cell by cell, from the lattice.
+    for (std::size_t i = 0; i + 1 < g->x_lines.size(); ++i) {
+      for (std::size_t j = 0; j + 1 < g->y_lines.size(); ++j) {
+        const double w = g->x_lines[i + 1] - g->x_lines[i], hh = g->y_lines[j + 1] - g->y_lines[j];
+        const int i0 = std::max(0, static_cast<int>(std::floor((g->x_lines[i] - ox) / step)) - 1);
+        const int i1 = std::min(nx - 1, static_cast<int>(std::ceil((g->x_lines[i + 1] - ox) / step)) + 1);
+        const int j0 = std::max(0, static_cast<int>(std::floor((g->y_lines[j] - oy) / step)) - 1);
+        const int j1 = std::min(ny - 1, static_cast<int>(std::ceil((g->y_lines[j + 1] - oy) / step)) + 1);
+        Stats st;
+        for (int jj = j0; jj <= j1; ++jj)
+          for (int ii = i0; ii <= i1; ++ii)
+            st.merge(lattice[static_cast<std::size_t>(jj) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(ii)]);
+        g->chord_bound_px = std::max(g->chord_bound_px, deviation(edges, std::hypot(w, hh), st));
+        if (edges)
+          grids.edges_interior_bound_px = std::max(grids.edges_interior_bound_px, deviation(false, std::hypot(w, hh), st));
+      }
     }
   }
-  return g;
+  return grids;
 }
 
 void split_by_grid(const LensGrid& grid, const std::vector<Vec2>& poly, std::vector<Vec2>& pieces,
@@ -216,7 +238,7 @@ LensMesher::LensMesher(const CameraIntrinsics& K, int supersample, double near_m
       s_(supersample),
       near_m_(near_m),
       far_m_(far_m),
-      grid_(make_lens_grid(K, tolerance_px)) {
+      grids_(make_lens_grids(K, tolerance_px)) {
   const int s = supersample;
   clip_from_camera_ = gl_clip_from_camera(s * K.fx_px, s * K.fy_px, s * K.cx_px + 0.5 * (s - 1),
                                           s * K.cy_px + 0.5 * (s - 1), s * K.width_px,
@@ -265,8 +287,9 @@ void LensMesher::add_face(const Face& f, const Eigen::Isometry3d& X_CW, const Ve
   poly_C_.clear();
   // Outcodes against the frustum that holds the lens region: a face entirely beyond one plane
   // is dropped before any clipping.
-  const double xl = grid_.x_lines.front(), xh = grid_.x_lines.back();
-  const double yl = grid_.y_lines.front(), yh = grid_.y_lines.back();
+  const LensGrid& grid = textured ? grids_.interior : grids_.edges;
+  const double xl = grid.x_lines.front(), xh = grid.x_lines.back();
+  const double yl = grid.y_lines.front(), yh = grid.y_lines.back();
   unsigned all_out = 0x3f;
   bool needs_z_clip = false;
   for (const Vec3& c : m.corners_W_m) {
@@ -312,7 +335,7 @@ void LensMesher::add_face(const Face& f, const Eigen::Isometry3d& X_CW, const Ve
   for (const Vec3& p : poly_C_) poly_n_.emplace_back(p.x() / p.z(), p.y() / p.z());
   pieces_.clear();
   sizes_.clear();
-  split_by_grid(grid_, poly_n_, pieces_, sizes_);
+  split_by_grid(grid, poly_n_, pieces_, sizes_);
   if (sizes_.empty()) return;
 
   // The face's plane in C: n_C . p = d_C (< 0: the camera is on the normal side), so the point

@@ -39,20 +39,33 @@
 
 namespace shelfcross::render {
 
-/// The lens grid over the part of the normalised plane that the image sees.
+/// A lens grid over the part of the normalised plane that the image sees.
 struct LensGrid {
   /// Grid lines in normalised coordinates, ascending; the first and last bound the region:
   /// the undistorted footprint of the image (pixel areas, plus margin_px) as a box.
   std::vector<double> x_lines, y_lines;
-  /// The bound max over cells of d_cell^2 / 8 * max_cell ||D''||, pixels (<= tolerance).
+  /// Largest deviation bound over the cells' segments, output pixels (<= the tolerance).
   double chord_bound_px = 0.0;
+};
+
+/// The two grids of one lens, over the same region:
+///   edges     for flat faces: bounds the distance of a segment's image from its chord
+///             (what decides which pixel centres a face covers), so cells are large;
+///   interior  for textured faces: bounds the whole displacement of the interpolated
+///             interior (texture coordinates along a segment), so cells are smaller.
+struct LensGrids {
+  LensGrid edges, interior;
+  /// The interior bound of the edges grid: how far (pixels) the interpolated interior of a
+  /// flat face (its depth) may sit from the true position. Decals are drawn with a depth
+  /// offset of this many pixels' worth of slope (renderer.cpp).
+  double edges_interior_bound_px = 0.0;
   /// Largest ||D''|| over the region, pixels per squared normalised unit.
   double max_second_derivative_px = 0.0;
 };
 
-/// Builds the grid for a chord tolerance (output pixels). Throws RenderError for invalid
+/// Builds the grids for a tolerance (output pixels). Throws RenderError for invalid
 /// intrinsics or a lens that cannot be inverted over the image or folds over in the region.
-LensGrid make_lens_grid(const CameraIntrinsics& K, double tolerance_px, double margin_px = 2.0);
+LensGrids make_lens_grids(const CameraIntrinsics& K, double tolerance_px, double margin_px = 2.0);
 
 /// Splits the convex polygon `poly` (normalised coordinates, in order around its edge) along
 /// the grid's lines, dropping what lies outside the region: `pieces` receives the convex
@@ -77,9 +90,11 @@ struct GpuVertex {
   float uv[2];
 };
 
-/// Faces in three groups, drawn in this order: the room (the inside of the arena box), the
-/// other flat faces, the textured (marker) faces.
-enum FaceGroup { kRoomFaces = 0, kFlatFaces = 1, kTexturedFaces = 2, kFaceGroups = 3 };
+/// Faces in four groups, drawn in this order: the room (the inside of the arena box), the
+/// other flat faces, flat decals (tags: a millimetre off the surface they are stuck on), and
+/// textured decals (markers). Textured faces are split along the interior grid, the others
+/// along the edges grid.
+enum FaceGroup { kRoomFaces = 0, kFlatFaces = 1, kDecalFaces = 2, kTexturedFaces = 3, kFaceGroups = 4 };
 
 class LensMesher {
  public:
@@ -97,7 +112,7 @@ class LensMesher {
   const std::vector<GpuVertex>& vertices() const { return vertices_; }
   const std::vector<std::uint32_t>& indices() const { return indices_; }
   std::size_t first_index(int group) const { return group_start_[static_cast<std::size_t>(group)]; }
-  const LensGrid& grid() const { return grid_; }
+  const LensGrids& grids() const { return grids_; }
 
   /// The pixel (at the rasterised size) of a normalised point: exact, double precision.
   Eigen::Vector2d pixel_of(const Eigen::Vector2d& xy) const;
@@ -114,7 +129,7 @@ class LensMesher {
   int s_;
   Eigen::Matrix4d clip_from_camera_;  // gl_clip_from_camera of the rasterised (x s) pinhole
   double near_m_, far_m_;
-  LensGrid grid_;
+  LensGrids grids_;
   std::array<std::vector<Face>, kFaceGroups> faces_;
   std::vector<GpuVertex> vertices_;
   std::vector<std::uint32_t> indices_;

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include <opencv2/core/hal/intrin.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "shelfcross/random.hpp"
 
@@ -52,34 +53,31 @@ void SensorNoise::apply_rgba_to_bgr(const cv::Mat& rgba, cv::Mat& bgr, std::uint
   const std::uint64_t h = mix64(frame_seed ^ 0xbb67ae8584caa73bULL);
   const std::vector<std::int8_t>& field = fields_[h % kFields];
   const int dx = static_cast<int>((h >> 8) % kMargin), dy = static_cast<int>((h >> 24) % kMargin);
-  auto add = [](int pixel, int noise) {
-    const int v = pixel + noise;
-    return static_cast<std::uint8_t>(v < 0 ? 0 : (v > 255 ? 255 : v));
-  };
-  for (int r = 0; r < rows_; ++r) {
-    const std::uint8_t* in = rgba.ptr<std::uint8_t>(r);
-    std::uint8_t* out = bgr.ptr<std::uint8_t>(r);
-    const std::int8_t* n = field.data() + (static_cast<size_t>(r + dy) * field_cols_ + dx) * 3;
-    int x = 0;
+  const int row_bytes = cols_ * 3;
+  // Blocks of rows small enough to stay in the L2 cache between the conversion (OpenCV's own
+  // SIMD) and the noise pass over the same bytes.
+  constexpr int kBlockRows = 16;
+  for (int r0 = 0; r0 < rows_; r0 += kBlockRows) {
+    const int r1 = std::min(rows_, r0 + kBlockRows);
+    cv::Mat out = bgr.rowRange(r0, r1);
+    cv::cvtColor(rgba.rowRange(r0, r1), out, cv::COLOR_RGBA2BGR);
+    for (int r = r0; r < r1; ++r) {
+      std::uint8_t* p = bgr.ptr<std::uint8_t>(r);
+      const std::int8_t* n = field.data() + (static_cast<size_t>(r + dy) * field_cols_ + dx) * 3;
+      int c = 0;
 #if CV_SIMD128
-    // 16 pixels at a time. Saturating u8 + s8: with x' = x - 128 (flip the top bit) the
-    // signed saturating sum x' + n, flipped back, is min(255, max(0, x + n)).
-    const cv::v_uint8x16 bias = cv::v_setall_u8(0x80);
-    for (; x + 16 <= cols_; x += 16) {
-      cv::v_uint8x16 R, G, B, A;
-      cv::v_load_deinterleave(in + 4 * x, R, G, B, A);
-      cv::v_int8x16 nb, ng, nr;
-      cv::v_load_deinterleave(n + 3 * x, nb, ng, nr);
-      auto sat = [&](const cv::v_uint8x16& p, const cv::v_int8x16& q) {
-        return cv::v_reinterpret_as_u8(cv::v_reinterpret_as_s8(p ^ bias) + q) ^ bias;
-      };
-      cv::v_store_interleave(out + 3 * x, sat(B, nb), sat(G, ng), sat(R, nr));
-    }
+      // Saturating u8 + s8: with p' = p - 128 (flip the top bit), the signed saturating sum
+      // p' + n flipped back is min(255, max(0, p + n)).
+      const cv::v_uint8x16 bias = cv::v_setall_u8(0x80);
+      for (; c + 16 <= row_bytes; c += 16) {
+        const cv::v_int8x16 sum = cv::v_reinterpret_as_s8(cv::v_load(p + c) ^ bias) + cv::v_load(n + c);
+        cv::v_store(p + c, cv::v_reinterpret_as_u8(sum) ^ bias);
+      }
 #endif
-    for (; x < cols_; ++x) {
-      out[3 * x + 0] = add(in[4 * x + 2], n[3 * x + 0]);
-      out[3 * x + 1] = add(in[4 * x + 1], n[3 * x + 1]);
-      out[3 * x + 2] = add(in[4 * x + 0], n[3 * x + 2]);
+      for (; c < row_bytes; ++c) {
+        const int v = p[c] + n[c];
+        p[c] = static_cast<std::uint8_t>(v < 0 ? 0 : (v > 255 ? 255 : v));
+      }
     }
   }
 }

@@ -35,8 +35,19 @@ double srgb_encode(double linear) {
   return c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055;
 }
 
-// Vertices arrive in clip coordinates, the lens already applied (lens_mesh.hpp).
-const char* kVertexShader = R"(#version 330 core
+// Vertices arrive in clip coordinates, the lens already applied (lens_mesh.hpp). Flat faces
+// pass on only their colour (fewer interpolants: cheaper triangle set-up on llvmpipe).
+const char* kFlatVertexShader = R"(#version 330 core
+layout(location = 0) in vec4 clip;
+layout(location = 1) in vec3 rgb;
+flat out vec3 v_rgb;
+void main() {
+  gl_Position = clip;
+  v_rgb = rgb;
+}
+)";
+
+const char* kTexturedVertexShader = R"(#version 330 core
 layout(location = 0) in vec4 clip;
 layout(location = 1) in vec3 rgb;
 layout(location = 2) in vec2 uv;
@@ -53,7 +64,6 @@ void main() {
 // the rest of the pipeline, so only marker faces pay for it.)
 const char* kFlatFragmentShader = R"(#version 330 core
 flat in vec3 v_rgb;
-in vec2 v_uv;
 layout(location = 0) out vec4 colour;
 void main() {
   colour = vec4(v_rgb, 1.0);
@@ -218,7 +228,7 @@ struct Renderer::Impl {
         hi_width(k.width_px * o.supersample),
         hi_height(k.height_px * o.supersample),
         egl(o.egl_platform) {
-    const LensGrid& g = mesher.grid();
+    const LensGrid& g = mesher.grids().edges;
     for (double x : {g.x_lines.front(), g.x_lines.back()})
       for (double y : {g.y_lines.front(), g.y_lines.back()})
         max_ray_stretch = std::max(max_ray_stretch, std::sqrt(1.0 + x * x + y * y));
@@ -258,7 +268,7 @@ void Renderer::Impl::build(const SceneLayout& layout) {
     mesh.cuboid(layout.X_WS[static_cast<size_t>(c.shelf)], c.min_S_m, c.max_S_m, albedo);
   }
   for (const TagQuad& t : layout.tags) {
-    mesh.face(kFlatFaces, t.corners_W_m, t.normal_W,
+    mesh.face(kDecalFaces, t.corners_W_m, t.normal_W,
               mesh.colour(warehouse.tag_colour, kTagFlat + (1.0 - kTagFlat) * mesh.shade(t.normal_W)));
     // Tags are coloured on their outer side only: half-way between the tag and the bar, a
     // backing square in the bar colour, facing inward, is what shows from inside the shelf (a
@@ -300,10 +310,11 @@ void Renderer::Impl::build(const SceneLayout& layout) {
                Eigen::Vector2f(u0, 1.f)});
   }
   room_first = true;
-  for (FaceGroup g : {kFlatFaces, kTexturedFaces})
+  for (FaceGroup g : {kFlatFaces, kDecalFaces, kTexturedFaces})
     for (const MeshFace& f : mesh.faces(g))
       for (const Eigen::Vector3d& c : f.corners_W_m) room_first = room_first && arena.contains(c);
-  for (FaceGroup g : {kRoomFaces, kFlatFaces, kTexturedFaces}) mesher.set_faces(g, std::move(mesh.faces(g)));
+  for (FaceGroup g : {kRoomFaces, kFlatFaces, kDecalFaces, kTexturedFaces})
+    mesher.set_faces(g, std::move(mesh.faces(g)));
 
   // ---- GL objects ----
   egl.make_current();
@@ -312,8 +323,8 @@ void Renderer::Impl::build(const SceneLayout& layout) {
   gl_renderer = r ? r : "?";
   gl_version = v ? v : "?";
 
-  flat_program = link_program(kVertexShader, kFlatFragmentShader);
-  textured_program = link_program(kVertexShader, kTexturedFragmentShader);
+  flat_program = link_program(kFlatVertexShader, kFlatFragmentShader);
+  textured_program = link_program(kTexturedVertexShader, kTexturedFragmentShader);
   glUseProgram(textured_program);
   glUniform1i(glGetUniformLocation(textured_program, "atlas"), 0);
 
@@ -376,6 +387,7 @@ void Renderer::Impl::build(const SceneLayout& layout) {
   glDisable(GL_MULTISAMPLE);
   glDisable(GL_BLEND);
   glClearColor(0.f, 0.f, 0.f, 1.f);
+  glPolygonOffset(-static_cast<float>(std::ceil(mesher.grids().edges_interior_bound_px) + 1.0), -1.f);
   glPixelStorei(GL_PACK_ALIGNMENT, 4);
   check_gl("renderer initialisation");
 
@@ -420,13 +432,19 @@ void Renderer::Impl::draw_and_read(const Eigen::Isometry3d& X_WC) {
     glDisable(GL_DEPTH_TEST);
     draw(kRoomFaces, kFlatFaces);
     glEnable(GL_DEPTH_TEST);
-    draw(kFlatFaces, kTexturedFaces);
+    draw(kFlatFaces, kDecalFaces);
   } else {
     glEnable(GL_DEPTH_TEST);
-    draw(kRoomFaces, kTexturedFaces);
+    draw(kRoomFaces, kDecalFaces);
   }
+  // Decals a millimetre off their surface: the depth of a large flat face is interpolated
+  // across its lens cell and may sit up to edges_interior_bound_px pixels' worth of depth
+  // slope off (lens_mesh.hpp), so decals are pulled forward by that much plus one pixel.
+  glEnable(GL_POLYGON_OFFSET_FILL);
+  draw(kDecalFaces, kTexturedFaces);
   glUseProgram(textured_program);
   draw(kTexturedFaces, kFaceGroups);
+  glDisable(GL_POLYGON_OFFSET_FILL);
   // Rows come back bottom GL row first = image row 0 first (see gl_clip_from_camera).
   // RGBA, the renderbuffer's own layout on Mesa: a plain copy (BGRA costs a swizzle pass,
   // ~6x slower on llvmpipe); the channel order is fixed in finish().
@@ -462,7 +480,6 @@ Renderer::Renderer(const Warehouse& warehouse, const CameraIntrinsics& intrinsic
     throw RenderError(os.str());
   }
   const SceneLayout layout = build_scene_layout(warehouse);  // validates before EGL
-  make_lens_grid(intrinsics, kLensChordTolerance_px);  // validates the lens before EGL
   impl_ = std::make_unique<Impl>(warehouse, intrinsics, options);
   if (options.noise_stddev > 0.0) {
     impl_->noise = std::make_unique<SensorNoise>(intrinsics.height_px, intrinsics.width_px, 3, options.noise_stddev);

@@ -89,10 +89,10 @@ TEST(CameraModel, ProjectorEqualsOpenCvForWorldPoints) {
 TEST(CameraModel, InvalidIntrinsicsAreRefused) {
   CameraIntrinsics K;
   K.fx_px = 0.0;
-  EXPECT_THROW(make_lens_grid(K, 0.2), RenderError);
+  EXPECT_THROW(make_lens_grids(K, 0.2), RenderError);
   K = CameraIntrinsics{};
   K.k1 = -2.0;  // folds over inside the image
-  EXPECT_THROW(make_lens_grid(K, 0.2), RenderError);
+  EXPECT_THROW(make_lens_grids(K, 0.2), RenderError);
 }
 
 }  // namespace
