@@ -265,9 +265,16 @@ void LensMesher::set_faces(FaceGroup group, std::vector<MeshFace> faces) {
   }
 }
 
+std::vector<MeshFace> LensMesher::faces(FaceGroup group) const {
+  std::vector<MeshFace> out;
+  for (const Face& f : faces_[static_cast<std::size_t>(group)]) out.push_back(f.face);
+  return out;
+}
+
 void LensMesher::build(const Eigen::Isometry3d& X_WC) {
   vertices_.clear();
   indices_.clear();
+  points_C_.clear();
   const Eigen::Isometry3d X_CW = X_WC.inverse(Eigen::Isometry);
   for (int g = 0; g < kFaceGroups; ++g) {
     group_start_[static_cast<std::size_t>(g)] = indices_.size();
@@ -373,6 +380,7 @@ void LensMesher::add_face(const Face& f, const Eigen::Isometry3d& X_CW, const Ve
         gv.uv[0] = gv.uv[1] = 0.0f;
       }
       vertices_.push_back(gv);
+      points_C_.push_back(Z * Vec3(xy.x(), xy.y(), 1.0));
     }
     for (int v = 1; v + 1 < size; ++v) {
       indices_.push_back(base);

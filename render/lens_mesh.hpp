@@ -111,8 +111,13 @@ class LensMesher {
 
   const std::vector<GpuVertex>& vertices() const { return vertices_; }
   const std::vector<std::uint32_t>& indices() const { return indices_; }
+  /// The camera-frame point (metres) of each vertex, in double precision: what the vertex is
+  /// the projection of (for tests).
+  const std::vector<Eigen::Vector3d>& points_C() const { return points_C_; }
   std::size_t first_index(int group) const { return group_start_[static_cast<std::size_t>(group)]; }
   const LensGrids& grids() const { return grids_; }
+  /// The faces of a group, as set.
+  std::vector<MeshFace> faces(FaceGroup group) const;
 
   /// The pixel (at the rasterised size) of a normalised point: exact, double precision.
   Eigen::Vector2d pixel_of(const Eigen::Vector2d& xy) const;
@@ -133,6 +138,7 @@ class LensMesher {
   std::array<std::vector<Face>, kFaceGroups> faces_;
   std::vector<GpuVertex> vertices_;
   std::vector<std::uint32_t> indices_;
+  std::vector<Eigen::Vector3d> points_C_;
   std::array<std::size_t, kFaceGroups + 1> group_start_{};
   // scratch
   std::vector<Eigen::Vector3d> poly_C_, clipped_C_;
