@@ -6,24 +6,31 @@
 // Why straight chords are enough. A face is planar and convex, so its pinhole image in the
 // normalised plane (x, y) = (X/Z, Y/Z) of camera C is a convex polygon with straight edges;
 // the lens is the 2-D map D: (x, y) -> pixel (u, v) of camera_model.hpp. The rasteriser joins
-// projected vertices by straight chords, whereas D bends the segment a -> b into the curve
-// c(t) = D(a + t (b - a)). Linear interpolation of c gives
-//   |c(t) - chord(t)| <= t (1 - t) / 2 max |c''|  <=  |b - a|^2 / 8 * max ||D''||,
-// with ||D''|| = max over unit directions e of |d^2 D(p + s e) / ds^2| (pixels per squared
-// normalised unit), bounded here by max(|D_xx|, |D_yy|) + |D_xy| (vector norms). The lens
-// grid cuts the normalised plane into cells whose diagonal d satisfies d^2 / 8 * max_cell
-// ||D''|| <= tolerance_px; every face is split along the grid lines into convex pieces (each
-// inside one cell, so every edge and fan diagonal of a piece is at most d long) and
-// fan-triangulated. Every drawn edge thus lies within tolerance_px of the true curve, and so
-// does the interpolated interior (depth, texture coordinates). Vertices themselves are exact:
-// each is a point of the face, projected in double precision with camera_model's formula (the
-// one of cv::projectPoints), handed to GL as clip coordinates (x_ndc Z, y_ndc Z, z_clip, Z)
-// so that GL's perspective-correct interpolation uses the true depth Z.
+// projected vertices by straight chords, whereas D bends the segment a -> b (length L,
+// direction e) into the curve c(t) = D(a + t (b - a)). Linear interpolation of c gives
+//   |c(t) - chord(t)| <= t (1 - t) / 2 max |c''|  <=  L^2 / 8 * max |D''(e, e)|      (1)
+// (pixels; D'' in pixels per squared normalised unit). What decides which pixel centres a
+// face covers is only the distance ACROSS the chord, n . (c(t) - chord(t)) with n the chord's
+// unit normal in the image; n differs from the normal of J e (J = dD) at any point of the
+// segment by at most L max |D''| / min |J e| radians, so
+//   distance across <= L^2 / 8 * (max |n(e) . D''(e, e)| + L max |D''|^2 / min |J e|).   (2)
+// A lens grid cuts the normalised plane into cells whose diagonal d keeps the bound below
+// tolerance_px everywhere in the cell (statistics of D sampled every 4 px, 36 directions);
+// every face is split along the grid lines into convex pieces (each inside one cell, so every
+// edge and fan diagonal of a piece is at most d long) and fan-triangulated. Two grids:
+//   edges     bound (2), for flat faces: every drawn edge within tolerance_px of the true
+//             curve; the interpolated interior (depth) may be off by bound (1), about 0.5 px
+//             for the default lens, which decals absorb with a depth offset (renderer.cpp);
+//   interior  bound (1), for textured faces: texture coordinates within tolerance_px too.
+// Both are coarse where the lens is nearly linear and fine where it bends most (default lens:
+// edges cells 65 to 130 px, interior cells 40 to 125 px). Vertices themselves are exact: each
+// is a point of the face, projected in double precision with camera_model's formula (the one
+// of cv::projectPoints), handed to GL as clip coordinates (x_ndc Z, y_ndc Z, z_clip, Z) so
+// that GL's perspective-correct interpolation uses the true depth Z.
 //
-// The cells are large where the lens is nearly linear (the centre of the default lens: about
-// 100 px) and small where it bends most (the corners: about 40 px). Split vertices on a grid
-// line are computed once and shared by both sides, and every intersection is computed from
-// its segment's end points in a canonical order, so pieces meet without cracks.
+// No cracks: split vertices on a grid line are computed once and shared by both sides, and
+// every intersection is computed from its segment's end points in a canonical order, so the
+// pieces of a face, and faces sharing an edge (split along the same grid), meet exactly.
 //
 // Culling: every face is single-sided (drawn only when the camera is strictly on the side
 // its normal points to). The world is made of closed solids, one-sided tags with a backing,
