@@ -275,11 +275,27 @@ void LensMesher::build(const Eigen::Isometry3d& X_WC) {
   vertices_.clear();
   indices_.clear();
   points_C_.clear();
+  room_spans_.clear();
   const Eigen::Isometry3d X_CW = X_WC.inverse(Eigen::Isometry);
   for (int g = 0; g < kFaceGroups; ++g) {
     group_start_[static_cast<std::size_t>(g)] = indices_.size();
-    for (const Face& f : faces_[static_cast<std::size_t>(g)])
+    for (const Face& f : faces_[static_cast<std::size_t>(g)]) {
+      const std::size_t first = indices_.size();
       add_face(f, X_CW, X_WC.translation(), g == kTexturedFaces);
+      if (g != kRoomFaces || indices_.size() == first) continue;
+      // Its area: the triangles' areas in window coordinates (x_ndc, y_ndc scaled).
+      FaceSpan span{first, indices_.size(), 0.0, f.face.rgb};
+      for (std::size_t i = first; i < indices_.size(); i += 3) {
+        Vec2 p[3];
+        for (int k = 0; k < 3; ++k) {
+          const GpuVertex& v = vertices_[indices_[i + static_cast<std::size_t>(k)]];
+          p[k] = Vec2(v.clip[0] / v.clip[3] * 0.5 * s_ * K_.width_px, v.clip[1] / v.clip[3] * 0.5 * s_ * K_.height_px);
+        }
+        const Vec2 a = p[1] - p[0], b = p[2] - p[0];
+        span.area_px2 += 0.5 * std::abs(a.x() * b.y() - a.y() * b.x());
+      }
+      room_spans_.push_back(span);
+    }
   }
   group_start_[kFaceGroups] = indices_.size();
 }

@@ -122,6 +122,15 @@ class LensMesher {
   /// the projection of (for tests).
   const std::vector<Eigen::Vector3d>& points_C() const { return points_C_; }
   std::size_t first_index(int group) const { return group_start_[static_cast<std::size_t>(group)]; }
+
+  /// The room faces of the last frame, each with its index range and its area in the image
+  /// (pixels at the rasterised size), in drawing order.
+  struct FaceSpan {
+    std::size_t first_index = 0, end_index = 0;
+    double area_px2 = 0.0;
+    Eigen::Vector3f rgb = Eigen::Vector3f::Zero();
+  };
+  const std::vector<FaceSpan>& room_spans() const { return room_spans_; }
   const LensGrids& grids() const { return grids_; }
   /// The faces of a group, as set.
   std::vector<MeshFace> faces(FaceGroup group) const;
@@ -146,6 +155,7 @@ class LensMesher {
   std::vector<GpuVertex> vertices_;
   std::vector<std::uint32_t> indices_;
   std::vector<Eigen::Vector3d> points_C_;
+  std::vector<FaceSpan> room_spans_;
   std::array<std::size_t, kFaceGroups + 1> group_start_{};
   // scratch
   std::vector<Eigen::Vector3d> poly_C_, clipped_C_;

@@ -136,11 +136,14 @@ class FaceBuilder {
   double shade(const Eigen::Vector3d& n_W) const {
     return lighting_.ambient + lighting_.directional * std::max(0.0, n_W.dot(light_to_W_));
   }
+  // The face's 8-bit colour k / 255, k = round(255 srgb): the byte GL writes for it, whether
+  // a fragment or a clear (renderer.cpp clears to a room face's colour) writes it.
   Eigen::Vector3f colour(const Rgb& albedo, double shade_factor) const {
     const double k = shade_factor * light_scale_;
-    return {static_cast<float>(srgb_encode(albedo.r * k)),
-            static_cast<float>(srgb_encode(albedo.g * k)),
-            static_cast<float>(srgb_encode(albedo.b * k))};
+    auto byte = [](double linear) {
+      return static_cast<float>(std::nearbyint(255.0 * srgb_encode(linear)) / 255.0);
+    };
+    return {byte(albedo.r * k), byte(albedo.g * k), byte(albedo.b * k)};
   }
 
   // A quad c0 c1 c2 c3 (in order around its edge), seen from the side n_W points to.
@@ -386,7 +389,6 @@ void Renderer::Impl::build(const SceneLayout& layout) {
   glDisable(GL_DITHER);
   glDisable(GL_MULTISAMPLE);
   glDisable(GL_BLEND);
-  glClearColor(0.f, 0.f, 0.f, 1.f);
   glPolygonOffset(-static_cast<float>(std::ceil(mesher.grids().edges_interior_bound_px) + 1.0), -1.f);
   glPixelStorei(GL_PACK_ALIGNMENT, 4);
   check_gl("renderer initialisation");
@@ -410,7 +412,8 @@ void Renderer::Impl::draw_and_read(const Eigen::Isometry3d& X_WC) {
                indices.data(), GL_STREAM_DRAW);
   // The room covers every pixel when the camera is inside the arena, farther than the near
   // plane from every wall along every ray (Z >= distance / max |(x, y, 1)|) and nearer than the
-  // far plane to every corner: then the colour clear is redundant.
+  // far plane to every corner (each pixel then shows exactly one room face or something in
+  // front of it).
   const Eigen::Vector3d p = X_WC.translation();
   const double wall_distance = std::min((p - arena.min()).minCoeff(), (arena.max() - p).minCoeff());
   double farthest = 0.0;
@@ -418,19 +421,37 @@ void Renderer::Impl::draw_and_read(const Eigen::Isometry3d& X_WC) {
     farthest = std::max(farthest, (arena.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c)) - p).norm());
   const bool room_covers = room_first && wall_distance > options.near_m * max_ray_stretch &&
                            farthest < options.far_m;
-  glClear(room_covers ? GL_DEPTH_BUFFER_BIT : GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-  auto draw = [&](int first_group, int end_group) {
-    const std::size_t a = mesher.first_index(first_group), b = mesher.first_index(end_group);
+  // When the room covers the view, its largest face is not drawn: the colour clear (a fill of
+  // the tiles, cheaper than shading their fragments) paints it, and the room's other faces
+  // and everything else are drawn over it.
+  const std::vector<LensMesher::FaceSpan>& room = mesher.room_spans();
+  std::size_t skipped = room.size();
+  if (room_covers) {
+    for (std::size_t k = 0; k < room.size(); ++k)
+      if (skipped == room.size() || room[k].area_px2 > room[skipped].area_px2) skipped = k;
+  }
+  if (skipped < room.size()) {
+    const Eigen::Vector3f& c = room[skipped].rgb;
+    glClearColor(c.x(), c.y(), c.z(), 1.f);
+  } else {
+    glClearColor(0.f, 0.f, 0.f, 1.f);
+  }
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  auto draw_range = [&](std::size_t a, std::size_t b) {
     if (b > a)
       glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(b - a), GL_UNSIGNED_INT,
                      reinterpret_cast<const void*>(a * sizeof(std::uint32_t)));
+  };
+  auto draw = [&](int first_group, int end_group) {
+    draw_range(mesher.first_index(first_group), mesher.first_index(end_group));
   };
   glUseProgram(flat_program);
   if (room_first) {
     // The room first, no depth test (its visible faces never overlap; everything else is in
     // front of it), then the rest with it.
     glDisable(GL_DEPTH_TEST);
-    draw(kRoomFaces, kFlatFaces);
+    for (std::size_t k = 0; k < room.size(); ++k)
+      if (k != skipped) draw_range(room[k].first_index, room[k].end_index);
     glEnable(GL_DEPTH_TEST);
     draw(kFlatFaces, kDecalFaces);
   } else {

@@ -231,7 +231,8 @@ TEST(LensMesh, RenderedPixelsEqualARayCastAwayFromEdges) {
       const Eigen::Vector3f& rgb = faces[static_cast<std::size_t>(face)].rgb;
       const cv::Vec3b got = img.at<cv::Vec3b>(v, u);
       bool ok = true;
-      for (int c = 0; c < 3; ++c) ok = ok && std::abs(got[2 - c] - std::lround(255.0 * rgb[c])) <= 1;
+      // Face colours are whole bytes k / 255 (renderer.cpp), so the pixel must be exactly k.
+      for (int c = 0; c < 3; ++c) ok = ok && got[2 - c] == std::lround(255.0 * rgb[c]);
       if (!ok) {
         ++mismatched;
         ADD_FAILURE() << "pixel (" << u << ", " << v << ") is " << got << ", the ray cast gives face "
