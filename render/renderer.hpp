@@ -11,8 +11,9 @@
 //      split along the lens grid and projected through the lens on the CPU (lens_mesh.hpp):
 //      every vertex exactly as cv::projectPoints puts it, every drawn edge within
 //      kLensChordTolerance_px of the true (curved) image of the face's edge;
-//   2. rasterised at the output size (x supersample): the room first, without depth test,
-//      then the shelves with it, then the marker faces (textured); point-sampled at pixel
+//   2. rasterised at the output size (x supersample): the room first, without depth test
+//      (its largest face painted by the colour clear when the room fills the view), then the
+//      shelves with it, then tags and markers with a depth offset; point-sampled at pixel
 //      centres, no MSAA;
 //   3. glReadPixels as RGBA (rows already in image order: the projection writes image row v
 //      to GL row v);
