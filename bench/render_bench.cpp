@@ -1,15 +1,18 @@
-// Renderer throughput at 960 x 720 on one core with llvmpipe.
+// Renderer throughput at 960 x 720 on one core with llvmpipe (issue 16).
 //
-// Run: build/release/bench/shelfcross_bench --benchmark_filter=Render
+// Run: taskset -c 1 build/release/bench/shelfcross_bench --benchmark_filter=Render
 // LP_NUM_THREADS=1 is set here before the first EGL display is created (llvmpipe reads it
 // when its screen is created) and OpenCV runs single-threaded, so the figure is one core's
 // worth of work. Times are process CPU time (all threads: llvmpipe's rasteriser thread
 // included), which also keeps the figure meaningful on a loaded machine; frames per second
 // = 1 / CPU time per frame.
 //
-// BM_RenderFrame is the whole Renderer::render_into (draw + readback + distortion remap +
-// RGBA->BGR); BM_RenderRemapOnly and BM_RenderConvertOnly time the CPU stages alone on the
-// same buffers, so draw + readback = RenderFrame - RemapOnly - ConvertOnly.
+// BM_RenderFrame/supersample:S/noise:N is the whole Renderer::render_into (lens mesh + upload
+// + draw + readback [+ S x S block average] + RGBA->BGR [+ noise]) with the default lens and
+// lighting; noise:1 is the co-simulation's default sensor noise (cosim.render_noise_stddev,
+// 2 grey levels), the configuration of the issue's target. BM_RenderMeshOnly and
+// BM_RenderFinishOnly time two CPU stages alone: the per-frame lens mesh (cull, clip, split,
+// project) and the fused RGBA->BGR + noise pass; draw + readback is the rest.
 #include <benchmark/benchmark.h>
 
 #include <cstdlib>
@@ -17,6 +20,8 @@
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "render/lens_mesh.hpp"
+#include "render/noise.hpp"
 #include "render/renderer.hpp"
 #include "render/test/test_warehouse.hpp"
 
@@ -26,17 +31,22 @@ using shelfcross::CameraIntrinsics;
 using shelfcross::render::Renderer;
 using shelfcross::render::RenderOptions;
 
-Renderer& bench_renderer(int supersample) {
+constexpr double kDefaultNoise = 2.0;  // verification/cosim_settings.hpp render_noise_stddev
+
+Renderer& bench_renderer(int supersample, bool noise) {
   ::setenv("LP_NUM_THREADS", "1", 1);
   cv::setNumThreads(1);
-  static Renderer r1(shelfcross::render::test::paper_test_shelf(), CameraIntrinsics{});
-  if (supersample == 1) return r1;
-  static Renderer r2(shelfcross::render::test::paper_test_shelf(), CameraIntrinsics{}, [] {
+  auto make = [](int s, bool n) {
     RenderOptions o;
-    o.supersample = 2;
+    o.supersample = s;
+    o.noise_stddev = n ? kDefaultNoise : 0.0;
     return o;
-  }());
-  return r2;
+  };
+  static Renderer r10(shelfcross::render::test::paper_test_shelf(), CameraIntrinsics{}, make(1, false));
+  static Renderer r11(shelfcross::render::test::paper_test_shelf(), CameraIntrinsics{}, make(1, true));
+  static Renderer r20(shelfcross::render::test::paper_test_shelf(), CameraIntrinsics{}, make(2, false));
+  if (supersample == 1) return noise ? r11 : r10;
+  return r20;
 }
 
 Eigen::Isometry3d bench_pose() {
@@ -44,39 +54,42 @@ Eigen::Isometry3d bench_pose() {
 }
 
 void BM_RenderFrame(benchmark::State& state) {
-  Renderer& r = bench_renderer(static_cast<int>(state.range(0)));
+  Renderer& r = bench_renderer(static_cast<int>(state.range(0)), state.range(1) != 0);
   state.SetLabel(r.gl_renderer_name());
   cv::Mat bgr;
-  r.render_into(bench_pose(), 0, bgr);
+  std::uint64_t seed = 0;
+  r.render_into(bench_pose(), seed, bgr);
   for (auto _ : state) {
-    r.render_into(bench_pose(), 0, bgr);
+    r.render_into(bench_pose(), ++seed, bgr);
     benchmark::DoNotOptimize(bgr.data);
   }
   state.SetItemsProcessed(state.iterations());
 }
-BENCHMARK(BM_RenderFrame)->Arg(1)->Arg(2)->ArgName("supersample")->MeasureProcessCPUTime()
-    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_RenderFrame)->Args({1, 1})->Args({1, 0})->Args({2, 0})
+    ->ArgNames({"supersample", "noise"})->MeasureProcessCPUTime()->Unit(benchmark::kMillisecond);
 
-void BM_RenderRemapOnly(benchmark::State& state) {
-  Renderer& r = bench_renderer(1);
-  const auto& rc = r.render_camera();
-  cv::Mat src(rc.height_px, rc.width_px, CV_8UC4, cv::Scalar(90, 120, 150, 255)), dst, m1, m2;
-  cv::convertMaps(rc.map_xy, cv::noArray(), m1, m2, CV_16SC2);
+void BM_RenderMeshOnly(benchmark::State& state) {
+  // A copy of the renderer's mesher (its faces and lens grid), rebuilt for the frame's pose.
+  shelfcross::render::LensMesher mesher = bench_renderer(1, true).lens_mesh();
   for (auto _ : state) {
-    cv::remap(src, dst, m1, m2, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
-    benchmark::DoNotOptimize(dst.data);
+    mesher.build(bench_pose());
+    benchmark::DoNotOptimize(mesher.vertices().data());
   }
+  state.counters["vertices"] = static_cast<double>(mesher.vertices().size());
+  state.counters["triangles"] = static_cast<double>(mesher.indices().size() / 3);
 }
-BENCHMARK(BM_RenderRemapOnly)->MeasureProcessCPUTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_RenderMeshOnly)->MeasureProcessCPUTime()->Unit(benchmark::kMillisecond);
 
-void BM_RenderConvertOnly(benchmark::State& state) {
-  cv::Mat src(720, 960, CV_8UC4, cv::Scalar(90, 120, 150, 255)), dst;
+void BM_RenderFinishOnly(benchmark::State& state) {
   cv::setNumThreads(1);
+  const shelfcross::render::SensorNoise noise(720, 960, 3, kDefaultNoise);
+  cv::Mat src(720, 960, CV_8UC4, cv::Scalar(90, 120, 150, 255)), dst;
+  std::uint64_t seed = 0;
   for (auto _ : state) {
-    cv::cvtColor(src, dst, cv::COLOR_RGBA2BGR);
+    noise.apply_rgba_to_bgr(src, dst, ++seed);
     benchmark::DoNotOptimize(dst.data);
   }
 }
-BENCHMARK(BM_RenderConvertOnly)->MeasureProcessCPUTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_RenderFinishOnly)->MeasureProcessCPUTime()->Unit(benchmark::kMillisecond);
 
 }  // namespace

@@ -1,12 +1,5 @@
 #include "render/camera_model.hpp"
 
-#include <algorithm>
-#include <cmath>
-#include <limits>
-#include <sstream>
-
-#include "render/render_error.hpp"
-
 namespace shelfcross::render {
 
 Eigen::Vector2d distort_normalized(const CameraIntrinsics& K, const Eigen::Vector2d& xy) {
@@ -39,62 +32,6 @@ bool undistort_normalized(const CameraIntrinsics& K, const Eigen::Vector2d& xy_d
 Eigen::Vector2d project_camera_point(const CameraIntrinsics& K, const Eigen::Vector3d& p_C) {
   const Eigen::Vector2d d = distort_normalized(K, {p_C.x() / p_C.z(), p_C.y() / p_C.z()});
   return {K.fx_px * d.x() + K.cx_px, K.fy_px * d.y() + K.cy_px};
-}
-
-RenderCamera make_render_camera(const CameraIntrinsics& K, int margin_px) {
-  if (K.width_px <= 0 || K.height_px <= 0 || !(K.fx_px > 0) || !(K.fy_px > 0)) {
-    std::ostringstream os;
-    os << "camera intrinsics invalid: need width, height, fx, fy > 0 (got " << K.width_px << " x "
-       << K.height_px << ", fx " << K.fx_px << ", fy " << K.fy_px << ")";
-    throw RenderError(os.str());
-  }
-  RenderCamera rc;
-  rc.fx_px = K.fx_px;
-  rc.fy_px = K.fy_px;
-  // Undistort every output pixel centre once; keep the normalised coordinates.
-  const int W = K.width_px, H = K.height_px;
-  cv::Mat xy_n(H, W, CV_64FC2);
-  double x_min = std::numeric_limits<double>::infinity(), x_max = -x_min;
-  double y_min = x_min, y_max = -x_min;
-  double worst = 0.0;
-  for (int v = 0; v < H; ++v) {
-    auto* row = xy_n.ptr<cv::Vec2d>(v);
-    for (int u = 0; u < W; ++u) {
-      const Eigen::Vector2d xy_d((u - K.cx_px) / K.fx_px, (v - K.cy_px) / K.fy_px);
-      Eigen::Vector2d xy;
-      if (!undistort_normalized(K, xy_d, xy)) {
-        std::ostringstream os;
-        os << "lens distortion (k1 " << K.k1 << ", k2 " << K.k2 << ", p1 " << K.p1 << ", p2 "
-           << K.p2 << ", k3 " << K.k3 << ") cannot be inverted at pixel (" << u << ", " << v
-           << "): the model folds over inside the image";
-        throw RenderError(os.str());
-      }
-      const Eigen::Vector2d back = distort_normalized(K, xy);
-      worst = std::max(worst, std::hypot((back.x() - xy_d.x()) * K.fx_px,
-                                         (back.y() - xy_d.y()) * K.fy_px));
-      row[u] = cv::Vec2d(xy.x(), xy.y());
-      x_min = std::min(x_min, xy.x());
-      x_max = std::max(x_max, xy.x());
-      y_min = std::min(y_min, xy.y());
-      y_max = std::max(y_max, xy.y());
-    }
-  }
-  rc.max_roundtrip_error_px = worst;
-  // Render pixel u' = fx x + cx'. Put x_min at margin px and size to x_max + margin.
-  rc.cx_px = std::floor(margin_px - K.fx_px * x_min) + (K.cx_px - std::floor(K.cx_px));
-  rc.cy_px = std::floor(margin_px - K.fy_px * y_min) + (K.cy_px - std::floor(K.cy_px));
-  rc.width_px = static_cast<int>(std::ceil(K.fx_px * x_max + rc.cx_px + margin_px)) + 1;
-  rc.height_px = static_cast<int>(std::ceil(K.fy_px * y_max + rc.cy_px + margin_px)) + 1;
-  rc.map_xy.create(H, W, CV_32FC2);
-  for (int v = 0; v < H; ++v) {
-    const auto* src = xy_n.ptr<cv::Vec2d>(v);
-    auto* dst = rc.map_xy.ptr<cv::Vec2f>(v);
-    for (int u = 0; u < W; ++u) {
-      dst[u] = cv::Vec2f(static_cast<float>(rc.fx_px * src[u][0] + rc.cx_px),
-                         static_cast<float>(rc.fy_px * src[u][1] + rc.cy_px));
-    }
-  }
-  return rc;
 }
 
 Eigen::Matrix4d gl_clip_from_camera(double fx, double fy, double cx, double cy, int width,

@@ -9,7 +9,6 @@
 // and pixel u = fx x_d + cx, v = fy y_d + cy (the formula of cv::projectPoints).
 
 #include <Eigen/Core>
-#include <opencv2/core/mat.hpp>
 
 #include "shelfcross/camera.hpp"
 
@@ -26,27 +25,6 @@ bool undistort_normalized(const CameraIntrinsics& K, const Eigen::Vector2d& xy_d
 
 /// Pixel of a camera-frame point (Z must be > 0): distortion then K.
 Eigen::Vector2d project_camera_point(const CameraIntrinsics& K, const Eigen::Vector3d& p_C);
-
-/// The undistorted pinhole camera the renderer rasterises with, and the map from the
-/// distorted output image into it.
-///
-/// The output image (width x height, distorted) covers, after undistortion, a region of the
-/// normalised plane a little different from its own rectangle. The render camera keeps fx, fy
-/// (same sampling density) and gets a principal point and size such that the undistorted
-/// image of every output pixel, plus a margin for bilinear interpolation, lies inside it.
-struct RenderCamera {
-  int width_px = 0, height_px = 0;  ///< size of the undistorted render
-  double fx_px = 0, fy_px = 0, cx_px = 0, cy_px = 0;
-  /// For output pixel (u, v): the render-image position it samples, CV_32FC2, output size.
-  cv::Mat map_xy;
-  /// Largest |distort(undistort(p)) - p| over the output pixels, in pixels (a check).
-  double max_roundtrip_error_px = 0.0;
-};
-
-/// Builds the render camera and distortion map; margin_px is the border kept around the
-/// undistorted footprint of the output image. Throws RenderError if the intrinsics are
-/// invalid or the lens model cannot be inverted over the image.
-RenderCamera make_render_camera(const CameraIntrinsics& K, int margin_px = 3);
 
 /// The OpenGL clip-from-camera matrix (column-major, for glUniformMatrix4fv) of a pinhole
 /// camera (fx, fy, cx, cy, width, height) looking along +z_C, with depth range [near, far].

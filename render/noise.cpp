@@ -4,6 +4,9 @@
 #include <cassert>
 #include <cmath>
 
+#include <opencv2/core/hal/intrin.hpp>
+#include <opencv2/imgproc.hpp>
+
 #include "shelfcross/random.hpp"
 
 namespace shelfcross::render {
@@ -39,6 +42,42 @@ void SensorNoise::apply(cv::Mat& image, std::uint64_t frame_seed) const {
     for (int c = 0; c < row_bytes; ++c) {
       const int v = p[c] + n[c];
       p[c] = static_cast<std::uint8_t>(v < 0 ? 0 : (v > 255 ? 255 : v));
+    }
+  }
+}
+
+void SensorNoise::apply_rgba_to_bgr(const cv::Mat& rgba, cv::Mat& bgr, std::uint64_t frame_seed) const {
+  assert(channels_ == 3 && rgba.type() == CV_8UC4 && rgba.rows == rows_ && rgba.cols == cols_);
+  bgr.create(rows_, cols_, CV_8UC3);
+  // The same window as apply().
+  const std::uint64_t h = mix64(frame_seed ^ 0xbb67ae8584caa73bULL);
+  const std::vector<std::int8_t>& field = fields_[h % kFields];
+  const int dx = static_cast<int>((h >> 8) % kMargin), dy = static_cast<int>((h >> 24) % kMargin);
+  const int row_bytes = cols_ * 3;
+  // Blocks of rows small enough to stay in the L2 cache between the conversion (OpenCV's own
+  // SIMD) and the noise pass over the same bytes.
+  constexpr int kBlockRows = 16;
+  for (int r0 = 0; r0 < rows_; r0 += kBlockRows) {
+    const int r1 = std::min(rows_, r0 + kBlockRows);
+    cv::Mat out = bgr.rowRange(r0, r1);
+    cv::cvtColor(rgba.rowRange(r0, r1), out, cv::COLOR_RGBA2BGR);
+    for (int r = r0; r < r1; ++r) {
+      std::uint8_t* p = bgr.ptr<std::uint8_t>(r);
+      const std::int8_t* n = field.data() + (static_cast<size_t>(r + dy) * field_cols_ + dx) * 3;
+      int c = 0;
+#if CV_SIMD128
+      // Saturating u8 + s8: with p' = p - 128 (flip the top bit), the signed saturating sum
+      // p' + n flipped back is min(255, max(0, p + n)).
+      const cv::v_uint8x16 bias = cv::v_setall_u8(0x80);
+      for (; c + 16 <= row_bytes; c += 16) {
+        const cv::v_int8x16 sum = cv::v_reinterpret_as_s8(cv::v_load(p + c) ^ bias) + cv::v_load(n + c);
+        cv::v_store(p + c, cv::v_reinterpret_as_u8(sum) ^ bias);
+      }
+#endif
+      for (; c < row_bytes; ++c) {
+        const int v = p[c] + n[c];
+        p[c] = static_cast<std::uint8_t>(v < 0 ? 0 : (v > 255 ? 255 : v));
+      }
     }
   }
 }

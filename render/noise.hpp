@@ -28,6 +28,12 @@ class SensorNoise {
   /// Adds one frame's noise to an 8-bit image of the size given at construction.
   void apply(cv::Mat& image, std::uint64_t frame_seed) const;
 
+  /// The renderer's last pass: `bgr` = RGBA -> BGR of `rgba` with this frame's noise added,
+  /// byte-identical to cv::cvtColor(rgba, bgr, COLOR_RGBA2BGR) followed by apply(bgr,
+  /// frame_seed), in one pass over memory (SIMD). Needs channels = 3 at construction, `rgba`
+  /// CV_8UC4 of the constructed size; `bgr` is (re)allocated CV_8UC3.
+  void apply_rgba_to_bgr(const cv::Mat& rgba, cv::Mat& bgr, std::uint64_t frame_seed) const;
+
  private:
   int rows_, cols_, channels_, field_cols_;
   std::vector<std::vector<std::int8_t>> fields_;  // (rows + kMargin) x (cols + kMargin) x channels

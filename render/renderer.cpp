@@ -14,19 +14,12 @@
 #include <opencv2/aruco.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "render/lens_mesh.hpp"
 #include "render/noise.hpp"
 #include "render/scene.hpp"
 
 namespace shelfcross::render {
 namespace {
-
-// One vertex of the static world: position in W, final sRGB colour of its face (lighting
-// baked in), texture coordinate in the marker atlas (unused by untextured faces).
-struct Vertex {
-  float p_W[3];
-  float rgb[3];
-  float uv[2];
-};
 
 // Printed black is not black: ~4 % reflectance; in the sRGB-encoded product texel * colour
 // this is about 0.2 of white.
@@ -42,15 +35,26 @@ double srgb_encode(double linear) {
   return c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055;
 }
 
-const char* kVertexShader = R"(#version 330 core
-layout(location = 0) in vec3 p_W;
+// Vertices arrive in clip coordinates, the lens already applied (lens_mesh.hpp). Flat faces
+// pass on only their colour (fewer interpolants: cheaper triangle set-up on llvmpipe).
+const char* kFlatVertexShader = R"(#version 330 core
+layout(location = 0) in vec4 clip;
+layout(location = 1) in vec3 rgb;
+flat out vec3 v_rgb;
+void main() {
+  gl_Position = clip;
+  v_rgb = rgb;
+}
+)";
+
+const char* kTexturedVertexShader = R"(#version 330 core
+layout(location = 0) in vec4 clip;
 layout(location = 1) in vec3 rgb;
 layout(location = 2) in vec2 uv;
-uniform mat4 clip_from_world;
 flat out vec3 v_rgb;
 out vec2 v_uv;
 void main() {
-  gl_Position = clip_from_world * vec4(p_W, 1.0);
+  gl_Position = clip;
   v_rgb = rgb;
   v_uv = uv;
 }
@@ -60,7 +64,6 @@ void main() {
 // the rest of the pipeline, so only marker faces pay for it.)
 const char* kFlatFragmentShader = R"(#version 330 core
 flat in vec3 v_rgb;
-in vec2 v_uv;
 layout(location = 0) out vec4 colour;
 void main() {
   colour = vec4(v_rgb, 1.0);
@@ -121,10 +124,10 @@ void check_gl(const char* where) {
   }
 }
 
-// Builds the triangles of the whole static world.
-class MeshBuilder {
+// Builds the faces of the whole static world (lens_mesh.hpp turns them into triangles per frame).
+class FaceBuilder {
  public:
-  MeshBuilder(const Lighting& lighting, double light_scale)
+  FaceBuilder(const Lighting& lighting, double light_scale)
       : lighting_(lighting), light_scale_(light_scale) {
     light_to_W_ = -lighting.direction_W.normalized();
   }
@@ -133,37 +136,29 @@ class MeshBuilder {
   double shade(const Eigen::Vector3d& n_W) const {
     return lighting_.ambient + lighting_.directional * std::max(0.0, n_W.dot(light_to_W_));
   }
+  // The face's 8-bit colour k / 255, k = round(255 srgb): the byte GL writes for it, whether
+  // a fragment or a clear (renderer.cpp clears to a room face's colour) writes it.
   Eigen::Vector3f colour(const Rgb& albedo, double shade_factor) const {
     const double k = shade_factor * light_scale_;
-    return {static_cast<float>(srgb_encode(albedo.r * k)),
-            static_cast<float>(srgb_encode(albedo.g * k)),
-            static_cast<float>(srgb_encode(albedo.b * k))};
+    auto byte = [](double linear) {
+      return static_cast<float>(std::nearbyint(255.0 * srgb_encode(linear)) / 255.0);
+    };
+    return {byte(albedo.r * k), byte(albedo.g * k), byte(albedo.b * k)};
   }
 
-  // Quad c0 c1 c2 c3 (in order around its edge) as triangles (0 1 2) (0 2 3).
-  static void quad(const std::array<Eigen::Vector3d, 4>& c, const Eigen::Vector3f& rgb,
-                   const std::array<Eigen::Vector2f, 4>& uv, std::vector<Vertex>& out) {
-    for (int k : {0, 1, 2, 0, 2, 3}) {
-      Vertex v;
-      for (int a = 0; a < 3; ++a) {
-        v.p_W[a] = static_cast<float>(c[static_cast<size_t>(k)][a]);
-        v.rgb[a] = rgb[a];
-      }
-      v.uv[0] = uv[static_cast<size_t>(k)].x();
-      v.uv[1] = uv[static_cast<size_t>(k)].y();
-      out.push_back(v);
-    }
-  }
-  void flat_quad(const std::array<Eigen::Vector3d, 4>& c, const Eigen::Vector3f& rgb) {
-    const Eigen::Vector2f uv0 = Eigen::Vector2f::Zero();
-    quad(c, rgb, {uv0, uv0, uv0, uv0}, flat_);
-  }
-  void textured_quad(const std::array<Eigen::Vector3d, 4>& c, const Eigen::Vector3f& rgb,
-                     const std::array<Eigen::Vector2f, 4>& uv) {
-    quad(c, rgb, uv, textured_);
+  // A quad c0 c1 c2 c3 (in order around its edge), seen from the side n_W points to.
+  void face(FaceGroup group, const std::array<Eigen::Vector3d, 4>& c, const Eigen::Vector3d& n_W,
+            const Eigen::Vector3f& rgb, const std::array<Eigen::Vector2f, 4>& uv = {}) {
+    MeshFace f;
+    f.corners_W_m = c;
+    f.normal_W = n_W;
+    f.rgb = rgb;
+    f.uv = uv;
+    faces_[static_cast<std::size_t>(group)].push_back(f);
   }
 
-  // An axis-aligned box [lo, hi] in a frame X_WF: six faces, lit by their outward normals.
+  // An axis-aligned box [lo, hi] in a frame X_WF: six faces, lit by and seen along their
+  // outward normals.
   void cuboid(const Eigen::Isometry3d& X_WF, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
               const Rgb& albedo) {
     for (int axis = 0; axis < 3; ++axis) {
@@ -180,20 +175,19 @@ class MeshBuilder {
           p[a2] = uv_a[k][1] ? hi[a2] : lo[a2];
           c[static_cast<size_t>(k)] = X_WF * p;
         }
-        flat_quad(c, colour(albedo, shade(X_WF.linear() * n_F)));
+        const Eigen::Vector3d n_W = X_WF.linear() * n_F;
+        face(kFlatFaces, c, n_W, colour(albedo, shade(n_W)));
       }
     }
   }
 
-  /// Untextured faces (drawn first, with the flat-colour program), then marker faces.
-  const std::vector<Vertex>& flat() const { return flat_; }
-  const std::vector<Vertex>& textured() const { return textured_; }
+  std::vector<MeshFace>& faces(FaceGroup group) { return faces_[static_cast<std::size_t>(group)]; }
 
  private:
   Lighting lighting_;
   double light_scale_;
   Eigen::Vector3d light_to_W_;
-  std::vector<Vertex> flat_, textured_;
+  std::array<std::vector<MeshFace>, kFaceGroups> faces_;
 };
 
 Eigen::Isometry3d interpolate_pose(const Eigen::Isometry3d& X0, const Eigen::Isometry3d& X1,
@@ -211,40 +205,46 @@ struct Renderer::Impl {
   Warehouse warehouse;
   CameraIntrinsics K;
   RenderOptions options;
-  RenderCamera camera;       // 1x undistorted render camera and float map
-  int hi_width = 0, hi_height = 0;  // render size x supersample
-  Eigen::Matrix4d clip_from_camera = Eigen::Matrix4d::Identity();
+  LensMesher mesher;
+  int hi_width = 0, hi_height = 0;  // image size x supersample
   EglContext egl;
   std::string gl_renderer, gl_version;
 
-  GLuint flat_program = 0, textured_program = 0, vao = 0, vbo = 0, fbo = 0, colour_rb = 0, depth_rb = 0, atlas = 0;
-  GLint flat_clip_loc = -1, textured_clip_loc = -1;
-  GLsizei flat_count = 0, textured_count = 0;
+  GLuint flat_program = 0, textured_program = 0, vao = 0, vbo = 0, ibo = 0, fbo = 0,
+         colour_rb = 0, depth_rb = 0, atlas = 0;
+  // Every non-room face lies inside the arena box, so the room (whose visible faces never
+  // overlap: the inside of a convex box) can be drawn first without the depth test.
+  bool room_first = false;
+  // The world box the room's faces bound, and the largest |(x, y, 1)| over the lens region
+  // (for the test that the room covers every pixel, see draw_and_read).
+  Eigen::AlignedBox3d arena;
+  double max_ray_stretch = 1.0;
 
-  cv::Mat map1, map2;        // fixed-point remap maps (CV_16SC2 + CV_16UC1)
   std::unique_ptr<SensorNoise> noise;  // when options.noise_stddev > 0
-  cv::Mat rgba_hi, rgba, acc, distorted_rgba;  // per-frame RGBA buffers, allocated once
+  cv::Mat rgba_hi, rgba, acc;          // per-frame RGBA buffers, allocated once
 
   Impl(const Warehouse& w, const CameraIntrinsics& k, const RenderOptions& o)
-      : warehouse(w), K(k), options(o), egl(o.egl_platform) {}
+      : warehouse(w),
+        K(k),
+        options(o),
+        mesher(k, o.supersample, o.near_m, o.far_m, kLensChordTolerance_px),
+        hi_width(k.width_px * o.supersample),
+        hi_height(k.height_px * o.supersample),
+        egl(o.egl_platform) {
+    const LensGrid& g = mesher.grids().edges;
+    for (double x : {g.x_lines.front(), g.x_lines.back()})
+      for (double y : {g.y_lines.front(), g.y_lines.back()})
+        max_ray_stretch = std::max(max_ray_stretch, std::sqrt(1.0 + x * x + y * y));
+  }
 
   void build(const SceneLayout& layout);
   void release_gl();  // deletes the GL objects build() made (context current)
-  void draw_and_read(const Eigen::Isometry3d& X_WC);  // -> rgba (1x render size)
+  void draw_and_read(const Eigen::Isometry3d& X_WC);  // -> rgba (1x image size)
   void finish(std::uint64_t noise_seed, cv::Mat& bgr);
+  cv::Mat& image() { return options.supersample > 1 ? rgba : rgba_hi; }
 };
 
 void Renderer::Impl::build(const SceneLayout& layout) {
-  const int s = options.supersample;
-  hi_width = camera.width_px * s;
-  hi_height = camera.height_px * s;
-  // Supersampled camera: hi-res pixel u_s = s u + (s - 1)/2 has the same centre as the
-  // s x s block average that INTER_AREA assigns to 1x pixel u.
-  clip_from_camera =
-      gl_clip_from_camera(s * camera.fx_px, s * camera.fy_px, s * camera.cx_px + 0.5 * (s - 1),
-                          s * camera.cy_px + 0.5 * (s - 1), hi_width, hi_height, options.near_m,
-                          options.far_m);
-
   // ---- marker atlas: tile 0 white, then one tile per distinct marker ID ----
   const int tile = layout.marker_bits + 2 + 2 * kQuietZoneCells;
   std::map<int, int> tile_of_id;
@@ -265,60 +265,59 @@ void Renderer::Impl::build(const SceneLayout& layout) {
   atlas_img.setTo(cv::Scalar(kBlackTexel), atlas_img == 0);
 
   // ---- static world ----
-  MeshBuilder mesh(warehouse.lighting, options.light_scale);
+  FaceBuilder mesh(warehouse.lighting, options.light_scale);
   for (const Cuboid& c : layout.cuboids) {
     const Rgb& albedo = c.kind == Cuboid::Kind::kBox ? warehouse.box_colour : warehouse.bar_colour;
     mesh.cuboid(layout.X_WS[static_cast<size_t>(c.shelf)], c.min_S_m, c.max_S_m, albedo);
   }
   for (const TagQuad& t : layout.tags) {
-    mesh.flat_quad(t.corners_W_m,
-                   mesh.colour(warehouse.tag_colour, kTagFlat + (1.0 - kTagFlat) * mesh.shade(t.normal_W)));
+    mesh.face(kDecalFaces, t.corners_W_m, t.normal_W,
+              mesh.colour(warehouse.tag_colour, kTagFlat + (1.0 - kTagFlat) * mesh.shade(t.normal_W)));
     // Tags are coloured on their outer side only: half-way between the tag and the bar, a
-    // backing square in the bar colour is what shows from inside the shelf (a tag of the
-    // back face seen through the cells from the front is not a tag blob).
+    // backing square in the bar colour, facing inward, is what shows from inside the shelf (a
+    // tag of the back face seen through the cells from the front is not a tag blob).
     std::array<Eigen::Vector3d, 4> back = t.corners_W_m;
     for (auto& c : back) c -= 0.5 * kSurfaceOffset_m * t.normal_W;
-    mesh.flat_quad(back, mesh.colour(warehouse.bar_colour, mesh.shade(-t.normal_W)));
+    mesh.face(kFlatFaces, back, -t.normal_W, mesh.colour(warehouse.bar_colour, mesh.shade(-t.normal_W)));
   }
-  // Room: floor, ceiling, four walls, as the inside of the arena box (normals inward); after
-  // the shelves, so that the early depth test skips most of their hidden pixels.
-  {
-    const Eigen::Vector3d lo = warehouse.arena_min_W_m, hi = warehouse.arena_max_W_m;
-    const Eigen::Isometry3d I = Eigen::Isometry3d::Identity();
-    auto room_face = [&](int axis, bool high, const Rgb& albedo) {
-      // One face of the arena box, lit by its inward normal.
-      const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
-      std::array<Eigen::Vector3d, 4> c;
-      const double uv_a[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-      for (int k = 0; k < 4; ++k) {
-        Eigen::Vector3d p;
-        p[axis] = high ? hi[axis] : lo[axis];
-        p[a1] = uv_a[k][0] ? hi[a1] : lo[a1];
-        p[a2] = uv_a[k][1] ? hi[a2] : lo[a2];
-        c[static_cast<size_t>(k)] = I * p;
-      }
-      Eigen::Vector3d n = Eigen::Vector3d::Zero();
-      n[axis] = high ? -1.0 : 1.0;
-      mesh.flat_quad(c, mesh.colour(albedo, mesh.shade(n)));
-    };
-    room_face(2, false, warehouse.floor_colour);
-    room_face(2, true, warehouse.wall_colour);
-    for (int axis : {0, 1})
-      for (bool high : {false, true}) room_face(axis, high, warehouse.wall_colour);
-  }
+  // Room: floor, ceiling, four walls, as the inside of the arena box (normals inward).
+  const Eigen::Vector3d lo = warehouse.arena_min_W_m, hi = warehouse.arena_max_W_m;
+  arena = Eigen::AlignedBox3d(lo, hi);
+  auto room_face = [&](int axis, bool high, const Rgb& albedo) {
+    // One face of the arena box, lit by and seen along its inward normal.
+    const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+    std::array<Eigen::Vector3d, 4> c;
+    const double uv_a[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    for (int k = 0; k < 4; ++k) {
+      Eigen::Vector3d p;
+      p[axis] = high ? hi[axis] : lo[axis];
+      p[a1] = uv_a[k][0] ? hi[a1] : lo[a1];
+      p[a2] = uv_a[k][1] ? hi[a2] : lo[a2];
+      c[static_cast<size_t>(k)] = p;
+    }
+    Eigen::Vector3d n = Eigen::Vector3d::Zero();
+    n[axis] = high ? -1.0 : 1.0;
+    mesh.face(kRoomFaces, c, n, mesh.colour(albedo, mesh.shade(n)));
+  };
+  room_face(2, false, warehouse.floor_colour);
+  room_face(2, true, warehouse.wall_colour);
+  for (int axis : {0, 1})
+    for (bool high : {false, true}) room_face(axis, high, warehouse.wall_colour);
   for (const MarkerQuad& m : layout.markers) {
     const float u0 = static_cast<float>(tile_of_id.at(m.marker_id) * tile) / atlas_w;
     const float u1 = static_cast<float>((tile_of_id.at(m.marker_id) + 1) * tile) / atlas_w;
     // Corners TL TR BR BL <- image rows top (v = 0) to bottom (v = 1).
-    mesh.textured_quad(m.quiet_corners_W_m,
+    mesh.face(kTexturedFaces, m.quiet_corners_W_m, m.normal_W,
               mesh.colour({kPaperAlbedo, kPaperAlbedo, kPaperAlbedo}, mesh.shade(m.normal_W)),
               {Eigen::Vector2f(u0, 0.f), Eigen::Vector2f(u1, 0.f), Eigen::Vector2f(u1, 1.f),
                Eigen::Vector2f(u0, 1.f)});
   }
-  flat_count = static_cast<GLsizei>(mesh.flat().size());
-  textured_count = static_cast<GLsizei>(mesh.textured().size());
-  std::vector<Vertex> vertices = mesh.flat();
-  vertices.insert(vertices.end(), mesh.textured().begin(), mesh.textured().end());
+  room_first = true;
+  for (FaceGroup g : {kFlatFaces, kDecalFaces, kTexturedFaces})
+    for (const MeshFace& f : mesh.faces(g))
+      for (const Eigen::Vector3d& c : f.corners_W_m) room_first = room_first && arena.contains(c);
+  for (FaceGroup g : {kRoomFaces, kFlatFaces, kDecalFaces, kTexturedFaces})
+    mesher.set_faces(g, std::move(mesh.faces(g)));
 
   // ---- GL objects ----
   egl.make_current();
@@ -327,10 +326,8 @@ void Renderer::Impl::build(const SceneLayout& layout) {
   gl_renderer = r ? r : "?";
   gl_version = v ? v : "?";
 
-  flat_program = link_program(kVertexShader, kFlatFragmentShader);
-  flat_clip_loc = glGetUniformLocation(flat_program, "clip_from_world");
-  textured_program = link_program(kVertexShader, kTexturedFragmentShader);
-  textured_clip_loc = glGetUniformLocation(textured_program, "clip_from_world");
+  flat_program = link_program(kFlatVertexShader, kFlatFragmentShader);
+  textured_program = link_program(kTexturedVertexShader, kTexturedFragmentShader);
   glUseProgram(textured_program);
   glUniform1i(glGetUniformLocation(textured_program, "atlas"), 0);
 
@@ -338,14 +335,14 @@ void Renderer::Impl::build(const SceneLayout& layout) {
   glBindVertexArray(vao);
   glGenBuffers(1, &vbo);
   glBindBuffer(GL_ARRAY_BUFFER, vbo);
-  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(Vertex)),
-               vertices.data(), GL_STATIC_DRAW);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex),
-                        reinterpret_cast<const void*>(offsetof(Vertex, p_W)));
-  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex),
-                        reinterpret_cast<const void*>(offsetof(Vertex, rgb)));
-  glVertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, sizeof(Vertex),
-                        reinterpret_cast<const void*>(offsetof(Vertex, uv)));
+  glGenBuffers(1, &ibo);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ibo);  // part of the VAO's state
+  glVertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, sizeof(GpuVertex),
+                        reinterpret_cast<const void*>(offsetof(GpuVertex, clip)));
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(GpuVertex),
+                        reinterpret_cast<const void*>(offsetof(GpuVertex, rgb)));
+  glVertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, sizeof(GpuVertex),
+                        reinterpret_cast<const void*>(offsetof(GpuVertex, uv)));
   for (GLuint a : {0u, 1u, 2u}) glEnableVertexAttribArray(a);
 
   glGenTextures(1, &atlas);
@@ -384,42 +381,94 @@ void Renderer::Impl::build(const SceneLayout& layout) {
     throw RenderError(os.str());
   }
   glViewport(0, 0, hi_width, hi_height);
-  glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
-  glDisable(GL_CULL_FACE);
+  // Faces are clipped against the near and far planes in 3-D already (lens_mesh.cpp); depth
+  // clamping keeps GL from clipping again at z_ndc = -1 +- rounding.
+  glEnable(GL_DEPTH_CLAMP);
+  glDisable(GL_CULL_FACE);  // culled per face on the CPU
   glDisable(GL_DITHER);
   glDisable(GL_MULTISAMPLE);
   glDisable(GL_BLEND);
-  glClearColor(0.f, 0.f, 0.f, 1.f);
+  glPolygonOffset(-static_cast<float>(std::ceil(mesher.grids().edges_interior_bound_px) + 1.0), -1.f);
   glPixelStorei(GL_PACK_ALIGNMENT, 4);
   check_gl("renderer initialisation");
 
-  // ---- per-frame buffers and the fixed-point distortion map, once ----
+  // ---- per-frame buffers, once ----
   rgba_hi.create(hi_height, hi_width, CV_8UC4);
-  rgba.create(camera.height_px, camera.width_px, CV_8UC4);
-  distorted_rgba.create(K.height_px, K.width_px, CV_8UC4);
-  cv::convertMaps(camera.map_xy, cv::noArray(), map1, map2, CV_16SC2);
+  rgba.create(K.height_px, K.width_px, CV_8UC4);
 }
 
 void Renderer::Impl::draw_and_read(const Eigen::Isometry3d& X_WC) {
   egl.make_current();
-  const Eigen::Matrix4f clip_from_world =
-      (clip_from_camera * X_WC.inverse(Eigen::Isometry).matrix()).cast<float>();
+  mesher.build(X_WC);
+  const std::vector<GpuVertex>& vertices = mesher.vertices();
+  const std::vector<std::uint32_t>& indices = mesher.indices();
   glBindFramebuffer(GL_FRAMEBUFFER, fbo);
   glBindVertexArray(vao);
-  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-  // Two draw calls for the whole static world: flat faces, then marker faces.
-  glUseProgram(flat_program);
-  glUniformMatrix4fv(flat_clip_loc, 1, GL_FALSE, clip_from_world.data());
-  glDrawArrays(GL_TRIANGLES, 0, flat_count);
-  if (textured_count > 0) {
-    glUseProgram(textured_program);
-    glUniformMatrix4fv(textured_clip_loc, 1, GL_FALSE, clip_from_world.data());
-    glDrawArrays(GL_TRIANGLES, flat_count, textured_count);
+  glBindBuffer(GL_ARRAY_BUFFER, vbo);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(GpuVertex)),
+               vertices.data(), GL_STREAM_DRAW);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(std::uint32_t)),
+               indices.data(), GL_STREAM_DRAW);
+  // The room covers every pixel when the camera is inside the arena, farther than the near
+  // plane from every wall along every ray (Z >= distance / max |(x, y, 1)|) and nearer than the
+  // far plane to every corner (each pixel then shows exactly one room face or something in
+  // front of it).
+  const Eigen::Vector3d p = X_WC.translation();
+  const double wall_distance = std::min((p - arena.min()).minCoeff(), (arena.max() - p).minCoeff());
+  double farthest = 0.0;
+  for (int c = 0; c < 8; ++c)
+    farthest = std::max(farthest, (arena.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c)) - p).norm());
+  const bool room_covers = room_first && wall_distance > options.near_m * max_ray_stretch &&
+                           farthest < options.far_m;
+  // When the room covers the view, its largest face is not drawn: the colour clear (a fill of
+  // the tiles, cheaper than shading their fragments) paints it, and the room's other faces
+  // and everything else are drawn over it.
+  const std::vector<LensMesher::FaceSpan>& room = mesher.room_spans();
+  std::size_t skipped = room.size();
+  if (room_covers) {
+    for (std::size_t k = 0; k < room.size(); ++k)
+      if (skipped == room.size() || room[k].area_px2 > room[skipped].area_px2) skipped = k;
   }
+  if (skipped < room.size()) {
+    const Eigen::Vector3f& c = room[skipped].rgb;
+    glClearColor(c.x(), c.y(), c.z(), 1.f);
+  } else {
+    glClearColor(0.f, 0.f, 0.f, 1.f);
+  }
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  auto draw_range = [&](std::size_t a, std::size_t b) {
+    if (b > a)
+      glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(b - a), GL_UNSIGNED_INT,
+                     reinterpret_cast<const void*>(a * sizeof(std::uint32_t)));
+  };
+  auto draw = [&](int first_group, int end_group) {
+    draw_range(mesher.first_index(first_group), mesher.first_index(end_group));
+  };
+  glUseProgram(flat_program);
+  if (room_first) {
+    // The room first, no depth test (its visible faces never overlap; everything else is in
+    // front of it), then the rest with it.
+    glDisable(GL_DEPTH_TEST);
+    for (std::size_t k = 0; k < room.size(); ++k)
+      if (k != skipped) draw_range(room[k].first_index, room[k].end_index);
+    glEnable(GL_DEPTH_TEST);
+    draw(kFlatFaces, kDecalFaces);
+  } else {
+    glEnable(GL_DEPTH_TEST);
+    draw(kRoomFaces, kDecalFaces);
+  }
+  // Decals a millimetre off their surface: the depth of a large flat face is interpolated
+  // across its lens cell and may sit up to edges_interior_bound_px pixels' worth of depth
+  // slope off (lens_mesh.hpp), so decals are pulled forward by that much plus one pixel.
+  glEnable(GL_POLYGON_OFFSET_FILL);
+  draw(kDecalFaces, kTexturedFaces);
+  glUseProgram(textured_program);
+  draw(kTexturedFaces, kFaceGroups);
+  glDisable(GL_POLYGON_OFFSET_FILL);
   // Rows come back bottom GL row first = image row 0 first (see gl_clip_from_camera).
   // RGBA, the renderbuffer's own layout on Mesa: a plain copy (BGRA costs a swizzle pass,
-  // ~6x slower on llvmpipe); the channel order is fixed in the final cvtColor.
+  // ~6x slower on llvmpipe); the channel order is fixed in finish().
   glReadPixels(0, 0, hi_width, hi_height, GL_RGBA, GL_UNSIGNED_BYTE, rgba_hi.data);
   check_gl("draw and readback");
   if (options.supersample > 1) {
@@ -429,12 +478,12 @@ void Renderer::Impl::draw_and_read(const Eigen::Isometry3d& X_WC) {
 }
 
 void Renderer::Impl::finish(std::uint64_t noise_seed, cv::Mat& bgr) {
-  const cv::Mat& undistorted = options.supersample > 1 ? rgba : rgba_hi;
-  cv::remap(undistorted, distorted_rgba, map1, map2, cv::INTER_LINEAR, cv::BORDER_CONSTANT,
-            cv::Scalar(0, 0, 0, 255));
   bgr.create(K.height_px, K.width_px, CV_8UC3);
-  cv::cvtColor(distorted_rgba, bgr, cv::COLOR_RGBA2BGR);
-  if (noise) noise->apply(bgr, noise_seed);
+  if (noise) {
+    noise->apply_rgba_to_bgr(image(), bgr, noise_seed);
+  } else {
+    cv::cvtColor(image(), bgr, cv::COLOR_RGBA2BGR);
+  }
 }
 
 Renderer::Renderer(const Warehouse& warehouse, const CameraIntrinsics& intrinsics,
@@ -452,15 +501,7 @@ Renderer::Renderer(const Warehouse& warehouse, const CameraIntrinsics& intrinsic
     throw RenderError(os.str());
   }
   const SceneLayout layout = build_scene_layout(warehouse);  // validates before EGL
-  RenderCamera camera = make_render_camera(intrinsics);
-  if (camera.max_roundtrip_error_px > 1e-3) {
-    std::ostringstream os;
-    os << "lens distortion cannot be inverted accurately over the image (round trip error "
-       << camera.max_roundtrip_error_px << " px)";
-    throw RenderError(os.str());
-  }
   impl_ = std::make_unique<Impl>(warehouse, intrinsics, options);
-  impl_->camera = std::move(camera);
   if (options.noise_stddev > 0.0) {
     impl_->noise = std::make_unique<SensorNoise>(intrinsics.height_px, intrinsics.width_px, 3, options.noise_stddev);
   }
@@ -473,10 +514,11 @@ void Renderer::Impl::release_gl() {
   glDeleteRenderbuffers(1, &depth_rb);
   glDeleteTextures(1, &atlas);
   glDeleteBuffers(1, &vbo);
+  glDeleteBuffers(1, &ibo);
   glDeleteVertexArrays(1, &vao);
   glDeleteProgram(flat_program);
   glDeleteProgram(textured_program);
-  fbo = colour_rb = depth_rb = atlas = vbo = vao = flat_program = textured_program = 0;
+  fbo = colour_rb = depth_rb = atlas = vbo = ibo = vao = flat_program = textured_program = 0;
 }
 
 void Renderer::set_warehouse(const Warehouse& warehouse) {
@@ -526,20 +568,20 @@ void Renderer::render_blurred_into(const Eigen::Isometry3d& X_WC_prev,
     return;
   }
   Impl& m = *impl_;
-  cv::Mat& undistorted = m.options.supersample > 1 ? m.rgba : m.rgba_hi;
-  m.acc.create(undistorted.size(), CV_16UC4);
+  cv::Mat& image = m.image();
+  m.acc.create(image.size(), CV_16UC4);
   m.acc.setTo(cv::Scalar::all(0));
   for (int k = 0; k < n; ++k) {
     const Eigen::Isometry3d X =
         k == n - 1 ? X_WC : interpolate_pose(X_WC_prev, X_WC, static_cast<double>(k + 1) / n);
     m.draw_and_read(X);
-    cv::add(m.acc, undistorted, m.acc, cv::noArray(), CV_16U);
+    cv::add(m.acc, image, m.acc, cv::noArray(), CV_16U);
   }
   // Integer mean rounded half up: (sum + n/2) / n, exact (sum <= 64 * 255).
   const int half = n / 2;
   for (int r = 0; r < m.acc.rows; ++r) {
     const std::uint16_t* a = m.acc.ptr<std::uint16_t>(r);
-    std::uint8_t* o = undistorted.ptr<std::uint8_t>(r);
+    std::uint8_t* o = image.ptr<std::uint8_t>(r);
     for (int c = 0; c < m.acc.cols * 4; ++c) o[c] = static_cast<std::uint8_t>((a[c] + half) / n);
   }
   m.finish(noise_seed, bgr);
@@ -554,6 +596,6 @@ std::string Renderer::backend_description() const {
 
 const CameraIntrinsics& Renderer::intrinsics() const { return impl_->K; }
 const RenderOptions& Renderer::options() const { return impl_->options; }
-const RenderCamera& Renderer::render_camera() const { return impl_->camera; }
+const LensMesher& Renderer::lens_mesh() const { return impl_->mesher; }
 
 }  // namespace shelfcross::render

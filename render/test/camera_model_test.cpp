@@ -8,6 +8,7 @@
 
 #include "render/camera_model.hpp"
 #include "render/ground_truth.hpp"
+#include "render/lens_mesh.hpp"
 #include "render/render_error.hpp"
 #include "test_warehouse.hpp"
 
@@ -41,33 +42,6 @@ TEST(CameraModel, UndistortInvertsDistort) {
       EXPECT_NEAR(back.y(), y, 1e-12);
     }
   }
-}
-
-TEST(CameraModel, RenderCameraCoversTheImageAndMapIsExact) {
-  const CameraIntrinsics K;
-  const RenderCamera rc = make_render_camera(K);
-  EXPECT_LT(rc.max_roundtrip_error_px, 1e-6);
-  ASSERT_EQ(rc.map_xy.size(), cv::Size(K.width_px, K.height_px));
-  // Every sample position lies inside the render with room for bilinear interpolation.
-  double mn = 1e9, mx_u = -1e9, mx_v = -1e9;
-  for (int v = 0; v < K.height_px; ++v)
-    for (int u = 0; u < K.width_px; ++u) {
-      const cv::Vec2f m = rc.map_xy.at<cv::Vec2f>(v, u);
-      mn = std::min({mn, double(m[0]), double(m[1])});
-      mx_u = std::max(mx_u, double(m[0]));
-      mx_v = std::max(mx_v, double(m[1]));
-    }
-  EXPECT_GE(mn, 1.0);
-  EXPECT_LE(mx_u, rc.width_px - 2.0);
-  EXPECT_LE(mx_v, rc.height_px - 2.0);
-  // Output pixel (u, v) samples the render where the pinhole render camera sees the ray
-  // that the distorted camera sees at (u, v).
-  const int u = 37, v = 690;
-  const cv::Vec2f m = rc.map_xy.at<cv::Vec2f>(v, u);
-  const Eigen::Vector3d ray((m[0] - rc.cx_px) / rc.fx_px, (m[1] - rc.cy_px) / rc.fy_px, 1.0);
-  const Eigen::Vector2d px = project_camera_point(K, ray);
-  EXPECT_NEAR(px.x(), u, 1e-3);  // float map: ~1e-4 px
-  EXPECT_NEAR(px.y(), v, 1e-3);
 }
 
 TEST(CameraModel, GlProjectionHitsOpenCvPixelCentres) {
@@ -115,10 +89,10 @@ TEST(CameraModel, ProjectorEqualsOpenCvForWorldPoints) {
 TEST(CameraModel, InvalidIntrinsicsAreRefused) {
   CameraIntrinsics K;
   K.fx_px = 0.0;
-  EXPECT_THROW(make_render_camera(K), RenderError);
+  EXPECT_THROW(make_lens_grids(K, 0.2), RenderError);
   K = CameraIntrinsics{};
   K.k1 = -2.0;  // folds over inside the image
-  EXPECT_THROW(make_render_camera(K), RenderError);
+  EXPECT_THROW(make_lens_grids(K, 0.2), RenderError);
 }
 
 }  // namespace

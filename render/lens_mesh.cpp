@@ -1,0 +1,409 @@
+#include "render/lens_mesh.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "render/camera_model.hpp"
+#include "render/render_error.hpp"
+
+namespace shelfcross::render {
+namespace {
+
+using Vec2 = Eigen::Vector2d;
+using Vec3 = Eigen::Vector3d;
+
+Vec2 pixel_1x(const CameraIntrinsics& K, const Vec2& xy) {
+  const Vec2 d = distort_normalized(K, xy);
+  return {K.fx_px * d.x() + K.cx_px, K.fy_px * d.y() + K.cy_px};
+}
+
+// The point where segment a-b crosses coordinate[axis] = value, computed from the end points
+// in a canonical order (so that a segment shared by two polygons, traversed in opposite
+// directions, gives bit-identical points) and with that coordinate set exactly.
+Vec2 cross_line(Vec2 a, Vec2 b, int axis, double value) {
+  if (b.x() < a.x() || (b.x() == a.x() && b.y() < a.y())) std::swap(a, b);
+  const double t = (value - a[axis]) / (b[axis] - a[axis]);
+  Vec2 q = a + t * (b - a);
+  q[axis] = value;
+  return q;
+}
+
+// Sutherland-Hodgman for both sides at once: the parts of convex `p` with coordinate[axis] <=
+// value (into lo, if given) and >= value (into hi, if given). A crossing point is computed
+// once and goes to both sides.
+void split_line(const std::vector<Vec2>& p, int axis, double value, std::vector<Vec2>* lo,
+                std::vector<Vec2>* hi) {
+  if (lo) lo->clear();
+  if (hi) hi->clear();
+  const std::size_t n = p.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec2& a = p[i];
+    const Vec2& b = p[(i + 1) % n];
+    const double da = a[axis] - value, db = b[axis] - value;
+    if (da <= 0.0 && lo) lo->push_back(a);
+    if (da >= 0.0 && hi) hi->push_back(a);
+    if ((da < 0.0 && db > 0.0) || (da > 0.0 && db < 0.0)) {
+      const Vec2 q = cross_line(a, b, axis, value);
+      if (lo) lo->push_back(q);
+      if (hi) hi->push_back(q);
+    }
+  }
+}
+
+// Splits `poly` along the interior lines of `lines` (axis 0: x, 1: y) and hands each part to
+// `part` in ascending order. `poly` must already lie within [lines.front(), lines.back()].
+template <class Part>
+void split_along(std::vector<Vec2>& poly, int axis, const std::vector<double>& lines,
+                 std::vector<Vec2>& lo, std::vector<Vec2>& hi, Part&& part) {
+  double mn = std::numeric_limits<double>::infinity(), mx = -mn;
+  for (const Vec2& v : poly) mn = std::min(mn, v[axis]), mx = std::max(mx, v[axis]);
+  // First interior line strictly above mn.
+  auto it = std::upper_bound(lines.begin() + 1, lines.end() - 1, mn);
+  for (; it != lines.end() - 1 && *it < mx; ++it) {
+    split_line(poly, axis, *it, &lo, &hi);
+    if (lo.size() >= 3) part(lo);
+    poly.swap(hi);
+    if (poly.size() < 3) return;
+  }
+  part(poly);
+}
+
+// Scratch buffers of split_by_grid, one set per thread.
+struct SplitScratch {
+  std::vector<Vec2> a, b, strip, lo, hi, lo2, hi2;
+};
+
+}  // namespace
+
+LensGrids make_lens_grids(const CameraIntrinsics& K, double tolerance_px, double margin_px) {
+  if (K.width_px <= 0 || K.height_px <= 0 || !(K.fx_px > 0) || !(K.fy_px > 0) ||
+      !(tolerance_px > 0)) {
+    std::ostringstream os;
+    os << "camera intrinsics invalid: need width, height, fx, fy > 0 (got " << K.width_px << " x "
+       << K.height_px << ", fx " << K.fx_px << ", fy " << K.fy_px << ")";
+    throw RenderError(os.str());
+  }
+  auto fail = [&](double u, double v, const char* what) {
+    std::ostringstream os;
+    os << "lens distortion (k1 " << K.k1 << ", k2 " << K.k2 << ", p1 " << K.p1 << ", p2 " << K.p2
+       << ", k3 " << K.k3 << ") " << what << " near pixel (" << u << ", " << v << ")";
+    throw RenderError(os.str());
+  };
+  // Footprint: D maps the region's boundary onto the image rectangle's (grown by the margin,
+  // pixel areas: centres +- 0.5), so the box around the undistorted boundary holds every
+  // normalised point that lands in the image.
+  double x_min = std::numeric_limits<double>::infinity(), x_max = -x_min;
+  double y_min = x_min, y_max = -x_min;
+  auto visit = [&](double u, double v) {
+    Vec2 xy;
+    if (!undistort_normalized(K, {(u - K.cx_px) / K.fx_px, (v - K.cy_px) / K.fy_px}, xy))
+      fail(u, v, "cannot be inverted (the model folds over inside the image)");
+    x_min = std::min(x_min, xy.x()), x_max = std::max(x_max, xy.x());
+    y_min = std::min(y_min, xy.y()), y_max = std::max(y_max, xy.y());
+  };
+  const double u0 = -0.5 - margin_px, u1 = K.width_px - 0.5 + margin_px;
+  const double v0 = -0.5 - margin_px, v1 = K.height_px - 0.5 + margin_px;
+  for (double u = u0; u < u1; u += 1.0) visit(u, v0), visit(u, v1);
+  for (double v = v0; v < v1; v += 1.0) visit(u0, v), visit(u1, v);
+  visit(u1, v1);
+
+  // On a lattice of 4-pixel pitch over the box (and one pitch beyond it), by central
+  // differences (step 1e-4: rounding ~1e-5 px per unit^2), over 36 directions e:
+  //   Mf = max |D''(e, e)|, Mp = max |n(e) . D''(e, e)| with n(e) the unit normal of J e (the
+  //   image direction of e), Jmin = min |J e|; and the Jacobian's sign (no fold-over).
+  const double step = 4.0 / std::max(K.fx_px, K.fy_px), h = 1e-4;
+  const int nx = static_cast<int>(std::ceil((x_max - x_min) / step)) + 3;
+  const int ny = static_cast<int>(std::ceil((y_max - y_min) / step)) + 3;
+  const double ox = x_min - step, oy = y_min - step;
+  struct Stats {
+    double Mf = 0.0, Mp = 0.0, Jmin = std::numeric_limits<double>::infinity();
+    void merge(const Stats& o) { Mf = std::max(Mf, o.Mf), Mp = std::max(Mp, o.Mp), Jmin = std::min(Jmin, o.Jmin); }
+  };
+  std::vector<Stats> lattice(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny));
+  std::vector<Stats> col(static_cast<std::size_t>(nx)), row(static_cast<std::size_t>(ny));
+  LensGrids grids;
+  for (int j = 0; j < ny; ++j) {
+    for (int i = 0; i < nx; ++i) {
+      const Vec2 p(ox + i * step, oy + j * step);
+      const Vec2 c = pixel_1x(K, p);
+      const Vec2 xp = pixel_1x(K, p + Vec2(h, 0)), xm = pixel_1x(K, p - Vec2(h, 0));
+      const Vec2 yp = pixel_1x(K, p + Vec2(0, h)), ym = pixel_1x(K, p - Vec2(0, h));
+      const Vec2 pp = pixel_1x(K, p + Vec2(h, h)), pm = pixel_1x(K, p + Vec2(h, -h));
+      const Vec2 mp = pixel_1x(K, p + Vec2(-h, h)), mm = pixel_1x(K, p + Vec2(-h, -h));
+      const Vec2 dxx = (xp - 2.0 * c + xm) / (h * h), dyy = (yp - 2.0 * c + ym) / (h * h);
+      const Vec2 dxy = (pp - pm - mp + mm) / (4.0 * h * h);
+      const Vec2 jx = (xp - xm) / (2.0 * h), jy = (yp - ym) / (2.0 * h);
+      if (!(jx.x() * jy.y() - jx.y() * jy.x() > 0.0)) {
+        fail(c.x(), c.y(), "folds over (Jacobian not positive) in the region the image sees");
+      }
+      Stats st;
+      for (int k = 0; k < 36; ++k) {
+        const double th = M_PI * k / 36.0, ex = std::cos(th), ey = std::sin(th);
+        const Vec2 d2 = ex * ex * dxx + 2.0 * ex * ey * dxy + ey * ey * dyy;
+        const Vec2 je = ex * jx + ey * jy;
+        const double jn = je.norm();
+        st.Mf = std::max(st.Mf, d2.norm());
+        st.Mp = std::max(st.Mp, std::abs(je.x() * d2.y() - je.y() * d2.x()) / jn);
+        st.Jmin = std::min(st.Jmin, jn);
+      }
+      // The direction samples are 5 degrees apart: a 2 % allowance for the maxima between them.
+      st.Mf *= 1.02, st.Mp *= 1.02;
+      lattice[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(i)] = st;
+      col[static_cast<std::size_t>(i)].merge(st);
+      row[static_cast<std::size_t>(j)].merge(st);
+      grids.max_second_derivative_px = std::max(grids.max_second_derivative_px, st.Mf);
+    }
+  }
+  // Stats over the lattice points bracketing [a, b] (one pitch beyond each end).
+  auto over = [&](const std::vector<Stats>& m, double origin, double a, double b) {
+    const int i0 = std::max(0, static_cast<int>(std::floor((a - origin) / step)) - 1);
+    const int i1 = std::min(static_cast<int>(m.size()) - 1, static_cast<int>(std::ceil((b - origin) / step)) + 1);
+    Stats r;
+    for (int i = i0; i <= i1; ++i) r.merge(m[static_cast<std::size_t>(i)]);
+    return r;
+  };
+  // The deviation bound of a segment of length L inside a region with statistics st:
+  //   interior (any component): L^2 / 8 Mf;
+  //   edges (across the chord only): L^2 / 8 (Mp + L Mf^2 / Jmin), the second term for the
+  //   chord's direction differing from J e along the segment by at most L Mf / Jmin radians.
+  auto deviation = [](bool edges, double L, const Stats& st) {
+    return edges ? L * L / 8.0 * (st.Mp + L * st.Mf * st.Mf / st.Jmin) : L * L / 8.0 * st.Mf;
+  };
+  // Columns of width w, rows of height h: a cell's diagonal is at most sqrt(2) max(w, h) and
+  // its statistics are bounded by its column's and by its row's, so a cell meets the
+  // tolerance when each column meets deviation(sqrt(2) w, column) <= tol, and each row alike.
+  auto lines = [&](bool edges, double lo, double hi, const std::vector<Stats>& m, double origin) {
+    std::vector<double> out{lo};
+    double a = lo;
+    while (hi - a > 1e-12) {
+      double w = hi - a;
+      while (deviation(edges, std::sqrt(2.0) * w, over(m, origin, a, a + w)) > tolerance_px) w *= 0.97;
+      a = hi - a - w < 1e-12 ? hi : a + w;
+      out.push_back(a);
+    }
+    return out;
+  };
+  for (LensGrid* g : {&grids.edges, &grids.interior}) {
+    const bool edges = g == &grids.edges;
+    g->x_lines = lines(edges, x_min, x_max, col, ox);
+    g->y_lines = lines(edges, y_min, y_max, row, oy);
+    // The bound achieved, cell by cell, from the lattice.
+    for (std::size_t i = 0; i + 1 < g->x_lines.size(); ++i) {
+      for (std::size_t j = 0; j + 1 < g->y_lines.size(); ++j) {
+        const double w = g->x_lines[i + 1] - g->x_lines[i], hh = g->y_lines[j + 1] - g->y_lines[j];
+        const int i0 = std::max(0, static_cast<int>(std::floor((g->x_lines[i] - ox) / step)) - 1);
+        const int i1 = std::min(nx - 1, static_cast<int>(std::ceil((g->x_lines[i + 1] - ox) / step)) + 1);
+        const int j0 = std::max(0, static_cast<int>(std::floor((g->y_lines[j] - oy) / step)) - 1);
+        const int j1 = std::min(ny - 1, static_cast<int>(std::ceil((g->y_lines[j + 1] - oy) / step)) + 1);
+        Stats st;
+        for (int jj = j0; jj <= j1; ++jj)
+          for (int ii = i0; ii <= i1; ++ii)
+            st.merge(lattice[static_cast<std::size_t>(jj) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(ii)]);
+        g->chord_bound_px = std::max(g->chord_bound_px, deviation(edges, std::hypot(w, hh), st));
+        if (edges)
+          grids.edges_interior_bound_px = std::max(grids.edges_interior_bound_px, deviation(false, std::hypot(w, hh), st));
+      }
+    }
+  }
+  return grids;
+}
+
+void split_by_grid(const LensGrid& grid, const std::vector<Vec2>& poly, std::vector<Vec2>& pieces,
+                   std::vector<int>& sizes) {
+  thread_local SplitScratch s;
+  // Clip to the region first (cheap rejection of everything outside it).
+  split_line(poly, 0, grid.x_lines.front(), nullptr, &s.a);
+  if (s.a.size() < 3) return;
+  split_line(s.a, 0, grid.x_lines.back(), &s.b, nullptr);
+  if (s.b.size() < 3) return;
+  split_line(s.b, 1, grid.y_lines.front(), nullptr, &s.a);
+  if (s.a.size() < 3) return;
+  split_line(s.a, 1, grid.y_lines.back(), &s.b, nullptr);
+  if (s.b.size() < 3) return;
+  // Vertical strips, then cells.
+  split_along(s.b, 0, grid.x_lines, s.lo, s.hi, [&](std::vector<Vec2>& strip) {
+    s.strip = strip;
+    split_along(s.strip, 1, grid.y_lines, s.lo2, s.hi2, [&](const std::vector<Vec2>& cell) {
+      pieces.insert(pieces.end(), cell.begin(), cell.end());
+      sizes.push_back(static_cast<int>(cell.size()));
+    });
+  });
+}
+
+LensMesher::LensMesher(const CameraIntrinsics& K, int supersample, double near_m, double far_m,
+                       double tolerance_px)
+    : K_(K),
+      s_(supersample),
+      near_m_(near_m),
+      far_m_(far_m),
+      grids_(make_lens_grids(K, tolerance_px)) {
+  const int s = supersample;
+  clip_from_camera_ = gl_clip_from_camera(s * K.fx_px, s * K.fy_px, s * K.cx_px + 0.5 * (s - 1),
+                                          s * K.cy_px + 0.5 * (s - 1), s * K.width_px,
+                                          s * K.height_px, near_m, far_m);
+}
+
+Eigen::Vector2d LensMesher::pixel_of(const Vec2& xy) const {
+  return s_ * pixel_1x(K_, xy) + Vec2::Constant(0.5 * (s_ - 1));
+}
+
+void LensMesher::set_faces(FaceGroup group, std::vector<MeshFace> faces) {
+  std::vector<Face>& out = faces_[static_cast<std::size_t>(group)];
+  out.clear();
+  for (MeshFace& m : faces) {
+    Face f;
+    const Vec3 e1 = m.corners_W_m[1] - m.corners_W_m[0], e2 = m.corners_W_m[3] - m.corners_W_m[0];
+    Eigen::Matrix2d G;
+    G << e1.dot(e1), e1.dot(e2), e1.dot(e2), e2.dot(e2);
+    const Eigen::Matrix2d Gi = G.inverse();
+    f.e1_dual_W = Gi(0, 0) * e1 + Gi(0, 1) * e2;
+    f.e2_dual_W = Gi(1, 0) * e1 + Gi(1, 1) * e2;
+    f.face = std::move(m);
+    out.push_back(std::move(f));
+  }
+}
+
+std::vector<MeshFace> LensMesher::faces(FaceGroup group) const {
+  std::vector<MeshFace> out;
+  for (const Face& f : faces_[static_cast<std::size_t>(group)]) out.push_back(f.face);
+  return out;
+}
+
+void LensMesher::build(const Eigen::Isometry3d& X_WC) {
+  vertices_.clear();
+  indices_.clear();
+  points_C_.clear();
+  room_spans_.clear();
+  const Eigen::Isometry3d X_CW = X_WC.inverse(Eigen::Isometry);
+  for (int g = 0; g < kFaceGroups; ++g) {
+    group_start_[static_cast<std::size_t>(g)] = indices_.size();
+    for (const Face& f : faces_[static_cast<std::size_t>(g)]) {
+      const std::size_t first = indices_.size();
+      add_face(f, X_CW, X_WC.translation(), g == kTexturedFaces);
+      if (g != kRoomFaces || indices_.size() == first) continue;
+      // Its area: the triangles' areas in window coordinates (x_ndc, y_ndc scaled).
+      FaceSpan span{first, indices_.size(), 0.0, f.face.rgb};
+      for (std::size_t i = first; i < indices_.size(); i += 3) {
+        Vec2 p[3];
+        for (int k = 0; k < 3; ++k) {
+          const GpuVertex& v = vertices_[indices_[i + static_cast<std::size_t>(k)]];
+          p[k] = Vec2(v.clip[0] / v.clip[3] * 0.5 * s_ * K_.width_px, v.clip[1] / v.clip[3] * 0.5 * s_ * K_.height_px);
+        }
+        const Vec2 a = p[1] - p[0], b = p[2] - p[0];
+        span.area_px2 += 0.5 * std::abs(a.x() * b.y() - a.y() * b.x());
+      }
+      room_spans_.push_back(span);
+    }
+  }
+  group_start_[kFaceGroups] = indices_.size();
+}
+
+void LensMesher::add_face(const Face& f, const Eigen::Isometry3d& X_CW, const Vec3& p_WC,
+                          bool textured) {
+  const MeshFace& m = f.face;
+  // Single-sided: the camera strictly in front of the face's plane.
+  if (!(m.normal_W.dot(p_WC - m.corners_W_m[0]) > 1e-9)) return;
+  const Eigen::Matrix3d& R_CW = X_CW.linear();
+  const Vec3 t_CW = X_CW.translation();
+  poly_C_.clear();
+  // Outcodes against the frustum that holds the lens region: a face entirely beyond one plane
+  // is dropped before any clipping.
+  const LensGrid& grid = textured ? grids_.interior : grids_.edges;
+  const double xl = grid.x_lines.front(), xh = grid.x_lines.back();
+  const double yl = grid.y_lines.front(), yh = grid.y_lines.back();
+  unsigned all_out = 0x3f;
+  bool needs_z_clip = false;
+  for (const Vec3& c : m.corners_W_m) {
+    const Vec3 p = R_CW * c + t_CW;
+    poly_C_.push_back(p);
+    unsigned out = 0;
+    if (p.z() < near_m_) out |= 1u;
+    if (p.z() > far_m_) out |= 2u;
+    if (p.x() < xl * p.z()) out |= 4u;
+    if (p.x() > xh * p.z()) out |= 8u;
+    if (p.y() < yl * p.z()) out |= 16u;
+    if (p.y() > yh * p.z()) out |= 32u;
+    all_out &= out;
+    needs_z_clip = needs_z_clip || (out & 3u);
+  }
+  if (all_out != 0) return;
+  if (needs_z_clip) {
+    // Near and far planes in 3-D (Z = near, Z = far), crossings in canonical order.
+    for (int side = 0; side < 2; ++side) {
+      const double plane = side == 0 ? near_m_ : far_m_;
+      const double sign = side == 0 ? 1.0 : -1.0;  // inside: sign (Z - plane) >= 0
+      clipped_C_.clear();
+      const std::size_t n = poly_C_.size();
+      for (std::size_t i = 0; i < n; ++i) {
+        const Vec3& a = poly_C_[i];
+        const Vec3& b = poly_C_[(i + 1) % n];
+        const double da = sign * (a.z() - plane), db = sign * (b.z() - plane);
+        if (da >= 0.0) clipped_C_.push_back(a);
+        if ((da < 0.0 && db > 0.0) || (da > 0.0 && db < 0.0)) {
+          const bool swap = b.x() < a.x() || (b.x() == a.x() && (b.y() < a.y() || (b.y() == a.y() && b.z() < a.z())));
+          const Vec3& p = swap ? b : a;
+          const Vec3& q = swap ? a : b;
+          Vec3 x = p + (plane - p.z()) / (q.z() - p.z()) * (q - p);
+          x.z() = plane;
+          clipped_C_.push_back(x);
+        }
+      }
+      poly_C_.swap(clipped_C_);
+      if (poly_C_.size() < 3) return;
+    }
+  }
+  poly_n_.clear();
+  for (const Vec3& p : poly_C_) poly_n_.emplace_back(p.x() / p.z(), p.y() / p.z());
+  pieces_.clear();
+  sizes_.clear();
+  split_by_grid(grid, poly_n_, pieces_, sizes_);
+  if (sizes_.empty()) return;
+
+  // The face's plane in C: n_C . p = d_C (< 0: the camera is on the normal side), so the point
+  // of the face on the ray (x, y, 1) has depth Z = d_C / (n_C . (x, y, 1)).
+  const Vec3 n_C = R_CW * m.normal_W;
+  const Vec3 c0_C = R_CW * m.corners_W_m[0] + t_CW;
+  const double d_C = n_C.dot(c0_C);
+  // Texture coordinates, affine on the face: uv = uv0 + s (uv1 - uv0) + t (uv3 - uv0).
+  const Vec3 g1_C = R_CW * f.e1_dual_W, g2_C = R_CW * f.e2_dual_W;
+  const Eigen::Vector2f duv1 = m.uv[1] - m.uv[0], duv3 = m.uv[3] - m.uv[0];
+  // Clip coordinates: the point with the vertex's true depth Z that the x s pinhole camera of
+  // gl_clip_from_camera sees at the vertex's (distorted) pixel, so x_ndc = 2 (u_s + 0.5) / W - 1
+  // as for any pinhole point and w = Z for perspective-correct interpolation.
+  const Eigen::Matrix4d& P = clip_from_camera_;
+  const double fx_s = s_ * K_.fx_px, fy_s = s_ * K_.fy_px;
+  const double cx_s = s_ * K_.cx_px + 0.5 * (s_ - 1), cy_s = s_ * K_.cy_px + 0.5 * (s_ - 1);
+  std::size_t k = 0;
+  for (int size : sizes_) {
+    const auto base = static_cast<std::uint32_t>(vertices_.size());
+    for (int v = 0; v < size; ++v, ++k) {
+      const Vec2& xy = pieces_[k];
+      const double Z = d_C / n_C.dot(Vec3(xy.x(), xy.y(), 1.0));
+      const Vec2 px = pixel_of(xy);
+      const Eigen::Vector4d clip =
+          P * Eigen::Vector4d((px.x() - cx_s) / fx_s * Z, (px.y() - cy_s) / fy_s * Z, Z, 1.0);
+      GpuVertex gv;
+      for (int c = 0; c < 4; ++c) gv.clip[c] = static_cast<float>(clip[c]);
+      for (int c = 0; c < 3; ++c) gv.rgb[c] = m.rgb[c];
+      if (textured) {
+        const Vec3 r = Z * Vec3(xy.x(), xy.y(), 1.0) - c0_C;
+        const float s = static_cast<float>(g1_C.dot(r)), t = static_cast<float>(g2_C.dot(r));
+        gv.uv[0] = m.uv[0].x() + s * duv1.x() + t * duv3.x();
+        gv.uv[1] = m.uv[0].y() + s * duv1.y() + t * duv3.y();
+      } else {
+        gv.uv[0] = gv.uv[1] = 0.0f;
+      }
+      vertices_.push_back(gv);
+      points_C_.push_back(Z * Vec3(xy.x(), xy.y(), 1.0));
+    }
+    for (int v = 1; v + 1 < size; ++v) {
+      indices_.push_back(base);
+      indices_.push_back(base + static_cast<std::uint32_t>(v));
+      indices_.push_back(base + static_cast<std::uint32_t>(v + 1));
+    }
+  }
+}
+
+}  // namespace shelfcross::render

@@ -1,0 +1,166 @@
+#pragma once
+// The lens in the geometry: each frame, the static world's faces are culled, clipped, split
+// and projected on the CPU, so that the rasteriser draws the distorted image directly at the
+// output size (no undistorted render, no remap pass).
+//
+// Why straight chords are enough. A face is planar and convex, so its pinhole image in the
+// normalised plane (x, y) = (X/Z, Y/Z) of camera C is a convex polygon with straight edges;
+// the lens is the 2-D map D: (x, y) -> pixel (u, v) of camera_model.hpp. The rasteriser joins
+// projected vertices by straight chords, whereas D bends the segment a -> b (length L,
+// direction e) into the curve c(t) = D(a + t (b - a)). Linear interpolation of c gives
+//   |c(t) - chord(t)| <= t (1 - t) / 2 max |c''|  <=  L^2 / 8 * max |D''(e, e)|      (1)
+// (pixels; D'' in pixels per squared normalised unit). What decides which pixel centres a
+// face covers is only the distance ACROSS the chord, n . (c(t) - chord(t)) with n the chord's
+// unit normal in the image; n differs from the normal of J e (J = dD) at any point of the
+// segment by at most L max |D''| / min |J e| radians, so
+//   distance across <= L^2 / 8 * (max |n(e) . D''(e, e)| + L max |D''|^2 / min |J e|).   (2)
+// A lens grid cuts the normalised plane into cells whose diagonal d keeps the bound below
+// tolerance_px everywhere in the cell (statistics of D sampled every 4 px, 36 directions);
+// every face is split along the grid lines into convex pieces (each inside one cell, so every
+// edge and fan diagonal of a piece is at most d long) and fan-triangulated. Two grids:
+//   edges     bound (2), for flat faces: every drawn edge within tolerance_px of the true
+//             curve; the interpolated interior (depth) may be off by bound (1), about 0.5 px
+//             for the default lens, which decals absorb with a depth offset (renderer.cpp);
+//   interior  bound (1), for textured faces: texture coordinates within tolerance_px too.
+// Both are coarse where the lens is nearly linear and fine where it bends most (default lens:
+// edges cells 65 to 130 px, interior cells 40 to 125 px). Vertices themselves are exact: each
+// is a point of the face, projected in double precision with camera_model's formula (the one
+// of cv::projectPoints), handed to GL as clip coordinates (x_ndc Z, y_ndc Z, z_clip, Z) so
+// that GL's perspective-correct interpolation uses the true depth Z.
+//
+// No cracks: split vertices on a grid line are computed once and shared by both sides, and
+// every intersection is computed from its segment's end points in a canonical order, so the
+// pieces of a face, and faces sharing an edge (split along the same grid), meet exactly.
+//
+// Culling: every face is single-sided (drawn only when the camera is strictly on the side
+// its normal points to). The world is made of closed solids, one-sided tags with a backing,
+// and the inside of the room, so this only removes faces that are hidden anyway.
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "shelfcross/camera.hpp"
+
+namespace shelfcross::render {
+
+/// A lens grid over the part of the normalised plane that the image sees.
+struct LensGrid {
+  /// Grid lines in normalised coordinates, ascending; the first and last bound the region:
+  /// the undistorted footprint of the image (pixel areas, plus margin_px) as a box.
+  std::vector<double> x_lines, y_lines;
+  /// Largest deviation bound over the cells' segments, output pixels (<= the tolerance).
+  double chord_bound_px = 0.0;
+};
+
+/// The two grids of one lens, over the same region:
+///   edges     for flat faces: bounds the distance of a segment's image from its chord
+///             (what decides which pixel centres a face covers), so cells are large;
+///   interior  for textured faces: bounds the whole displacement of the interpolated
+///             interior (texture coordinates along a segment), so cells are smaller.
+struct LensGrids {
+  LensGrid edges, interior;
+  /// The interior bound of the edges grid: how far (pixels) the interpolated interior of a
+  /// flat face (its depth) may sit from the true position. Decals are drawn with a depth
+  /// offset of this many pixels' worth of slope (renderer.cpp).
+  double edges_interior_bound_px = 0.0;
+  /// Largest ||D''|| over the region, pixels per squared normalised unit.
+  double max_second_derivative_px = 0.0;
+};
+
+/// Builds the grids for a tolerance (output pixels). Throws RenderError for invalid
+/// intrinsics or a lens that cannot be inverted over the image or folds over in the region.
+LensGrids make_lens_grids(const CameraIntrinsics& K, double tolerance_px, double margin_px = 2.0);
+
+/// Splits the convex polygon `poly` (normalised coordinates, in order around its edge) along
+/// the grid's lines, dropping what lies outside the region: `pieces` receives the convex
+/// pieces' vertices one piece after the other and `sizes` their vertex counts (appended).
+void split_by_grid(const LensGrid& grid, const std::vector<Eigen::Vector2d>& poly,
+                   std::vector<Eigen::Vector2d>& pieces, std::vector<int>& sizes);
+
+/// One face of the static world: a planar convex quad, single-sided, flat-coloured, with
+/// texture coordinates at its corners if it is textured (the quad must then be a
+/// parallelogram: texture coordinates are affine on it).
+struct MeshFace {
+  std::array<Eigen::Vector3d, 4> corners_W_m;  ///< in order around the edge
+  Eigen::Vector3d normal_W = Eigen::Vector3d::Zero();  ///< drawn when the camera is on this side
+  Eigen::Vector3f rgb = Eigen::Vector3f::Zero();       ///< final sRGB-encoded colour
+  std::array<Eigen::Vector2f, 4> uv{};                 ///< atlas coordinates (textured faces)
+};
+
+/// A vertex as GL receives it: clip coordinates, face colour, texture coordinates.
+struct GpuVertex {
+  float clip[4];
+  float rgb[3];
+  float uv[2];
+};
+
+/// Faces in four groups, drawn in this order: the room (the inside of the arena box), the
+/// other flat faces, flat decals (tags: a millimetre off the surface they are stuck on), and
+/// textured decals (markers). Textured faces are split along the interior grid, the others
+/// along the edges grid.
+enum FaceGroup { kRoomFaces = 0, kFlatFaces = 1, kDecalFaces = 2, kTexturedFaces = 3, kFaceGroups = 4 };
+
+class LensMesher {
+ public:
+  /// `supersample` s: the image is rasterised at s times the size, pixel u_s = s u + (s-1)/2
+  /// (the centre of the s x s block that becomes pixel u). Clip planes at Z = near_m, far_m.
+  LensMesher(const CameraIntrinsics& K, int supersample, double near_m, double far_m,
+             double tolerance_px);
+
+  void set_faces(FaceGroup group, std::vector<MeshFace> faces);
+
+  /// The triangles of one frame from camera pose X_WC: vertices() and indices(), the
+  /// indices of group g at [first_index(g), first_index(g + 1)).
+  void build(const Eigen::Isometry3d& X_WC);
+
+  const std::vector<GpuVertex>& vertices() const { return vertices_; }
+  const std::vector<std::uint32_t>& indices() const { return indices_; }
+  /// The camera-frame point (metres) of each vertex, in double precision: what the vertex is
+  /// the projection of (for tests).
+  const std::vector<Eigen::Vector3d>& points_C() const { return points_C_; }
+  std::size_t first_index(int group) const { return group_start_[static_cast<std::size_t>(group)]; }
+
+  /// The room faces of the last frame, each with its index range and its area in the image
+  /// (pixels at the rasterised size), in drawing order.
+  struct FaceSpan {
+    std::size_t first_index = 0, end_index = 0;
+    double area_px2 = 0.0;
+    Eigen::Vector3f rgb = Eigen::Vector3f::Zero();
+  };
+  const std::vector<FaceSpan>& room_spans() const { return room_spans_; }
+  const LensGrids& grids() const { return grids_; }
+  /// The faces of a group, as set.
+  std::vector<MeshFace> faces(FaceGroup group) const;
+
+  /// The pixel (at the rasterised size) of a normalised point: exact, double precision.
+  Eigen::Vector2d pixel_of(const Eigen::Vector2d& xy) const;
+
+ private:
+  struct Face {
+    MeshFace face;
+    Eigen::Vector3d e1_dual_W, e2_dual_W;  // s = e1_dual . (p - c0), t = e2_dual . (p - c0)
+  };
+  void add_face(const Face& f, const Eigen::Isometry3d& X_CW, const Eigen::Vector3d& p_WC,
+                bool textured);
+
+  CameraIntrinsics K_;
+  int s_;
+  Eigen::Matrix4d clip_from_camera_;  // gl_clip_from_camera of the rasterised (x s) pinhole
+  double near_m_, far_m_;
+  LensGrids grids_;
+  std::array<std::vector<Face>, kFaceGroups> faces_;
+  std::vector<GpuVertex> vertices_;
+  std::vector<std::uint32_t> indices_;
+  std::vector<Eigen::Vector3d> points_C_;
+  std::vector<FaceSpan> room_spans_;
+  std::array<std::size_t, kFaceGroups + 1> group_start_{};
+  // scratch
+  std::vector<Eigen::Vector3d> poly_C_, clipped_C_;
+  std::vector<Eigen::Vector2d> poly_n_, pieces_;
+  std::vector<int> sizes_;
+};
+
+}  // namespace shelfcross::render
