@@ -1,6 +1,7 @@
 #include "verification/results_store.hpp"
 
 #include <SQLiteCpp/SQLiteCpp.h>
+#include <nlohmann/json.hpp>
 
 namespace shelfcross::verification {
 namespace {
@@ -132,6 +133,30 @@ std::vector<RunRecord> ResultsStore::runs() const {
     out.push_back(std::move(r));
   }
   return out;
+}
+
+std::string encode_run_record(const RunRecord& r) {
+  return nlohmann::json{{"index", r.index},
+                        {"seed", r.seed},
+                        {"dispersion_json", r.dispersion_json},
+                        {"outcome", r.outcome},
+                        {"metrics_json", r.metrics_json},
+                        {"run_hash", r.run_hash},
+                        {"wall_s", r.wall_s},
+                        {"trace_json", r.trace_json}}
+      .dump();
+}
+
+RunRecord decode_run_record(const std::string& message) {
+  try {
+    const auto j = nlohmann::json::parse(message);
+    return RunRecord{j.at("index").get<std::int64_t>(),       j.at("seed").get<std::uint64_t>(),
+                     j.at("dispersion_json").get<std::string>(), j.at("outcome").get<std::string>(),
+                     j.at("metrics_json").get<std::string>(),    j.at("run_hash").get<std::string>(),
+                     j.at("wall_s").get<double>(),               j.at("trace_json").get<std::string>()};
+  } catch (const nlohmann::json::exception& e) {
+    throw std::invalid_argument(std::string("malformed run record message: ") + e.what());
+  }
 }
 
 }  // namespace shelfcross::verification

@@ -44,6 +44,12 @@ struct RunRecord {
   bool operator==(const RunRecord&) const = default;
 };
 
+/// A run record as one line of JSON (no raw newline), and back: the message that carries a
+/// finished run from a worker process or rank to the store. decode throws
+/// std::invalid_argument on a malformed message.
+std::string encode_run_record(const RunRecord& record);
+RunRecord decode_run_record(const std::string& message);
+
 /// The database does not belong to this campaign (other scenario or seed), or is not one.
 class ResultsMismatch : public std::runtime_error {
  public:
