@@ -31,6 +31,7 @@ using nlohmann::json;
 using Clock = std::chrono::steady_clock;
 
 constexpr int kChildFd = 3;  ///< the socket's number in the child
+constexpr double kStartLimit_s = 300.0;  ///< see start_child
 
 Clock::time_point after_s(Clock::time_point t0, double seconds) {
   return t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
@@ -174,8 +175,9 @@ void ProcessRunWorker::start_child() {
   pid_ = pid;
   fd_ = sv[0];
   buffer_.clear();
-  // Start-up (the renderer's EGL context, the scenario) gets the same limit as a run.
-  const auto deadline = after_s(Clock::now(), run_wall_limit_s(*nominal_, limits_));
+  // Start-up (the scenario, the renderer's EGL context and shaders) is not part of a run's
+  // limit: it gets the run's limit, but at least kStartLimit_s (a loaded machine).
+  const auto deadline = after_s(Clock::now(), std::max(kStartLimit_s, run_wall_limit_s(*nominal_, limits_)));
   std::string line;
   const auto failed = [&](const std::string& why) {
     end_child(true);
