@@ -66,5 +66,26 @@ TEST(RendererThreads, ParallelStartUpAndTeardownGiveTheReferenceFrame) {
   }
 }
 
+// Renderers made, used and destroyed on a thread that exits right after, while this thread
+// makes, uses and destroys its own: the display's last user and its next first user overlap
+// in every order, with a thread that used the driver exiting meanwhile (egl_context.cpp,
+// release_display).
+TEST(RendererThreads, RenderersGoingOnExitingThreadsWhileOthersStart) {
+  const Warehouse warehouse = test::paper_test_shelf();
+  const Eigen::Isometry3d X_WC = test::camera_looking_forward(Eigen::Vector3d(1.6, 0.2, 0.9));
+  const cv::Mat reference = Renderer(warehouse, small_camera()).render(X_WC).clone();
+  constexpr int kRounds = 16;
+  for (int round = 0; round < kRounds; ++round) {
+    cv::Mat theirs;
+    std::thread exiting([&] { theirs = Renderer(warehouse, small_camera()).render(X_WC).clone(); });
+    const cv::Mat ours = Renderer(warehouse, small_camera()).render(X_WC).clone();
+    exiting.join();
+    for (const cv::Mat* f : {&ours, const_cast<const cv::Mat*>(&theirs)}) {
+      ASSERT_EQ(f->size(), reference.size()) << "round " << round;
+      ASSERT_TRUE(std::equal(reference.datastart, reference.dataend, f->datastart)) << "round " << round;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace shelfcross::render
