@@ -1,7 +1,11 @@
 #include "verification/results_store.hpp"
 
+#include <algorithm>
+
 #include <SQLiteCpp/SQLiteCpp.h>
 #include <nlohmann/json.hpp>
+
+#include "verification/cosim.hpp"
 
 namespace shelfcross::verification {
 namespace {
@@ -95,7 +99,28 @@ std::vector<std::int64_t> ResultsStore::finished_indices() const {
 
 void ResultsStore::insert(const RunRecord& run) { insert(std::vector<RunRecord>{run}); }
 
+const std::vector<std::string>& known_run_outcomes() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> v;
+    for (RunOutcome o : {RunOutcome::success, RunOutcome::collision, RunOutcome::left_arena, RunOutcome::timeout,
+                         RunOutcome::numerical_failure, RunOutcome::flight_software_exception,
+                         RunOutcome::mission_aborted, RunOutcome::no_crossing, RunOutcome::inventory_mismatch}) {
+      v.emplace_back(outcome_name(o));
+    }
+    v.insert(v.end(), {"crashed", "hung", "worker_error"});
+    return v;
+  }();
+  return names;
+}
+
 void ResultsStore::insert(const std::vector<RunRecord>& runs) {
+  for (const RunRecord& run : runs) {
+    const auto& known = known_run_outcomes();
+    if (std::find(known.begin(), known.end(), run.outcome) == known.end()) {
+      throw std::invalid_argument("run " + std::to_string(run.index) + ": unknown outcome '" + run.outcome +
+                                  "' (not stored; known: verification::known_run_outcomes)");
+    }
+  }
   SQLite::Transaction tx(*db_);
   SQLite::Statement q(*db_,
                       "INSERT INTO runs(run_index, seed, dispersion_json, outcome, metrics_json, run_hash, wall_s, trace_json)"

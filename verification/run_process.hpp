@@ -21,7 +21,9 @@
 //   memory       the child's resident set (/proc/PID/statm) above memory_limit_mb:
 //                SIGKILL, `crashed` (RLIMIT_AS is not used: AddressSanitizer and Mesa's
 //                llvmpipe reserve far more address space than they use)
-// A child that ends by a signal, or exits, while a run is in flight: `crashed`.
+// A child that ends by a signal, or exits, while a run is in flight: `crashed`. The next run
+// starts a fresh child; if that one cannot start (it dies or errs before it is ready), that
+// run is recorded as `worker_error` with the reason, and the run after tries again.
 // The child ignores SIGINT and SIGTERM (Ctrl-C stops the parent, which lets the runs in flight
 // finish) and dies with its parent thread (PR_SET_PDEATHSIG).
 
