@@ -354,7 +354,12 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
   // Faults of the run's process itself (cosim.inject_crash_s, cosim.inject_hang_s), for
   // verifying that a campaign survives them: a real SIGSEGV, and a hang that never returns.
   const auto inject_process_faults = [&](TimeNs t) {
-    if (cs.inject_crash_s >= 0.0 && t >= seconds_to_ns(cs.inject_crash_s)) std::raise(SIGSEGV);
+    if (cs.inject_crash_s >= 0.0 && t >= seconds_to_ns(cs.inject_crash_s)) {
+      // Past any handler (AddressSanitizer's would turn the signal into exit code 1): the
+      // process dies by SIGSEGV, as a driver's fault kills a release build.
+      std::signal(SIGSEGV, SIG_DFL);
+      std::raise(SIGSEGV);
+    }
     if (cs.inject_hang_s >= 0.0 && t >= seconds_to_ns(cs.inject_hang_s)) {
       for (;;) pause();
     }
