@@ -14,6 +14,8 @@
 #include "command_registry.hpp"
 #include "verification/campaign.hpp"
 #include "verification/report.hpp"
+#include "verification/run_process.hpp"
+#include "worker_options.hpp"
 #ifdef SHELFCROSS_WITH_MPI
 #include "distributed/mpi_campaign.hpp"
 #endif
@@ -32,6 +34,7 @@ struct CampaignOptions {
   std::string out = "out/campaign";
   std::string shard;       ///< "I/N", empty for the whole campaign
   double rank_timeout_s = 60.0;
+  verification::WorkerLimits limits;
 };
 
 std::string duration(double s) {
@@ -74,8 +77,10 @@ OpenedCampaign open_campaign(const CampaignOptions& o) {
   return {nominal, verification::ResultsStore::open_or_create(std::filesystem::path(o.out) / "results.sqlite", meta)};
 }
 
-verification::WorkerFactory worker_factory(std::shared_ptr<const verification::Scenario> nominal) {
-  return [nominal](int) { return std::make_unique<verification::CampaignWorker>(nominal); };
+/// Each run in a worker process of this program (verification/run_process.hpp).
+verification::WorkerFactory worker_factory(std::shared_ptr<const verification::Scenario> nominal,
+                                           const CampaignOptions& o) {
+  return verification::process_worker_factory(std::move(nominal), o.limits);
 }
 
 /// Writes the report and prints the outcome; 0 when every run (of the shard) is stored.
@@ -114,7 +119,7 @@ int run_in_this_process(const CampaignOptions& o, const verification::Shard& sha
   OpenedCampaign c = open_campaign(o);
   const auto t0 = std::chrono::steady_clock::now();  // informative: runs per hour
   const std::int64_t added = verification::run_pending(
-      c.store, o.seed, o.runs, worker_factory(c.nominal),
+      c.store, o.seed, o.runs, worker_factory(c.nominal, o),
       {.jobs = o.jobs, .on_progress = progress_printer(), .stop = &g_stop, .shard = shard});
   const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return finish(o, shard, c.store, c.nominal->name, added, elapsed_s);
@@ -138,7 +143,7 @@ int run_under_mpi(const CampaignOptions& o, const verification::Shard& shard) {
     if (!setup.error.empty()) return 2;  // rank 0 reports it
     auto nominal = std::make_shared<const verification::Scenario>(
         verification::parse_scenario(setup.scenario_yaml, "scenario from rank 0"));
-    distributed::serve_campaign(mpi, setup.campaign_seed, o.jobs, worker_factory(nominal), rank_timeout(o));
+    distributed::serve_campaign(mpi, setup.campaign_seed, o.jobs, worker_factory(nominal, o), rank_timeout(o));
     return 0;
   }
   std::optional<OpenedCampaign> c;
@@ -171,7 +176,7 @@ const CommandRegistration kCampaign{
       sub.add_option("--scenario", o->scenario, "scenario file")->capture_default_str();
       sub.add_option("--runs", o->runs, "number of runs")->capture_default_str()->check(CLI::Range(1, 10000000));
       sub.add_option("--seed", o->seed, "campaign seed; run k's seed is a fixed hash of (seed, k)")->capture_default_str();
-      sub.add_option("--jobs", o->jobs, "worker threads (per worker rank under mpirun; default: all cores)")
+      sub.add_option("--jobs", o->jobs, "worker processes, one run each at a time (per worker rank under mpirun; default: all cores)")
           ->capture_default_str()
           ->check(CLI::Range(1, 1024));
       sub.add_option("--out", o->out, "output folder: results.sqlite, summary.json, report.md")->capture_default_str();
@@ -183,6 +188,7 @@ const CommandRegistration kCampaign{
                      "and its runs are handed out again (and workers give up on a silent rank 0)")
           ->capture_default_str()
           ->check(CLI::Range(1.0, 86400.0));
+      add_worker_limit_options(sub, o->limits);
       return [o]() -> int {
         verification::Shard shard;
         if (!o->shard.empty()) {

@@ -11,6 +11,8 @@
 
 #include "command_registry.hpp"
 #include "verification/compare.hpp"
+#include "verification/run_process.hpp"
+#include "worker_options.hpp"
 
 namespace shelfcross::app {
 namespace {
@@ -24,6 +26,7 @@ struct CompareCliOptions {
   std::uint64_t seed = 1;
   int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   std::string out = "out/compare";
+  verification::WorkerLimits limits;
 };
 
 const CommandRegistration kCompare{
@@ -33,9 +36,10 @@ const CommandRegistration kCompare{
       sub.add_option("--scenario", o->scenario, "scenario file")->capture_default_str();
       sub.add_option("--runs", o->runs, "runs per strategy")->capture_default_str()->check(CLI::Range(1, 10000000));
       sub.add_option("--seed", o->seed, "campaign seed, shared by the three campaigns")->capture_default_str();
-      sub.add_option("--jobs", o->jobs, "worker threads (default: all cores)")->capture_default_str()->check(CLI::Range(1, 1024));
+      sub.add_option("--jobs", o->jobs, "worker processes, one run each at a time (default: all cores)")->capture_default_str()->check(CLI::Range(1, 1024));
       sub.add_option("--out", o->out, "output folder: compare.md, compare.json, plots, one folder per strategy")
           ->capture_default_str();
+      add_worker_limit_options(sub, o->limits);
       return [o]() -> int {
         const verification::Scenario nominal = verification::load_scenario(o->scenario);
         std::signal(SIGINT, request_compare_stop);
@@ -44,6 +48,9 @@ const CommandRegistration kCompare{
         verification::CompareOptions options;
         options.jobs = o->jobs;
         options.stop = &g_stop;
+        options.make_workers = [o](std::shared_ptr<const verification::Scenario> scenario) {
+          return verification::process_worker_factory(std::move(scenario), o->limits);
+        };
         options.on_progress = [tty](const std::string& strategy, const verification::CampaignProgress& p) {
           char line[160];
           std::snprintf(line, sizeof line, "%s: %lld/%lld runs, %lld successes", strategy.c_str(),

@@ -20,6 +20,8 @@ int main(int argc, char** argv) {
   std::vector<std::pair<CLI::App*, CommandAction>> actions;
   for (const auto& entry : entries) {
     CLI::App* sub = app.add_subcommand(entry.name, entry.description);
+    // A command without a description is internal (`worker`): left out of --help.
+    if (entry.description.empty()) sub->group("");
     actions.emplace_back(sub, entry.setup(*sub));
   }
   try {

@@ -148,29 +148,9 @@ void share_setup(const MpiSession& mpi, CampaignSetup& setup) {
   }
 }
 
-std::string encode_record(const RunRecord& r) {
-  return nlohmann::json{{"index", r.index},
-                        {"seed", r.seed},
-                        {"dispersion_json", r.dispersion_json},
-                        {"outcome", r.outcome},
-                        {"metrics_json", r.metrics_json},
-                        {"run_hash", r.run_hash},
-                        {"wall_s", r.wall_s},
-                        {"trace_json", r.trace_json}}
-      .dump();
-}
+std::string encode_record(const RunRecord& r) { return verification::encode_run_record(r); }
 
-RunRecord decode_record(const std::string& message) {
-  try {
-    const auto j = nlohmann::json::parse(message);
-    return RunRecord{j.at("index").get<std::int64_t>(),       j.at("seed").get<std::uint64_t>(),
-                     j.at("dispersion_json").get<std::string>(), j.at("outcome").get<std::string>(),
-                     j.at("metrics_json").get<std::string>(),    j.at("run_hash").get<std::string>(),
-                     j.at("wall_s").get<double>(),               j.at("trace_json").get<std::string>()};
-  } catch (const nlohmann::json::exception& e) {
-    throw std::invalid_argument(std::string("malformed run record message: ") + e.what());
-  }
-}
+RunRecord decode_record(const std::string& message) { return verification::decode_run_record(message); }
 
 // ---------------------------------------------------------------------------------------------
 // Rank 0

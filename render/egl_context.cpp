@@ -2,7 +2,6 @@
 
 #include <cstdlib>
 #include <cstring>
-#include <map>
 #include <mutex>
 #include <sstream>
 #include <vector>
@@ -44,28 +43,29 @@ bool has_extension(const char* list, const char* name) {
   return false;
 }
 
-// EGL displays are per (platform, native display) and not reference counted: two
-// eglInitialize calls and one eglTerminate leave the other user with a dead display. Count
-// our users and terminate on the last release.
+// EGL displays are per (platform, native display), shared by every context of the process.
+// A display, once initialised, stays initialised until the process exits: eglTerminate is
+// never called. Why (issue 18): with Mesa 22.3 (egl_dri2), terminating the display's last
+// user destroys the screen and dlcloses the driver, swrast_dri.so with LLVM; the next
+// renderer's eglInitialize maps it again, possibly elsewhere. A thread that used the driver
+// and is still exiting (its thread-local destructors), or any pointer kept across the unload,
+// then runs code that is no longer there. A general protection fault in swrast_dri.so at an
+// offset that is not an instruction boundary (this machine's kernel log: 0x7700dc, inside
+// the 5-byte lea at 0x7700d9) is what a jump through such a stale pointer looks like. Both
+// reported crashes had renderers of several threads in one process (a campaign's worker
+// threads, three co-simulations in threads); the stress test (render/test/renderer_threads_
+// test.cpp) did not reproduce it in 27 x 8 rounds of 4 threads nor 10 x 16 rounds of the
+// last-user race, so this is the cause as inferred, removed rather than proven. Not unloading
+// the driver also keeps its globals mapped, so LeakSanitizer sees what they point to as
+// reachable instead of reporting Mesa's driver state as leaked. Cost: one display's state
+// (the driver, kept until exit) after the last renderer is gone.
 std::mutex g_display_mutex;
-std::map<EGLDisplay, int> g_display_users;
 
 bool acquire_display(EGLDisplay d) {
+  // eglInitialize is serialised: the first call per display loads the driver.
   std::lock_guard<std::mutex> lock(g_display_mutex);
   EGLint major = 0, minor = 0;
-  if (!eglInitialize(d, &major, &minor)) return false;
-  ++g_display_users[d];
-  return true;
-}
-
-void release_display(EGLDisplay d) {
-  std::lock_guard<std::mutex> lock(g_display_mutex);
-  auto it = g_display_users.find(d);
-  if (it == g_display_users.end()) return;
-  if (--it->second == 0) {
-    g_display_users.erase(it);
-    eglTerminate(d);
-  }
+  return eglInitialize(d, &major, &minor) == EGL_TRUE;
 }
 
 EglPlatform platform_from_environment() {
@@ -91,7 +91,6 @@ bool EglContext::try_display(void* display_ptr, const std::string& name, std::st
   }
   auto give_up = [&](const std::string& what) {
     why += name + ": " + what + " (" + egl_error_name(eglGetError()) + "); ";
-    release_display(d);
     return false;
   };
   if (!has_extension(eglQueryString(d, EGL_EXTENSIONS), "EGL_KHR_surfaceless_context"))
@@ -179,7 +178,7 @@ EglContext::~EglContext() {
   if (eglGetCurrentContext() == static_cast<EGLContext>(context_))
     eglMakeCurrent(d, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
   eglDestroyContext(d, static_cast<EGLContext>(context_));
-  release_display(d);
+  // The display stays initialised (see acquire_display's comment).
 }
 
 void EglContext::make_current() {

@@ -6,6 +6,12 @@ bash scripts/install-deps.sh
 cmake --preset release
 cmake --build --preset release
 ctest --preset release -j "$(nproc)"
+# The parsers' (config, sdk, tello), plant's and flight software's tests under AddressSanitizer
+# and UndefinedBehaviorSanitizer (the debug preset; the whole suite under it: README.md). Only
+# these: the debug build of the rest (render, verification, app) would not fit CI's time.
+cmake --preset debug
+cmake --build build/debug --target config_test sdk_test plant_test flight_sw_test tello_test
+ctest --preset debug -j "$(nproc)" -L '^(config|sdk|plant|flight_sw|tello)$'
 # The parsers under libFuzzer (fuzz/README.md): each target about 30 s on its seed corpus, when
 # clang and libFuzzer's runtime are there (scripts/debian-packages.txt installs both).
 if command -v clang++ >/dev/null && compgen -G "/usr/lib/llvm-*/lib/clang/*/lib/linux/libclang_rt.fuzzer-x86_64.a" >/dev/null; then

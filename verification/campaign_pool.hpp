@@ -3,7 +3,8 @@
 // and an MPI campaign joins through messages (distributed/):
 //
 //   RunPool            `jobs` threads, each owning one RunWorker (its own renderer context,
-//                      plant, flight software); run indices are submitted to it and finished
+//                      plant, flight software; in the program, a worker process of its own:
+//                      run_process.hpp); run indices are submitted to it and finished
 //                      records come back, in completion order.
 //   CampaignCollector  the store's side: which indices are still missing (of the campaign or
 //                      of one shard of it), handed out in index order on demand (so a slow run

@@ -176,7 +176,9 @@ json run_comparison(const Scenario& nominal, std::int64_t runs, std::uint64_t se
     const CampaignMeta meta{write_scenario(*scenario), seed, runs};
     ResultsStore store = ResultsStore::open_or_create(dir / "results.sqlite", meta);
     std::shared_ptr<const Scenario> shared = scenario;
-    const auto factory = [shared](int) { return std::make_unique<CampaignWorker>(shared); };
+    const WorkerFactory factory = options.make_workers
+                                      ? options.make_workers(shared)
+                                      : WorkerFactory([shared](int) { return std::make_unique<CampaignWorker>(shared); });
     PoolOptions pool;  // fields assigned one by one: the struct may grow (sharding) without touching this
     pool.jobs = options.jobs;
     pool.stop = options.stop;

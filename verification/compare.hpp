@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -63,6 +64,9 @@ struct CompareOptions {
   int jobs = 1;
   std::function<void(const std::string& strategy, const CampaignProgress&)> on_progress;
   const std::atomic<bool>* stop = nullptr;  ///< see PoolOptions::stop
+  /// The workers of one strategy's campaign; unset: CampaignWorker threads in this process
+  /// (`shelfcross compare` runs them in worker processes, verification/run_process.hpp).
+  std::function<WorkerFactory(std::shared_ptr<const Scenario>)> make_workers;
 };
 
 /// Runs (or resumes) the three campaigns and writes everything listed above. Returns

@@ -1,5 +1,9 @@
 #include "verification/cosim.hpp"
 
+#include <unistd.h>
+
+#include <csignal>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -347,6 +351,19 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
   const auto injected_fault_due = [&](TimeNs t) {
     return cs.inject_flight_software_exception_s >= 0.0 && t >= seconds_to_ns(cs.inject_flight_software_exception_s);
   };
+  // Faults of the run's process itself (cosim.inject_crash_s, cosim.inject_hang_s), for
+  // verifying that a campaign survives them: a real SIGSEGV, and a hang that never returns.
+  const auto inject_process_faults = [&](TimeNs t) {
+    if (cs.inject_crash_s >= 0.0 && t >= seconds_to_ns(cs.inject_crash_s)) {
+      // Past any handler (AddressSanitizer's would turn the signal into exit code 1): the
+      // process dies by SIGSEGV, as a driver's fault kills a release build.
+      std::signal(SIGSEGV, SIG_DFL);
+      std::raise(SIGSEGV);
+    }
+    if (cs.inject_hang_s >= 0.0 && t >= seconds_to_ns(cs.inject_hang_s)) {
+      for (;;) pause();
+    }
+  };
   const auto flight_software_threw = [&](TimeNs t, const std::string& what) {
     outcome = RunOutcome::flight_software_exception;
     result.detail = what;
@@ -428,6 +445,7 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
         result.detail = "not finished after " + std::to_string(cs.timeout_s) + " s";
         break;
       }
+      inject_process_faults(t);
       while (!to_drone.empty() && to_drone.top().t_ns <= t) {
         dc->deliver({to_drone.top().payload, kPilotCommand});
         to_drone.pop();
@@ -564,6 +582,7 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
         result.detail = "not finished after " + std::to_string(cs.timeout_s) + " s";
         break;
       }
+      inject_process_faults(t);
 
       // 1. Advance the plant and the autopilot; check the motion for contacts.
       try {

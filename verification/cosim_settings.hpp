@@ -93,6 +93,13 @@ struct CosimSettings {
   /// Fault injection, for verifying the harness and campaigns: from this simulated time on
   /// the flight software's next step raises an exception (as a bug in it would). < 0: off.
   double inject_flight_software_exception_s = -1.0;
+  /// Fault injection of the run's process: at this simulated time it raises SIGSEGV (as a
+  /// crash in a graphics driver would). < 0: off. Only for campaigns, whose runs live in
+  /// worker processes (verification/run_process.hpp): `shelfcross run` itself would die.
+  double inject_crash_s = -1.0;
+  /// Likewise: at this simulated time the run stops making progress for good (as a deadlock
+  /// would); a campaign's worker is killed at its wall-clock limit. < 0: off.
+  double inject_hang_s = -1.0;
   /// The flight software's guidance strategy between shelves (flight_sw::Strategy by name):
   /// through_cells (the paper's), over_tops or around_ends.
   std::string strategy = "through_cells";

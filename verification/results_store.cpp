@@ -1,6 +1,11 @@
 #include "verification/results_store.hpp"
 
+#include <algorithm>
+
 #include <SQLiteCpp/SQLiteCpp.h>
+#include <nlohmann/json.hpp>
+
+#include "verification/cosim.hpp"
 
 namespace shelfcross::verification {
 namespace {
@@ -94,7 +99,28 @@ std::vector<std::int64_t> ResultsStore::finished_indices() const {
 
 void ResultsStore::insert(const RunRecord& run) { insert(std::vector<RunRecord>{run}); }
 
+const std::vector<std::string>& known_run_outcomes() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> v;
+    for (RunOutcome o : {RunOutcome::success, RunOutcome::collision, RunOutcome::left_arena, RunOutcome::timeout,
+                         RunOutcome::numerical_failure, RunOutcome::flight_software_exception,
+                         RunOutcome::mission_aborted, RunOutcome::no_crossing, RunOutcome::inventory_mismatch}) {
+      v.emplace_back(outcome_name(o));
+    }
+    v.insert(v.end(), {"crashed", "hung", "worker_error"});
+    return v;
+  }();
+  return names;
+}
+
 void ResultsStore::insert(const std::vector<RunRecord>& runs) {
+  for (const RunRecord& run : runs) {
+    const auto& known = known_run_outcomes();
+    if (std::find(known.begin(), known.end(), run.outcome) == known.end()) {
+      throw std::invalid_argument("run " + std::to_string(run.index) + ": unknown outcome '" + run.outcome +
+                                  "' (not stored; known: verification::known_run_outcomes)");
+    }
+  }
   SQLite::Transaction tx(*db_);
   SQLite::Statement q(*db_,
                       "INSERT INTO runs(run_index, seed, dispersion_json, outcome, metrics_json, run_hash, wall_s, trace_json)"
@@ -132,6 +158,30 @@ std::vector<RunRecord> ResultsStore::runs() const {
     out.push_back(std::move(r));
   }
   return out;
+}
+
+std::string encode_run_record(const RunRecord& r) {
+  return nlohmann::json{{"index", r.index},
+                        {"seed", r.seed},
+                        {"dispersion_json", r.dispersion_json},
+                        {"outcome", r.outcome},
+                        {"metrics_json", r.metrics_json},
+                        {"run_hash", r.run_hash},
+                        {"wall_s", r.wall_s},
+                        {"trace_json", r.trace_json}}
+      .dump();
+}
+
+RunRecord decode_run_record(const std::string& message) {
+  try {
+    const auto j = nlohmann::json::parse(message);
+    return RunRecord{j.at("index").get<std::int64_t>(),       j.at("seed").get<std::uint64_t>(),
+                     j.at("dispersion_json").get<std::string>(), j.at("outcome").get<std::string>(),
+                     j.at("metrics_json").get<std::string>(),    j.at("run_hash").get<std::string>(),
+                     j.at("wall_s").get<double>(),               j.at("trace_json").get<std::string>()};
+  } catch (const nlohmann::json::exception& e) {
+    throw std::invalid_argument(std::string("malformed run record message: ") + e.what());
+  }
 }
 
 }  // namespace shelfcross::verification

@@ -36,13 +36,25 @@ struct RunRecord {
   std::int64_t index = 0;
   std::uint64_t seed = 0;
   std::string dispersion_json;  ///< drawn values, {"name": value, ...}
-  std::string outcome;          ///< success, collision, timeout, ...
+  std::string outcome;          ///< one of known_run_outcomes()
   std::string metrics_json;
   std::string run_hash;         ///< 32 hex digits (run_hash.hpp)
   double wall_s = 0.0;          ///< wall time the run took (informative, not hashed)
   std::string trace_json;       ///< a compact trajectory for the report's plots
   bool operator==(const RunRecord&) const = default;
 };
+
+/// Every outcome a stored run can have: the co-simulation's (verification::RunOutcome by
+/// outcome_name) and the campaign's own: crashed and hung (a worker process that died or was
+/// killed, run_process.hpp), worker_error (a worker that threw). insert() refuses any other,
+/// so a misspelt outcome fails loudly instead of landing in the report as a class of its own.
+const std::vector<std::string>& known_run_outcomes();
+
+/// A run record as one line of JSON (no raw newline), and back: the message that carries a
+/// finished run from a worker process or rank to the store. decode throws
+/// std::invalid_argument on a malformed message.
+std::string encode_run_record(const RunRecord& record);
+RunRecord decode_run_record(const std::string& message);
 
 /// The database does not belong to this campaign (other scenario or seed), or is not one.
 class ResultsMismatch : public std::runtime_error {

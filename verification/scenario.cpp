@@ -632,6 +632,8 @@ void visit_cosim(V& v, CosimSettings& c) {
     p.field("level_check", c.pilot.level_check);
   });
   v.field("inject_flight_software_exception_s", c.inject_flight_software_exception_s, between(-1.0, 3600.0));
+  v.field("inject_crash_s", c.inject_crash_s, between(-1.0, 3600.0));
+  v.field("inject_hang_s", c.inject_hang_s, between(-1.0, 3600.0));
   v.field("strategy", c.strategy);
   v.check("strategy", flight_sw::parse_strategy(c.strategy).has_value(),
           "unknown strategy '" + c.strategy + "' (through_cells, over_tops or around_ends)");

@@ -135,6 +135,12 @@ class Drawer {
   // (coverage) and blended. (OpenCV's LINE_AA fill is biased by about half a pixel.)
   void fill_exact(cv::Mat& img, const std::vector<cv::Point2d>& q, const cv::Scalar& colour) const {
     constexpr int kSs = 8, kShift = 4;
+    // A vertex far off the picture (a point behind the camera projects anywhere): drawn as
+    // fill() draws it, which skips it. Checked first because boundingRect rounds to int, and a
+    // rectangle at x = INT_MIN moved by (-1, -1) overflows (UBSan).
+    for (const auto& v : q) {
+      if (!(std::abs(v.x) <= 1e5 && std::abs(v.y) <= 1e5)) return fill(img, q, colour);
+    }
     std::vector<cv::Point2f> qf(q.begin(), q.end());
     const cv::Rect roi = (cv::boundingRect(qf) + cv::Size(2, 2) - cv::Point(1, 1)) & cv::Rect(0, 0, img.cols, img.rows);
     if (roi.empty() || roi.area() > 200 * 200) return fill(img, q, colour);

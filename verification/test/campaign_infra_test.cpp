@@ -1,4 +1,5 @@
 // Seeding, statistics, run hashes and the results store: the campaign's bookkeeping.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <set>
@@ -119,6 +120,23 @@ class ResultsStoreTest : public ::testing::Test {
 RunRecord make_run(std::int64_t i) {
   return {i, run_seed(9, static_cast<std::uint64_t>(i)), "{\"start_distance_m\":3.1}", "success",
           "{\"settling_z_s\":1.5}", std::string(32, 'a'), 0.25, "{\"t\":[0]}"};
+}
+
+TEST_F(ResultsStoreTest, StoresKnownOutcomesOnlyAndKeepsNothingOfARefusedBatch) {
+  ResultsStore store = ResultsStore::open_or_create(dir_ / "results.sqlite", {"scenario: {}\n", 9, 10});
+  const std::vector<std::string>& known = known_run_outcomes();
+  for (const char* name : {"success", "collision", "timeout", "inventory_mismatch", "crashed", "hung", "worker_error"}) {
+    EXPECT_NE(std::find(known.begin(), known.end(), name), known.end()) << name;
+  }
+  RunRecord hung = make_run(0);
+  hung.outcome = "hung";
+  store.insert(hung);
+  RunRecord misspelt = make_run(2);
+  misspelt.outcome = "sucess";
+  EXPECT_THROW(store.insert(misspelt), std::invalid_argument);
+  EXPECT_THROW(store.insert(std::vector<RunRecord>{make_run(1), misspelt}), std::invalid_argument);
+  ASSERT_EQ(store.runs().size(), 1u);
+  EXPECT_EQ(store.runs()[0].outcome, "hung");
 }
 
 TEST_F(ResultsStoreTest, KeepsRunsAcrossReopenAndRefusesOtherCampaigns) {

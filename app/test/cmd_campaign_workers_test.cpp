@@ -1,0 +1,127 @@
+// A campaign's runs live in worker processes (verification/run_process.hpp): runs that crash
+// (cosim.inject_crash_s: a real SIGSEGV) or hang (cosim.inject_hang_s) are recorded as such
+// with their reason and seed, the campaign completes with exit 0 and its report lists them with
+// their replay commands; runs that complete give exactly the records of in-process workers.
+#include <regex>
+
+#include "campaign_helpers.hpp"
+#include "shelfcross/random.hpp"
+#include "verification/campaign.hpp"
+
+namespace {
+
+using namespace shelfcross::app::test;
+using nlohmann::json;
+
+/// short_scenario with `extra` (lines of the cosim section) and cosim.timeout_s set to `timeout_s`.
+fs::path faulty_scenario(const fs::path& dir, const std::string& extra, int timeout_s) {
+  std::ifstream in(short_scenario(dir));
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string yaml = text.str();
+  const auto at = yaml.find("  timeout_s: 4\n");
+  yaml.replace(at, 15, "  timeout_s: " + std::to_string(timeout_s) + "\n" + extra);
+  const fs::path path = dir / "faulty.yaml";
+  std::ofstream(path) << yaml;
+  return path;
+}
+
+struct StoredRun {
+  int index;
+  std::uint64_t seed;
+  std::string outcome;
+  json metrics;
+};
+
+std::vector<StoredRun> stored_runs_of(const fs::path& db) {
+  SQLite::Database d(db.string(), SQLite::OPEN_READONLY);
+  SQLite::Statement q(d, "SELECT run_index, seed, outcome, metrics_json FROM runs ORDER BY run_index");
+  std::vector<StoredRun> out;
+  while (q.executeStep()) {
+    out.push_back({q.getColumn(0).getInt(), std::stoull(q.getColumn(1).getString()), q.getColumn(2).getString(),
+                   json::parse(q.getColumn(3).getString())});
+  }
+  return out;
+}
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+int count_of(const std::string& text, const std::string& what) {
+  int n = 0;
+  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+TEST(CampaignWorkers, RunsThatCrashAreRecordedAndTheCampaignCompletes) {
+  const fs::path root = fresh_dir("workers_crash");
+  const std::string scenario = faulty_scenario(root, "  inject_crash_s: 5\n", 6).string();
+  const fs::path out = root / "out";
+  EXPECT_EQ(wait_exit(spawn({SHELFCROSS_PROGRAM, "campaign", "--scenario", scenario, "--runs", "3", "--seed", "12",
+                             "--jobs", "2", "--out", out.string()},
+                            (root / "log.txt").string())),
+            0)
+      << read_text(root / "log.txt");
+  const std::vector<StoredRun> runs = stored_runs_of(out / "results.sqlite");
+  ASSERT_EQ(runs.size(), 3u);
+  for (const StoredRun& r : runs) {
+    EXPECT_EQ(r.outcome, "crashed");
+    EXPECT_EQ(r.seed, shelfcross::run_seed(12, static_cast<std::uint64_t>(r.index)));
+    EXPECT_EQ(r.metrics.value("signal", 0), SIGSEGV);
+    EXPECT_EQ(r.metrics.value("detail", ""), "worker process killed by signal 11 (SIGSEGV)");
+  }
+  const json summary = json::parse(read_text(out / "summary.json"));
+  EXPECT_EQ(summary["outcomes"], json({{"crashed", 3}}));
+  const std::string report = read_text(out / "report.md");
+  EXPECT_EQ(count_of(report, "killed by signal 11 (SIGSEGV) | `shelfcross replay "), 3) << report;
+}
+
+TEST(CampaignWorkers, RunsThatHangAreKilledAtTheirLimitAndRecorded) {
+  const fs::path root = fresh_dir("workers_hang");
+  const std::string scenario = faulty_scenario(root, "  inject_hang_s: 1\n", 4).string();
+  const fs::path out = root / "out";
+  // The limit: max(2 s, 0 x cosim.timeout_s) of wall-clock time per run.
+  EXPECT_EQ(wait_exit(spawn({SHELFCROSS_PROGRAM, "campaign", "--scenario", scenario, "--runs", "2", "--seed", "3",
+                             "--jobs", "1", "--run-wall-factor", "0", "--run-wall-floor", "2", "--out", out.string()},
+                            (root / "log.txt").string())),
+            0)
+      << read_text(root / "log.txt");
+  const std::vector<StoredRun> runs = stored_runs_of(out / "results.sqlite");
+  ASSERT_EQ(runs.size(), 2u);
+  for (const StoredRun& r : runs) {
+    EXPECT_EQ(r.outcome, "hung");
+    EXPECT_EQ(r.seed, shelfcross::run_seed(3, static_cast<std::uint64_t>(r.index)));
+    EXPECT_TRUE(r.metrics.value("detail", "").starts_with("no result after 2.0 s of wall-clock time"))
+        << r.metrics.dump();
+  }
+  EXPECT_EQ(count_of(read_text(out / "report.md"), "`shelfcross replay "), 2);
+}
+
+TEST(CampaignWorkers, WorkerProcessesStoreTheRecordsOfInProcessWorkers) {
+  namespace v = shelfcross::verification;
+  const fs::path root = fresh_dir("workers_same");
+  const std::string scenario = short_scenario(root).string();
+  const fs::path out = root / "processes";
+  EXPECT_EQ(wait_exit(spawn({SHELFCROSS_PROGRAM, "campaign", "--scenario", scenario, "--runs", "3", "--seed", "9",
+                             "--jobs", "2", "--out", out.string()})),
+            0);
+  // The same campaign on CampaignWorker threads in this process, as campaigns ran before.
+  auto nominal = std::make_shared<const v::Scenario>(v::load_scenario(scenario));
+  v::ResultsStore threads = v::ResultsStore::open_or_create(root / "threads.sqlite", {v::write_scenario(*nominal), 9, 3});
+  v::run_pending(threads, 9, 3, [nominal](int) { return std::make_unique<v::CampaignWorker>(nominal); }, {.jobs = 2});
+  v::ResultsStore processes = v::ResultsStore::open_existing(out / "results.sqlite");
+  std::vector<v::RunRecord> a = threads.runs(), b = processes.runs();
+  ASSERT_EQ(a.size(), 3u);
+  ASSERT_EQ(b.size(), 3u);
+  for (size_t i = 0; i < a.size(); ++i) {
+    a[i].wall_s = b[i].wall_s = 0.0;  // informative, not part of the result
+    EXPECT_EQ(a[i], b[i]) << "run " << i;
+  }
+  EXPECT_EQ(v::summarize_campaign(a, 3)["campaign_hash"], campaign_hash(out));
+}
+
+}  // namespace
