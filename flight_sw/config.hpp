@@ -35,7 +35,7 @@
 //               beyond_distance_m edge_margin_px settle_s settle_z_m settle_psi_rad
 //               settle_hold_s pose_fresh_s pose_jump_m pose_jump_rad pose_jump_window_s
 //               identity_continuity_s identity_confirm_s identity_rereads stop_distance_m
-//               min_beyond_distance_m vertical_lag_s
+//               min_beyond_distance_m level_check vertical_lag_s
 //   layout:     shelf_count shelf_spacing_m (required when shelf_count > 1)
 //   strategy:   mode (through_cells | over_tops | around_ends) top_clearance_m end_clearance_m
 //               transfer_speed_mps transfer_kp transfer_yaw_kp waypoint_tolerance_m transfer_leg_s
@@ -180,7 +180,7 @@ struct Timeouts {
 struct MissionParams {
   int low_battery_pct = 15;
   int takeoff_min_battery_pct = 25;
-  double airborne_height_m = 0.3;  ///< a takeoff whose reply was lost counts above this
+  double airborne_height_m = 0.3;  ///< a takeoff whose reply was lost counts above this, a land at or below
   double viewpoint_margin = 0.15;  ///< shelf extent grown by this fraction to fit the view
   double viewpoint_position_tolerance_m = 0.15;
   double viewpoint_yaw_tolerance_rad = 0.08;

@@ -244,10 +244,15 @@ void FlightSoftware::on_completion(const SdkLink::Completion& c) {
       abort_on_ground("takeoff failed: " + (c.timed_out ? std::string("no reply") : c.reply));
     }
   } else if (c.command == "land") {
-    if (c.ok) {
+    // The `ok` comes once the drone is down; if it was lost, a repeated `land` finds the drone
+    // on the ground and gets `error`. The state height settles it, as for a takeoff whose reply
+    // was lost: at or below airborne_height_m the drone is down. (A stale state record shows
+    // the last height in flight, so it can only keep the flight software trying.)
+    const bool down_anyway = !c.ok && state_ && state_->height_m <= config_.mission.airborne_height_m;
+    if (c.ok || down_anyway) {
       result_.outcome = pending_outcome_;
       result_.landed = true;
-      enter(Phase::Done, "landed");
+      enter(Phase::Done, c.ok ? "landed" : "landed (no `ok`: the state height says on the ground)");
     } else if (retry_left) {
       retry(config_.timeouts.land_reply_s);
     } else {

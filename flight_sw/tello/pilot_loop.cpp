@@ -87,7 +87,9 @@ class PilotLoop::Impl {
         airborne_ = true;
       } else if (e.kind == K::Reply || e.kind == K::Failed) {
         const bool ok = e.kind == K::Reply && flight_sw::is_ok_reply(e.reply);
-        if (e.command == "land" && ok) airborne_ = false;
+        // A `land` whose `ok` was lost: repeated, it finds the drone on the ground and gets
+        // `error`, or times out; the state height says whether it is down.
+        if (e.command == "land" && (ok || grounded())) airborne_ = false;
         // A refused takeoff ("error No valid imu", ...) left the drone on the ground, unless
         // the state stream says otherwise.
         if (e.command == "takeoff" && e.kind == K::Reply && !ok &&
@@ -97,7 +99,7 @@ class PilotLoop::Impl {
         if (e.tag == kTagFlightSoftware && e.kind == K::Reply) inputs.emplace_back(SdkReply{e.t_ns, e.reply});
         if (e.tag == kTagPilot && e.command == "land") {
           land_done_ = true;
-          land_ok_ = ok;
+          land_ok_ = ok || grounded();
         }
       }
     }
@@ -321,6 +323,9 @@ class PilotLoop::Impl {
     }
     if (fsw_.finished()) {
       const int code = fsw_.result().outcome == flight_sw::Outcome::Aborted ? 1 : 0;
+      // The flight software found the drone down by the state height (its `land` reply lost):
+      // the program agrees when its own newest height does.
+      if (airborne_ && fsw_.result().landed && grounded()) airborne_ = false;
       if (airborne_) {
         begin_land("the flight software ended while airborne", code);
         return std::nullopt;
@@ -360,6 +365,8 @@ class PilotLoop::Impl {
   const SdkDriver& driver() const { return *driver_; }
   const VideoReceiver& video() const { return *video_; }
   bool airborne() const { return airborne_; }
+  /// The newest state record puts the drone on the ground (at or below kAirborneHeight_m).
+  bool grounded() const { return last_height_m_ && *last_height_m_ <= kAirborneHeight_m; }
   const std::string& failsafe_reason() const { return failsafe_reason_; }
 
  private:
