@@ -237,10 +237,11 @@ TEST(CrossingGate, RefusesAnUnidentifiedCellEvenPerfectlyCentred) {
 }
 
 // Issue 17, run 19 of grid_2x2 seed 2 (ideal link), at its commit: the last pose (0.3 s old
-// with the video latency) showed the vehicle 13 cm above the centre of L2 C1 (34 cm row, 32 cm
-// opening) at 0.83 m; the crossing line from it through the cell centre at mid-depth passes
-// the faces 2.3 cm off the centre, inside the 11 cm the opening leaves (0.5 (0.32 - 0.041) -
-// 0.03). The gate let it through; the vehicle sank 20 cm in the crossing. The state record
+// with the video latency) showed the vehicle about 13 cm above the centre of L2 C1 (34 cm row,
+// 32 cm opening) at 0.83 m; the crossing line from it through the cell centre at mid-depth
+// passes the faces 2.3 cm off the centre, inside the 11 cm the opening leaves (0.5 (0.32 -
+// 0.041) - 0.03). The gate let it through; the vehicle, by then 7.7 cm above and sinking at
+// 0.1 m/s, sank 21 cm in the crossing. The state record
 // tells where the vehicle is now: the gate refuses while the state height, or where the
 // vertical speed carries it (vz * vertical_lag_s), leaves the opening, and when the cell's
 // height was never measured against the state height.
@@ -258,11 +259,12 @@ TEST(CrossingGate, JudgesTheHeightByTheStateRecordNotOnlyByTheStalePose) {
   const double tol_z = 0.5 * (0.34 - 0.02 - config.mission.vehicle_size_m.z()) - config.mission.crossing_margin_m;
   // No height measured against the state: never crossed.
   EXPECT_EQ(crossing_refusal(config, target, pose, gate).value_or(""), "cell height not measured against the state height");
-  // The state agrees with the pose and the vehicle is still: the line is inside, crossed.
+  // The state puts the vehicle at the centre's height, still: crossed (the line passes too).
   gate.height_above_cell_m = 0.0;
   EXPECT_FALSE(crossing_refusal(config, target, pose, gate).has_value());
-  // Still above, but sinking at 0.1 m/s: carried 5 cm further, still inside.
-  gate.height_above_cell_m = 0.065;
+  // Run 19 by the state: 7.7 cm above, sinking at 0.1 m/s, carried to 2.7 cm: inside, crossed
+  // (the crossing then holds the centre's height).
+  gate.height_above_cell_m = 0.077;
   gate.vz_mps = -0.1;
   EXPECT_FALSE(crossing_refusal(config, target, pose, gate).has_value());
   // Already low by the state and still sinking: carried below the opening's margin. Refused,
