@@ -147,6 +147,8 @@ void read_control(const Map& m, ControlGains& c) {
   opt(m, "max_control_dt_s", c.max_control_dt_s, kPositive);
   opt(m, "approach_cone_rad", c.approach_cone_rad, kPositive);
   opt(m, "commit_range_m", c.commit_range_m, kNonNegative);
+  opt(m, "crossing_kp_z", c.crossing_kp_z, kNonNegative);
+  opt(m, "crossing_z_speed_max_mps", c.crossing_z_speed_max_mps, kPositive);
   m.finish();
 }
 
@@ -211,6 +213,7 @@ void read_mission(const Map& m, MissionParams& p) {
   opt(m, "min_beyond_distance_m", p.min_beyond_distance_m, kNonNegative);
   opt(m, "identity_confirm_s", p.identity_confirm_s, kPositive);
   opt(m, "identity_rereads", p.identity_rereads, within(0, 100));
+  opt(m, "vertical_lag_s", p.vertical_lag_s, kNonNegative);
   m.finish();
 }
 

@@ -22,7 +22,7 @@
 //               psi_integral_limit_rad_s yaw_rate_max_radps lateral_speed_mps
 //               psi_lateral_threshold_rad viewpoint_kp viewpoint_speed_max_mps viewpoint_yaw_kp
 //               search_yaw_rate_radps back_off_speed_mps crossing_speed_mps max_control_dt_s
-//               approach_cone_rad commit_range_m
+//               approach_cone_rad commit_range_m crossing_kp_z crossing_z_speed_max_mps
 //   rc:         rc_per_mps_horizontal rc_per_mps_vertical rc_per_radps_yaw rc_period_s
 //               keepalive_s
 //   timeouts:   command_reply_s takeoff_reply_s land_reply_s command_retries command_gap_s
@@ -35,7 +35,7 @@
 //               beyond_distance_m edge_margin_px settle_s settle_z_m settle_psi_rad
 //               settle_hold_s pose_fresh_s pose_jump_m pose_jump_rad pose_jump_window_s
 //               identity_continuity_s identity_confirm_s identity_rereads stop_distance_m
-//               min_beyond_distance_m level_check
+//               min_beyond_distance_m level_check vertical_lag_s
 //   layout:     shelf_count shelf_spacing_m (required when shelf_count > 1)
 //   strategy:   mode (through_cells | over_tops | around_ends) top_clearance_m end_clearance_m
 //               transfer_speed_mps transfer_kp transfer_yaw_kp waypoint_tolerance_m transfer_leg_s
@@ -144,6 +144,11 @@ struct ControlGains {
   /// the view (about 0.55 m for 34 cm cells) plus the stopping distance.
   double commit_range_m = 0.95;
   double max_control_dt_s = 0.2;            ///< integrator step cap across frame gaps
+  /// Height hold in the crossing (no picture shows the cell there): on every state record,
+  /// vz = kp (z_cell - h) saturated to +-crossing_z_speed_max_mps, z_cell the cell centre's
+  /// height in the frame of the state height h, measured in the approach (flight_sw/README.md).
+  double crossing_kp_z = 1.0;               ///< (m/s) per m
+  double crossing_z_speed_max_mps = 0.1;
 };
 
 /// Conversion between SI commands and the SDK's -100..100 sticks.
@@ -222,6 +227,12 @@ struct MissionParams {
   double stop_distance_m = 0.4;
   double min_beyond_distance_m = 0.1;
   int identity_rereads = 2;
+  /// The autopilot's vertical lag assumed: a vertical speed vz carries the vehicle about
+  /// vz * vertical_lag_s further after the command changes (a first-order response; the Tello's
+  /// time constant is unidentified, docs/tello_sdk.md: 0.3 to 0.7 s horizontally). The crossing
+  /// gate adds it to the state height; the approach's height samples wait this long after the
+  /// state last showed vertical motion (the picture is a video latency older than the record).
+  double vertical_lag_s = 0.5;
 };
 
 /// The warehouse as the operator describes it: shelf_count shelves of the known geometry in a

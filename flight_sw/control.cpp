@@ -22,6 +22,10 @@ double bang_off_bang(double psi_rad, double threshold_rad, double speed_mps) {
   return 0.0;
 }
 
+double height_hold_vz_mps(double target_height_m, double height_m, double kp, double speed_max_mps) {
+  return std::clamp(kp * (target_height_m - height_m), -speed_max_mps, speed_max_mps);
+}
+
 std::string RcSticks::text() const {
   return "rc " + std::to_string(a) + " " + std::to_string(b) + " " + std::to_string(c) + " " +
          std::to_string(d);

@@ -43,6 +43,14 @@ class PiController {
 /// the path onto the normal.
 double bang_off_bang(double psi_rad, double threshold_rad, double speed_mps);
 
+/// The crossing's height hold on the state record's height (the Tello's h, its take-off-point
+/// height, in the frame the cell's height was measured in): vz = kp (target - h), saturated to
+/// +-speed_max (m/s, up positive). Proportional only: the autopilot holds its own height
+/// reference at zero stick, so no integral is needed to hold a height, and a crossing lasts a
+/// few seconds. Not the ToF: under the vehicle in a cell are the beam and the boxes below, not
+/// the floor.
+double height_hold_vz_mps(double target_height_m, double height_m, double kp, double speed_max_mps);
+
 /// A velocity command in the body frame.
 struct VelocityCommand {
   double vx_B_mps = 0.0;

@@ -7,6 +7,17 @@
 
 namespace shelfcross::flight_sw {
 
+namespace {
+// |vz| below half the SDK's 0.1 m/s step (vgz reads 0): vertically still.
+constexpr double kVerticallyStill_mps = 0.05;
+// A state record older than this is not the vehicle's height now (they come at 10 Hz).
+constexpr double kStateFresh_s = 0.3;
+// The cell centre's height: the median of the last kCellHeightSamples samples, at least
+// kMinCellHeightSamples of them (sample_cell_height).
+constexpr size_t kCellHeightSamples = 15;
+constexpr size_t kMinCellHeightSamples = 3;
+}  // namespace
+
 const char* phase_name(Phase p) {
   switch (p) {
     case Phase::Idle: return "idle";
@@ -143,7 +154,14 @@ void FlightSoftware::on_state(const StateRecord& s) {
   state_ = s;
   telemetry_.battery_pct = s.battery_pct;
   telemetry_.height_m = s.height_m;
+  if (std::abs(s.vz_H_mps) > kVerticallyStill_mps) vertical_motion_ns_ = s.t_ns;
   if (phase_ == Phase::Transfer) transfer();
+  // The crossing holds the cell centre's height by the state height (no picture shows the cell
+  // in there): a drift or a sink the open-loop command would carry into a beam is turned back.
+  if (phase_ == Phase::Cross && crossing_height_m_) {
+    const ControlGains& g = config_.control;
+    velocity_.vz_mps = height_hold_vz_mps(*crossing_height_m_, s.height_m, g.crossing_kp_z, g.crossing_z_speed_max_mps);
+  }
 }
 
 void FlightSoftware::on_frame(const CameraFrame& f) {
@@ -275,6 +293,9 @@ void FlightSoftware::supervise() {
       }
       break;
     case Phase::Cross:
+      // No fresh state record: no height to hold by; zero vertical stick (the autopilot holds
+      // its own height reference) rather than a correction computed on an old height.
+      if (!state_fresh()) velocity_.vz_mps = 0.0;
       if (now_ns_ - phase_start_ns_ >= cross_duration_ns_) {
         if (!last_shelf()) {
           hover();
@@ -592,6 +613,7 @@ bool FlightSoftware::select_target(const cv::Mat& bgr) {
   identity_vouched_ns_ = now_ns_;
   vouched_box_px_ = box_px_;
   behind_m_.reset();
+  cell_height_samples_m_.clear();
   gain_start_.reset();
   commanded_m_.clear();
   last_approach_ns_.reset();
@@ -783,6 +805,34 @@ std::optional<double> FlightSoftware::cell_height_m(double v_px, double range_m)
   return state_->height_m + range_m * std::tan(elevation);
 }
 
+// The target cell centre's height in the frame of the state height h: h less the body's z_K
+// from the pose (z_K = 0 at the cell centre). The picture is a video latency (0.1-0.35 s) older
+// than the state record, so a sample is taken only while the state has shown the vehicle
+// vertically still for vertical_lag_s (then h has not changed since the picture), on nearly
+// whole pictures, and inside commit_range_m (close in, the 4-tag pose's height is good to about
+// 2 cm; far out its tilt ambiguity moves it by decimetres). The last kCellHeightSamples count.
+void FlightSoftware::sample_cell_height(const Picture& pic, const PoseEstimate& pose) {
+  if (!pic.decides || !state_fresh() || -pose.p_FB_m().x() > config_.control.commit_range_m) return;
+  if (vertical_motion_ns_ && ns_to_seconds(now_ns_ - *vertical_motion_ns_) < config_.mission.vertical_lag_s) return;
+  cell_height_samples_m_.push_back(state_->height_m - pose.p_FB_m().z());
+  if (cell_height_samples_m_.size() > kCellHeightSamples) cell_height_samples_m_.erase(cell_height_samples_m_.begin());
+}
+
+// The median of the samples (a wrong corner match or a damaged band moves one, not the median);
+// empty with fewer than kMinCellHeightSamples: a picture or two is no measurement.
+std::optional<double> FlightSoftware::measured_cell_height_m() const {
+  if (cell_height_samples_m_.size() < kMinCellHeightSamples) return std::nullopt;
+  std::vector<double> v = cell_height_samples_m_;
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+// A state record within kStateFresh_s: the Tello sends them at 10 Hz.
+bool FlightSoftware::state_fresh() const {
+  return state_ && ns_to_seconds(now_ns_ - state_->t_ns) <= kStateFresh_s;
+}
+
 bool FlightSoftware::reacquire(const Picture& pic) {
   const cv::Mat& bgr = pic.bgr;
   // The target is a cell of the (possibly partial) grid near the last box: the nearest one
@@ -892,6 +942,7 @@ void FlightSoftware::reread_shelf(const std::string& why) {
   telemetry_.target.reset();
   pose_K_.reset();
   decision_pose_K_.reset();
+  cell_height_samples_m_.clear();
   identity_ = CellIdentity::Unknown;
   telemetry_.target_identity = identity_;
   unidentified_since_ns_.reset();
@@ -986,6 +1037,7 @@ void FlightSoftware::approach(const Picture& pic) {
     if (near_edge_ && !pic.decides) v = {};
     set_velocity(v);
     estimate_forward_gain(pic, pose);
+    sample_cell_height(pic, pose);
     telemetry_.e_z_m = e_z;
     telemetry_.e_psi_rad = e_psi;
     telemetry_.psi_cell_rad = psi;
@@ -1010,6 +1062,11 @@ void FlightSoftware::approach(const Picture& pic) {
     gate.pose_age_s = ns_to_seconds(now_ns_ - decision_pose_t_ns_);
     gate.still_for_s = ns_to_seconds(decision_pose_t_ns_ - lateral_active_ns_);
     gate.identity = identity_;
+    const std::optional<double> cell_centre_h_m = measured_cell_height_m();
+    if (cell_centre_h_m && state_fresh()) {
+      gate.height_above_cell_m = state_->height_m - *cell_centre_h_m;
+      gate.vz_mps = state_->vz_H_mps;
+    }
     const std::optional<std::string> refusal = crossing_refusal(config_, *target_, pose, gate);
     const std::string why = refusal.value_or("");
     if (!refusal) {
@@ -1033,11 +1090,17 @@ void FlightSoftware::approach(const Picture& pic) {
       // in the approach (the rc-to-speed gain of a Tello varies by tens of percent).
       cross_duration_ns_ = seconds_to_ns(distance / (d.x() * g.crossing_speed_mps * forward_gain_));
       enter(Phase::Cross, "corner tags left the view: crossing " + cell_text(*target_) + " (" + format_m(beyond_m) +
-                              " m past the back face; speed gain " + format_m(forward_gain_) +
+                              " m past the back face; speed gain " + format_m(forward_gain_) + "; " +
+                              format_m(*gate.height_above_cell_m) + " m above the cell centre by the state height" +
                               (behind_m_ ? "; tags " + format_m(*behind_m_) + " m behind)" : ")"));
+      // Horizontally along the line; vertically the cell centre's height held by the state
+      // height (on_state), not the line's slope: that slope came from a pose a video latency
+      // old, and open loop it flew a vehicle still settling vertically into the beam below.
+      crossing_height_m_ = cell_centre_h_m;
       const double cy = std::cos(pose.yaw_rad), sy = std::sin(pose.yaw_rad);
-      set_velocity({g.crossing_speed_mps * (cy * d.x() + sy * d.y()),
-                    g.crossing_speed_mps * (-sy * d.x() + cy * d.y()), g.crossing_speed_mps * d.z(), 0.0});
+      set_velocity({g.crossing_speed_mps * (cy * d.x() + sy * d.y()), g.crossing_speed_mps * (-sy * d.x() + cy * d.y()),
+                    height_hold_vz_mps(*cell_centre_h_m, state_->height_m, g.crossing_kp_z, g.crossing_z_speed_max_mps),
+                    0.0});
       return;
     }
     if (!back_off_since_ns_) {
@@ -1100,6 +1163,8 @@ void FlightSoftware::next_shelf(const std::string& event) {
                          config_.perception.marker_min_agreeing_frames);
   target_.reset();
   target_height_m_.reset();
+  cell_height_samples_m_.clear();
+  crossing_height_m_.reset();
   tracker_.release();
   pose_K_.reset();
   decision_pose_K_.reset();

@@ -60,9 +60,14 @@
 // commit_range_m, while settled (lateral law quiet for settle_s, e_z and e_psi small); 0
 // otherwise, the other loops running (hover and settle; given up after settle_hold_s).
 // Crossing: gated on a pose at most pose_fresh_s old taken settle_s after the last lateral
-// command (so the latency hides no sideways motion), on the heading, and on where the crossing
-// line meets the front and back faces; flown open loop along the straight line from the last
-// pose through the cell centre at mid-depth, heading held, at crossing_speed_mps.
+// command (so the latency hides no sideways motion), on the heading, on where the crossing
+// line meets the front and back faces, and on the height the state record gives now (h less
+// the cell centre's height in h's frame, measured on close, vertically still poses of the
+// approach) and where the vertical speed carries it: both inside the opening between the
+// beams. Flown along the straight line from the last pose through the cell centre at
+// mid-depth, heading held, at crossing_speed_mps, horizontally open loop; vertically the cell
+// centre's height is held by the state height (vz = crossing_kp_z (z_cell - h)), zero vertical
+// stick while no fresh state record comes.
 // Vertical: dy_im = cy - v_box (pixels, > 0 when the target is above the principal point);
 // e_z = dy_im * range / fy (metres, eq. 11 with k_e = fy / range); vz = PI(e_z) climbs toward
 // it. Heading: dx_im = u_box - cx; e_psi = atan(-dx_im / fx) (eq. 13-14 with k_dpsi = 1,
@@ -244,6 +249,9 @@ class FlightSoftware {
   bool measure_target(const Picture& pic, const cv::Rect2d& predicted);
   bool reacquire(const Picture& pic);
   std::optional<double> cell_height_m(double v_px, double range_m) const;
+  void sample_cell_height(const Picture& pic, const PoseEstimate& pose);
+  std::optional<double> measured_cell_height_m() const;
+  bool state_fresh() const;
   void start_tracker(const cv::Mat& bgr, const cv::Rect2d& box);
   /// The target's identity on a picture where it is not confirmed (target_tracker.hpp):
   /// confirmed, kept unknown, or the shelf re-read (returns false: the approach is over).
@@ -336,8 +344,14 @@ class FlightSoftware {
   std::optional<TimeNs> last_approach_ns_;
   double forward_gain_ = 1.0;
   std::vector<MarkerSighting> frame_markers_;
+  // The target cell centre's height in the frame of the state height h (the Tello's height
+  // above its take-off point): h - z_K of the body, sampled on close poses of the approach while
+  // the state shows the vehicle vertically still (sample_cell_height).
+  std::vector<double> cell_height_samples_m_;
+  std::optional<TimeNs> vertical_motion_ns_;  ///< last state record showing vertical motion
   // Crossing
   TimeNs cross_duration_ns_ = 0;
+  std::optional<double> crossing_height_m_;   ///< the height the crossing holds, h's frame
   // Shelves
   int shelf_ = 0;
   std::vector<Inventory> finished_;

@@ -247,6 +247,14 @@ std::optional<std::string> crossing_refusal(const FlightConfig& config, CellInde
   if (psi > m.crossing_yaw_tolerance_rad) return "heading off the cell normal";
   if (d.x() <= 0.0 || std::abs(front.y()) > tol_y || std::abs(back.y()) > tol_y) return "off-centre laterally";
   if (std::abs(front.z()) > tol_z || std::abs(back.z()) > tol_z) return "off-centre vertically";
+  // The height now, by the state record: the pose shows the vehicle a video latency ago
+  // (0.1-0.35 s), and in that time a vehicle still settling vertically moves centimetres. The
+  // crossing holds the cell centre's height by the state height from where the vehicle is now;
+  // a vertical speed vz carries it about vz * vertical_lag_s further before the hold turns it.
+  // Both heights must leave the vehicle crossing_margin_m clear of the beams.
+  if (!input.height_above_cell_m) return std::string("cell height not measured against the state height");
+  const double z_now = *input.height_above_cell_m, z_carried = z_now + input.vz_mps * m.vertical_lag_s;
+  if (std::abs(z_now) > tol_z || std::abs(z_carried) > tol_z) return "off the cell's height by the state height";
   return std::nullopt;
 }
 

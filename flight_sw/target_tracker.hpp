@@ -91,12 +91,20 @@ struct CrossingGateInput {
   double pose_age_s = 0.0;        ///< now less the pose's frame time
   double still_for_s = 0.0;       ///< the pose's frame time less the last lateral command
   CellIdentity identity = CellIdentity::Unknown;  ///< the target's identity (never cross unless Confirmed)
+  /// The vehicle's height above the target cell's centre now, m, from the state record: its
+  /// height h less the cell centre's height in h's frame, measured in the approach. Empty when
+  /// that was never measured (never crossed then).
+  std::optional<double> height_above_cell_m;
+  double vz_mps = 0.0;            ///< the state record's vertical speed (vgz), m/s, up positive
 };
 
 /// The crossing gate (flight_sw/README.md): empty when the crossing of `target` from `pose_K`
 /// may start, otherwise why not. Refused unless the cell's identity is confirmed; then on the
 /// pose's age and stillness, the heading and where the crossing line meets the front and back
-/// faces (the footprint crossing_margin_m inside the clear opening).
+/// faces (the footprint crossing_margin_m inside the clear opening); then on the height the
+/// state record gives now and where the vertical speed carries it (vz * vertical_lag_s): both
+/// must leave the vehicle's height crossing_margin_m inside the opening between the beams,
+/// since the pose is a video latency old and the crossing holds the height by the state.
 std::optional<std::string> crossing_refusal(const FlightConfig& config, CellIndex target,
                                             const PoseEstimate& pose_K, const CrossingGateInput& input);
 

@@ -53,6 +53,17 @@ TEST(BangOffBang, ThresholdsAndSigns) {
   EXPECT_LT(bang_off_bang(psi, psi_l, v), 0.0);
 }
 
+// The crossing's height hold: climbs when below the target height, descends when above,
+// proportionally, saturated both ways; zero on the target.
+TEST(HeightHold, ProportionalTowardTheTargetAndSaturated) {
+  EXPECT_DOUBLE_EQ(height_hold_vz_mps(0.87, 0.87, 1.0, 0.1), 0.0);
+  EXPECT_NEAR(height_hold_vz_mps(0.87, 0.82, 1.0, 0.1), 0.05, 1e-12);
+  EXPECT_NEAR(height_hold_vz_mps(0.87, 0.92, 1.0, 0.1), -0.05, 1e-12);
+  EXPECT_DOUBLE_EQ(height_hold_vz_mps(0.87, 0.60, 1.0, 0.1), 0.1);
+  EXPECT_DOUBLE_EQ(height_hold_vz_mps(0.87, 1.20, 1.0, 0.1), -0.1);
+  EXPECT_DOUBLE_EQ(height_hold_vz_mps(0.87, 0.60, 0.0, 0.1), 0.0);
+}
+
 TEST(RcConversion, SignsGainsRoundingAndSaturation) {
   RcConversion k;  // 100 rc per m/s, 66.7 rc per rad/s
   // Forward 0.25, left 0.1, up 0.05, turning left 0.3 rad/s:

@@ -77,6 +77,7 @@ Outcome judge(const testing::Scene& scene, CellIndex seen, CellIndex believed, d
   gate.pose_age_s = 0.0;
   gate.still_for_s = 10.0;
   gate.identity = out.check.verdict;
+  gate.height_above_cell_m = pose->p_FB_m().z();  // hovering: the state height agrees with the picture
   out.refusal = crossing_refusal(config, believed, *pose, gate);
   return out;
 }
@@ -193,6 +194,7 @@ TEST(CellIdentity, UniformGridWithoutMarkersIsNeverConfirmedWrongly) {
     CrossingGateInput gate;
     gate.still_for_s = 10.0;
     gate.identity = check.verdict;
+    gate.height_above_cell_m = pose->p_FB_m().z();
     EXPECT_TRUE(crossing_refusal(config, believed, *pose, gate).has_value());
   }
 }
@@ -221,6 +223,7 @@ TEST(CrossingGate, RefusesAnUnidentifiedCellEvenPerfectlyCentred) {
   pose.X_FC.translation() = Eigen::Vector3d(-0.555, 0.0, 0.0);
   CrossingGateInput gate;
   gate.still_for_s = 10.0;
+  gate.height_above_cell_m = 0.0;
   for (CellIdentity id : {CellIdentity::Unknown, CellIdentity::Contradicted}) {
     gate.identity = id;
     const auto r = crossing_refusal(config, {2, 2}, pose, gate);
@@ -231,6 +234,52 @@ TEST(CrossingGate, RefusesAnUnidentifiedCellEvenPerfectlyCentred) {
   EXPECT_FALSE(crossing_refusal(config, {2, 2}, pose, gate).has_value());
   gate.pose_age_s = 1.0;
   EXPECT_EQ(crossing_refusal(config, {2, 2}, pose, gate).value_or(""), "last pose too old");
+}
+
+// Issue 17, run 19 of grid_2x2 seed 2 (ideal link), at its commit: the last pose (0.3 s old
+// with the video latency) showed the vehicle about 13 cm above the centre of L2 C1 (34 cm row,
+// 32 cm opening) at 0.83 m; the crossing line from it through the cell centre at mid-depth
+// passes the faces 2.3 cm off the centre, inside the 11 cm the opening leaves (0.5 (0.32 -
+// 0.041) - 0.03). The gate let it through; the vehicle, by then 7.7 cm above and sinking at
+// 0.1 m/s, sank 21 cm in the crossing. The state record
+// tells where the vehicle is now: the gate refuses while the state height, or where the
+// vertical speed carries it (vz * vertical_lag_s), leaves the opening, and when the cell's
+// height was never measured against the state height.
+TEST(CrossingGate, JudgesTheHeightByTheStateRecordNotOnlyByTheStalePose) {
+  FlightConfig config;
+  config.shelf.column_pitch_m = {0.48, 0.36};
+  config.shelf.row_pitch_m = {0.40, 0.34};
+  const CellIndex target{2, 1};
+  PoseEstimate pose;  // camera 4.5 cm ahead of the body (mount), level, facing the cell
+  pose.X_FB.translation() = Eigen::Vector3d(-0.83, 0.0, 0.13);
+  pose.X_FC.translation() = Eigen::Vector3d(-0.785, 0.0, 0.13);
+  CrossingGateInput gate;
+  gate.still_for_s = 10.0;
+  gate.identity = CellIdentity::Confirmed;
+  const double tol_z = 0.5 * (0.34 - 0.02 - config.mission.vehicle_size_m.z()) - config.mission.crossing_margin_m;
+  // No height measured against the state: never crossed.
+  EXPECT_EQ(crossing_refusal(config, target, pose, gate).value_or(""), "cell height not measured against the state height");
+  // The state puts the vehicle at the centre's height, still: crossed (the line passes too).
+  gate.height_above_cell_m = 0.0;
+  EXPECT_FALSE(crossing_refusal(config, target, pose, gate).has_value());
+  // Run 19 by the state: 7.7 cm above, sinking at 0.1 m/s, carried to 2.7 cm: inside, crossed
+  // (the crossing then holds the centre's height).
+  gate.height_above_cell_m = 0.077;
+  gate.vz_mps = -0.1;
+  EXPECT_FALSE(crossing_refusal(config, target, pose, gate).has_value());
+  // Already low by the state and still sinking: carried below the opening's margin. Refused,
+  // though the stale pose alone would have passed.
+  gate.height_above_cell_m = -(tol_z - 0.03);
+  gate.vz_mps = -0.1;
+  EXPECT_EQ(crossing_refusal(config, target, pose, gate).value_or(""), "off the cell's height by the state height");
+  // Low and still, or just outside the margin: refused; just inside and still: crossed.
+  gate.vz_mps = 0.0;
+  gate.height_above_cell_m = -(tol_z + 0.005);
+  EXPECT_TRUE(crossing_refusal(config, target, pose, gate).has_value());
+  gate.height_above_cell_m = tol_z + 0.005;
+  EXPECT_TRUE(crossing_refusal(config, target, pose, gate).has_value());
+  gate.height_above_cell_m = -(tol_z - 0.005);
+  EXPECT_FALSE(crossing_refusal(config, target, pose, gate).has_value());
 }
 
 }  // namespace
