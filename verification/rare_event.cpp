@@ -79,6 +79,10 @@ CeFit ce_refit(const ParameterDistributions& nominal, const ParameterProposals& 
   const double alpha = settings.smoothing;
 
   for (const auto& [name, f_j] : nominal) {
+    if (!settings.adapted.empty() && !settings.adapted.count(name)) {
+      fit.proposal[name] = ProposalDistribution::of_nominal(f_j);
+      continue;
+    }
     // The current parameters are those of the shifted component (the nominal's in round 0).
     const ProposalDistribution& current_j = current.at(name);
     const Distribution& q_j = current_j.nominal_share >= 1.0 ? current_j.nominal : current_j.shifted;
@@ -170,6 +174,7 @@ IsEstimate importance_estimate(const std::vector<double>& log_weights, const std
     w2_sum += y[i] * y[i];
   }
   const double n = static_cast<double>(e.runs);
+  for (double lw : log_weights) e.mean_weight += std::exp(lw) / n;
   e.p_hat = std::accumulate(y.begin(), y.end(), 0.0) / n;
   if (e.failures == 0) return e;
   e.failure_ess = w_sum * w_sum / w2_sum;

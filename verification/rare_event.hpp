@@ -52,6 +52,7 @@
 #include <cstdint>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -80,6 +81,11 @@ struct CeSettings {
   double min_stddev_fraction = 0.1;      ///< stddev floor, times the nominal's scale()
   double nominal_share = 0.1;            ///< s: the nominal's share in every proposal
   std::int64_t estimation_runs = 0;      ///< at least this many runs for the final proposal
+  /// The parameters CE adapts; empty: all. The others keep their nominal as proposal (ratio 1).
+  /// The variance of an IS weight grows exponentially with the number of parameters whose
+  /// proposal differs from the nominal (the fit of a parameter that does not matter is noise
+  /// from a few elites): with tens of runs, adapt the few that matter.
+  std::set<std::string> adapted;
 };
 
 /// One finished run as CE sees it. A NaN margin (the run says nothing about this failure
@@ -129,6 +135,10 @@ struct IsEstimate {
   /// Kish's effective sample size of the failures' weights, (sum w)^2 / sum w^2: near the
   /// failure count when the weights are even, near 1 when one failure dominates.
   double failure_ess = 0.0;
+  /// mean(f(x_i) / q(x_i)) over all runs: an unbiased estimate of 1 for any q keeping f's
+  /// support. Far from 1 (below 0.5 or above 2, say) the weights are too uneven for the runs at
+  /// hand, and the interval is not to be trusted.
+  double mean_weight = 0.0;
 };
 
 /// The estimate from i.i.d. draws of one proposal: log_weight_i = log f(x_i) - log q(x_i),

@@ -69,7 +69,8 @@ nlohmann::json search_settings_json(const SearchSettings& s) {
           {"smoothing", s.ce.smoothing},
           {"min_stddev_fraction", s.ce.min_stddev_fraction},
           {"nominal_share", s.ce.nominal_share},
-          {"estimation_runs", s.ce.estimation_runs}};
+          {"estimation_runs", s.ce.estimation_runs},
+          {"adapted", s.ce.adapted}};
 }
 
 nlohmann::json distribution_json(const Distribution& d) {
@@ -182,7 +183,8 @@ std::vector<CeRound> SearchStore::rounds() const {
     r.estimation = q.getColumn(3).getInt() != 0;
     r.level = q.getColumn(4).isNull() ? std::numeric_limits<double>::quiet_NaN() : q.getColumn(4).getDouble();
     r.elites = q.getColumn(5).getInt64();
-    for (const auto& [name, d] : nlohmann::json::parse(q.getColumn(6).getString()).items()) {
+    const nlohmann::json proposal = nlohmann::json::parse(q.getColumn(6).getString());  // outlives the loop
+    for (const auto& [name, d] : proposal.items()) {
       r.proposal[name] = {distribution_from_json(d.at("shifted")), distribution_from_json(d.at("nominal")),
                           d.at("nominal_share").get<double>()};
     }

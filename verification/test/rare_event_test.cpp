@@ -60,6 +60,7 @@ TEST(CrossEntropy, EstimateOfOneProposalByHand) {
   EXPECT_NEAR(e.standard_error, std::sqrt(s2 / 4.0), 1e-15);
   EXPECT_NEAR(e.lower * e.upper, p * p, 1e-15);  // symmetric on the log scale
   EXPECT_NEAR(e.failure_ess, (y1 + y2) * (y1 + y2) / (y1 * y1 + y2 * y2), 1e-12);
+  EXPECT_NEAR(e.mean_weight, (y1 + y2 + 2.0 * std::exp(5.0)) / 4.0, 1e-12);
   const IsEstimate none = importance_estimate({0.0, 0.0}, {false, false});
   EXPECT_EQ(none.p_hat, 0.0);
   EXPECT_EQ(none.upper, 0.0);
@@ -140,6 +141,7 @@ TEST(CrossEntropy, EstimateCoversTheKnownProbabilityIn19Of20Seeds) {
     covered += r.estimate.lower <= toy.p && toy.p <= r.estimate.upper;
     if (std::getenv("SHELFCROSS_TEST_VERBOSE")) std::printf("seed %d rounds %d fails %lld p_hat %.4g [%.4g, %.4g] re %.3f ess %.1f\n", (int)seed, r.rounds, (long long)r.estimate.failures, r.estimate.p_hat, r.estimate.lower, r.estimate.upper, r.estimate.standard_error / r.estimate.p_hat, r.estimate.failure_ess);
     sum_p_hat += r.estimate.p_hat;
+    EXPECT_NEAR(r.estimate.mean_weight, 1.0, 0.2) << "seed " << seed;
     // A relative standard error of 7 to 20 % from 1000 runs; plain Monte Carlo's would be
     // sqrt((1 - p) / (1000 p)) = 250 %.
     EXPECT_LT(r.estimate.standard_error / r.estimate.p_hat, 0.25) << "seed " << seed;
