@@ -171,8 +171,7 @@ nlohmann::json write_search_report(const std::filesystem::path& dir, const std::
   };
   std::vector<std::string> plots;
   for (const auto& [name, d] : f) {
-    Chart chart(name + ": " + margin_label + " per run (grey: round 0 = nominal, blue: adaptation, green: "
-                "estimation, red: failed)", name, margin_label);
+    Chart chart(margin_label + " against " + name, name, margin_label);
     for (int pass = 0; pass < 2; ++pass) {  // failures drawn last, on top
       for (const Row& row : rows) {
         const double m = row.margins.of(target);
@@ -196,8 +195,7 @@ nlohmann::json write_search_report(const std::filesystem::path& dir, const std::
     plots.push_back(file);
   }
   {
-    Chart chart("Search progress: " + margin_label + " of each run (colours as in the parameter plots)", "run index",
-                margin_label);
+    Chart chart("Search progress: " + margin_label + " of each run", "run index", margin_label);
     for (const Row& row : rows) {
       const double m = row.margins.of(target);
       if (!std::isnan(m)) chart.add_points({static_cast<double>(row.record->index)}, {m}, colour_of(row), 4);
@@ -316,7 +314,8 @@ nlohmann::json write_search_report(const std::filesystem::path& dir, const std::
     for (const auto& [name, d] : f) md << "| " << name << " | " << fmt(most_likely->drawn.at(name), "%.6g") << " | " << describe(d) << " |\n";
   }
   md << "\n## Margin against each parameter\n\nWhich parameters separate failures from successes: the "
-     << margin_label << " of every run against its draw.\n\n![progress](search_progress.png)\n\n";
+     << margin_label << " of every run against its draw (grey: round 0, the nominal; blue: adaptation rounds; green: "
+        "the estimation round; red: failed), and against the run index.\n\n![progress](search_progress.png)\n\n";
   for (const std::string& file : plots) md << "![" << file << "](" << file << ")\n";
   md << "\nEvery run's margins and draws: `margins.csv`.\n";
   std::ofstream(dir / "report.md") << md.str();
