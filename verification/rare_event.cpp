@@ -69,9 +69,14 @@ CeFit ce_refit(const ParameterDistributions& nominal, const ParameterProposals& 
     fit.proposal = current;
     return fit;
   }
-  // Likelihood ratios f / q_t of the elites, scaled by the largest (only ratios matter).
+  // Weights: while the level is above 0 (no failure among the elites yet) all 1, so the search
+  // moves toward failure as fast as the elites lead (CE as an optimiser); at level 0 (the
+  // elites are failures) the likelihood ratios f / q_t, so the fit tends to the zero-variance
+  // density f 1[fail] / p for the estimate. Scaled by the largest (only ratios matter).
   std::vector<double> log_w;
-  for (const CeSample* s : elites) log_w.push_back(log_density(nominal, s->drawn) - log_density(current, s->drawn));
+  for (const CeSample* s : elites) {
+    log_w.push_back(fit.level > 0.0 ? 0.0 : log_density(nominal, s->drawn) - log_density(current, s->drawn));
+  }
   const double log_w_max = *std::max_element(log_w.begin(), log_w.end());
   std::vector<double> w;
   for (double lw : log_w) w.push_back(std::exp(lw - log_w_max));

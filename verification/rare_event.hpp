@@ -13,8 +13,12 @@
 //   after round t, with its runs x_1..x_n drawn from q_t:
 //     level       gamma_t = max(0, the k-th smallest margin), k = max(ceil(rho n), min_elites)
 //     elites      the runs with g <= gamma_t
-//     weights     w_i = f(x_i) / q_t(x_i) (the likelihood ratio: the fit then tends to the
-//                 zero-variance density f(x) 1[g(x) < 0] / p, not to the failures' mode)
+//     weights     while gamma_t > 0, all 1 (falsification: the fit follows the elites toward
+//                 failure as fast as they lead, CE as an optimiser); at gamma_t = 0 (the elites
+//                 are failures) w_i = f(x_i) / q_t(x_i), the likelihood ratio, so that the final
+//                 fit tends to the zero-variance density f(x) 1[g(x) < 0] / p of the estimate
+//                 (Rubinstein & Kroese weight every round; with rounds of ten runs that moved
+//                 the proposal into a 3-sigma tail too slowly for a budget of tens of runs)
 //     fit         per continuous parameter: the weighted mean and standard deviation of the
 //                 elites (the moment fit of the Gaussian; for a truncated Gaussian it is the
 //                 moment fit of the parent, an approximation of its maximum-likelihood fit);
@@ -77,8 +81,8 @@ struct CeSettings {
   std::int64_t round_runs = 16;          ///< runs per adaptation round
   double elite_fraction = 0.1;           ///< rho
   std::int64_t min_elites = 3;           ///< at least this many elites, whatever rho n is
-  double smoothing = 0.7;                ///< alpha
-  double min_stddev_fraction = 0.1;      ///< stddev floor, times the nominal's scale()
+  double smoothing = 0.8;                ///< alpha
+  double min_stddev_fraction = 0.5;      ///< stddev floor on a bounded support, times the nominal's scale()
   double nominal_share = 0.1;            ///< s: the nominal's share in every proposal
   std::int64_t estimation_runs = 0;      ///< at least this many runs for the final proposal
   /// The parameters CE adapts; empty: all. The others keep their nominal as proposal (ratio 1).

@@ -26,11 +26,11 @@ Distribution normal(double mean, double stddev) {
 double upper_tail(double b) { return 0.5 * std::erfc(b / std::numbers::sqrt2); }
 
 TEST(CrossEntropy, RefitByHand) {
-  // Ten runs x = 0..9, margin 9 - x, from the nominal itself (every ratio 1): k = max(ceil(0.1
-  // x 10), 3) = 3 elites, x = 7, 8, 9, level max(0, 2) = 2; their mean 8, stddev sqrt(2/3);
-  // smoothed with alpha 0.7 against the nominal N(0, 10) truncated to [-100, 100]: mean 5.6,
-  // stddev 0.7 sqrt(2/3) + 3 (above the floor, 0.1 x 10).
-  Distribution x = normal(0.0, 10.0);
+  // Ten runs x = 0..9, margin 9 - x, from the nominal itself: k = max(ceil(0.1 x 10), 3) = 3
+  // elites, x = 7, 8, 9, level max(0, 2) = 2 (> 0: unweighted); their mean 8, stddev sqrt(2/3);
+  // smoothed with alpha 0.8 against the nominal N(0, 2) truncated to [-100, 100]: mean 6.4,
+  // stddev 0.8 sqrt(2/3) + 0.4 (above the floor, 0.5 x 2).
+  Distribution x = normal(0.0, 2.0);
   x.kind = Distribution::Kind::truncated_normal;
   x.min = -100.0;
   x.max = 100.0;
@@ -40,14 +40,15 @@ TEST(CrossEntropy, RefitByHand) {
   const CeFit fit = ce_refit(nominal, nominal_proposals(nominal), samples, CeSettings{});
   EXPECT_EQ(fit.elites, 3);
   EXPECT_DOUBLE_EQ(fit.level, 2.0);
-  EXPECT_NEAR(fit.proposal.at("x").shifted.mean, 5.6, 1e-12);
-  EXPECT_NEAR(fit.proposal.at("x").shifted.stddev, 0.7 * std::sqrt(2.0 / 3.0) + 3.0, 1e-12);
-  // Four failures among ten: the level is 0 and the elites are the failures (x = 6..9).
+  EXPECT_NEAR(fit.proposal.at("x").shifted.mean, 6.4, 1e-12);
+  EXPECT_NEAR(fit.proposal.at("x").shifted.stddev, 0.8 * std::sqrt(2.0 / 3.0) + 0.4, 1e-12);
+  // Four failures among ten: the level is 0 and the elites are the failures (x = 6..9),
+  // weighted by f / q = 1 here.
   for (CeSample& s : samples) s.margin -= 3.5;
   const CeFit failing = ce_refit(nominal, nominal_proposals(nominal), samples, CeSettings{});
   EXPECT_EQ(failing.level, 0.0);
   EXPECT_EQ(failing.elites, 4);
-  EXPECT_NEAR(failing.proposal.at("x").shifted.mean, 0.7 * 7.5, 1e-12);
+  EXPECT_NEAR(failing.proposal.at("x").shifted.mean, 0.8 * 7.5, 1e-12);
 }
 
 TEST(CrossEntropy, EstimateOfOneProposalByHand) {
@@ -146,9 +147,9 @@ TEST(CrossEntropy, EstimateCoversTheKnownProbabilityIn19Of20Seeds) {
     // where q draws mostly through its defensive share).
     EXPECT_GE(r.estimate.mean_weight, 0.5) << "seed " << seed;
     EXPECT_LE(r.estimate.mean_weight, 2.0) << "seed " << seed;
-    // A relative standard error of 7 to 20 % from 1000 runs; plain Monte Carlo's would be
+    // A relative standard error of 7 to 27 % from 1000 runs; plain Monte Carlo's would be
     // sqrt((1 - p) / (1000 p)) = 250 %.
-    EXPECT_LT(r.estimate.standard_error / r.estimate.p_hat, 0.25) << "seed " << seed;
+    EXPECT_LT(r.estimate.standard_error / r.estimate.p_hat, 0.3) << "seed " << seed;
   }
   EXPECT_GE(covered, 19);
   // The mean of 20 unbiased estimates, each within ~10 %: within 5 % of p.
