@@ -5,6 +5,7 @@
 #include "run_output.hpp"
 #include "verification/results_store.hpp"
 #include "verification/scenario.hpp"
+#include "verification/search.hpp"
 
 namespace shelfcross::app {
 namespace {
@@ -33,11 +34,18 @@ const CommandRegistration kReplay{
         const verification::Scenario nominal = verification::parse_scenario(store.meta().scenario_yaml, db.string());
         const std::uint64_t seed = run_seed(store.meta().campaign_seed, static_cast<std::uint64_t>(o->run));
         const auto out = std::filesystem::path(o->dir) / ("replay_" + std::to_string(o->run));
-        const verification::RunResult r = run_and_write(verification::disperse(nominal, seed), out, o->video);
         std::optional<verification::RunRecord> stored;
         for (const auto& rec : store.runs()) {
           if (rec.index == o->run) stored = rec;
         }
+        // A search's runs draw from its proposals (verification/search.hpp): replayed with the
+        // stored draws. A campaign's stored draws are its seed's own.
+        const bool search = verification::is_search_database(db);
+        if (search && !stored) throw UsageError("run " + std::to_string(o->run) + " of this search is not stored yet");
+        const verification::RunSetup setup =
+            search ? verification::disperse(nominal, seed, nlohmann::json::parse(stored->dispersion_json).get<verification::DrawnValues>())
+                   : verification::disperse(nominal, seed);
+        const verification::RunResult r = run_and_write(setup, out, o->video);
         std::cout << "replay of run " << o->run << ": " << verification::outcome_name(r.outcome) << ", hash " << r.run_hash
                   << "\nwrote " << out.string() << ": run.json, trajectory.csv, events.log"
                   << (o->video ? ", video.mp4" : "") << "\n";

@@ -70,10 +70,35 @@ DrawnValues draw_dispersions(const std::map<std::string, Distribution>& dispersi
   return drawn;
 }
 
+DrawnValues draw_dispersions(const std::map<std::string, ProposalDistribution>& proposals, std::uint64_t run_seed) {
+  DrawnValues drawn;
+  for (const auto& [name, proposal] : proposals) {
+    RandomStream stream = parameter_stream(run_seed, name);
+    drawn[name] = proposal.sample(stream);
+  }
+  return drawn;
+}
+
 RunSetup disperse(const Scenario& nominal, std::uint64_t run_seed) {
+  return disperse(nominal, run_seed, draw_dispersions(nominal.dispersions, run_seed));
+}
+
+RunSetup disperse(const Scenario& nominal, std::uint64_t run_seed, const DrawnValues& drawn) {
+  if (drawn.size() != nominal.dispersions.size()) {
+    throw std::invalid_argument("disperse: " + std::to_string(drawn.size()) + " drawn values for " +
+                                std::to_string(nominal.dispersions.size()) + " dispersed parameters");
+  }
+  for (const auto& [name, value] : drawn) {
+    if (!nominal.dispersions.count(name)) throw std::invalid_argument("disperse: '" + name + "' is not dispersed");
+    for (const DispersionParameter& p : dispersion_parameters()) {
+      if (name == p.name && !(value >= p.lowest && value <= p.highest)) {
+        throw std::invalid_argument("disperse: " + name + " = " + std::to_string(value) + " is outside its range");
+      }
+    }
+  }
   RunSetup setup;
   setup.seed = run_seed;
-  setup.drawn = draw_dispersions(nominal.dispersions, run_seed);
+  setup.drawn = drawn;
   auto s = std::make_shared<Scenario>(nominal);
   setup.believed_camera = nominal.camera;
   const auto has = [&](const char* name) { return setup.drawn.count(name) > 0; };

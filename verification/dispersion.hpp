@@ -68,6 +68,9 @@ const std::vector<DispersionParameter>& dispersion_parameters();
 using DrawnValues = std::map<std::string, double>;
 
 DrawnValues draw_dispersions(const std::map<std::string, Distribution>& dispersions, std::uint64_t run_seed);
+/// The same from proposals (rare_event.hpp), with the same per-parameter streams: a proposal
+/// equal to the nominal (nominal_share 1) draws what draw_dispersions draws.
+DrawnValues draw_dispersions(const std::map<std::string, ProposalDistribution>& proposals, std::uint64_t run_seed);
 
 /// What a run is set up with: the dispersed truth, and the camera model the flight software
 /// believes (the truth's intrinsics plus any calibration error).
@@ -80,5 +83,12 @@ struct RunSetup {
 
 /// The nominal scenario with one run's draws applied.
 RunSetup disperse(const Scenario& nominal, std::uint64_t run_seed);
+
+/// The nominal scenario with the given draws applied instead of the seed's own (a rare-event
+/// search draws them from a proposal, rare_event.hpp); the seed still seeds everything else of
+/// the run (box placement, noise, the link). `drawn` must hold exactly the scenario's dispersed
+/// parameters, each in its allowed range (std::invalid_argument otherwise).
+/// disperse(nominal, seed) is disperse(nominal, seed, draw_dispersions(nominal.dispersions, seed)).
+RunSetup disperse(const Scenario& nominal, std::uint64_t run_seed, const DrawnValues& drawn);
 
 }  // namespace shelfcross::verification

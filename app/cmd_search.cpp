@@ -1,0 +1,140 @@
+// shelfcross search --scenario FILE --budget N --seed S --jobs J --out DIR: cross-entropy
+// search for failures over the scenario's dispersions and the importance-sampling estimate of
+// each failure class's probability (verification/search.hpp, docs/search.md); resumable (the
+// same command again runs only what is missing). No MPI, no shards.
+#include <atomic>
+#include <csignal>
+#include <iostream>
+#include <optional>
+
+#include "command_registry.hpp"
+#include "verification/search.hpp"
+#include "verification/search_report.hpp"
+
+namespace shelfcross::app {
+namespace {
+
+std::atomic<bool> g_stop{false};
+extern "C" void request_search_stop(int) { g_stop = true; }
+
+struct SearchOptions {
+  std::string scenario = verification::kDefaultScenarioFile;
+  std::int64_t budget = 40;
+  std::uint64_t seed = 1;
+  int jobs = 1;
+  std::string out = "out/search";
+  std::string failure_class = "contact";
+  std::int64_t round_runs = 10;
+  std::int64_t estimation_runs = -1;  ///< -1: half the budget
+  double elite_fraction = 0.1;
+  double nominal_share = 0.1;
+  std::string campaign;
+  std::vector<std::string> parameters;
+};
+
+const CommandRegistration kSearch{
+    "search",
+    "Search the scenario's dispersions for failures (cross-entropy) and estimate their probability by importance "
+    "sampling (resumable)",
+    [](CLI::App& sub) {
+      auto o = std::make_shared<SearchOptions>();
+      sub.add_option("--scenario", o->scenario, "scenario file (its dispersions are the nominal distributions)")
+          ->capture_default_str();
+      sub.add_option("--budget", o->budget, "runs in all")->capture_default_str()->check(CLI::Range(1, 10000000));
+      sub.add_option("--seed", o->seed, "search seed; run k's seed is a fixed hash of (seed, k), as in a campaign")
+          ->capture_default_str();
+      sub.add_option("--jobs", o->jobs, "worker threads")->capture_default_str()->check(CLI::Range(1, 1024));
+      sub.add_option("--out", o->out, "output folder: results.sqlite, report.md, search_summary.json, margins.csv, PNGs")
+          ->capture_default_str();
+      sub.add_option("--class", o->failure_class, "failure class searched for: contact, crossing or mission")
+          ->capture_default_str();
+      sub.add_option("--round-runs", o->round_runs, "runs per adaptation round")
+          ->capture_default_str()
+          ->check(CLI::Range(2, 1000000));
+      sub.add_option("--estimation-runs", o->estimation_runs,
+                     "runs kept for the final proposal's estimate (default: half the budget)")
+          ->check(CLI::Range(1, 10000000));
+      sub.add_option("--elite-fraction", o->elite_fraction, "rho: the fraction of a round kept as elites")
+          ->capture_default_str()
+          ->check(CLI::Range(0.01, 0.5));
+      sub.add_option("--nominal-share", o->nominal_share,
+                     "the nominal's share in every proposal (defensive mixture; bounds each parameter's ratio by 1/share)")
+          ->capture_default_str()
+          ->check(CLI::Range(0.01, 1.0));
+      sub.add_option("--parameters", o->parameters,
+                     "the dispersed parameters the search adapts (comma-separated; default: all); the others keep "
+                     "their nominal distribution")
+          ->delimiter(',');
+      sub.add_option("--campaign", o->campaign,
+                     "a campaign folder of the same scenario: its plain Monte Carlo estimates go beside the search's");
+      return [o]() -> int {
+        const auto target = verification::parse_failure_class(o->failure_class);
+        if (!target) throw UsageError("--class '" + o->failure_class + "': expected contact, crossing or mission");
+        verification::SearchSettings settings;
+        settings.seed = o->seed;
+        settings.budget = o->budget;
+        settings.target = *target;
+        settings.ce.round_runs = o->round_runs;
+        settings.ce.elite_fraction = o->elite_fraction;
+        settings.ce.nominal_share = o->nominal_share;
+        settings.ce.estimation_runs = o->estimation_runs < 0 ? o->budget / 2 : o->estimation_runs;
+        if (settings.ce.estimation_runs > o->budget) {
+          throw UsageError("--estimation-runs " + std::to_string(settings.ce.estimation_runs) + " exceeds --budget " +
+                           std::to_string(o->budget));
+        }
+        std::optional<std::filesystem::path> campaign;
+        if (!o->campaign.empty()) {
+          campaign = o->campaign;
+          if (!std::filesystem::exists(*campaign / "results.sqlite")) {
+            throw UsageError("--campaign " + o->campaign + ": no results.sqlite there");
+          }
+        }
+        auto nominal = std::make_shared<const verification::Scenario>(verification::load_scenario(o->scenario));
+        if (nominal->dispersions.empty()) throw UsageError(o->scenario + ": no dispersions to search over");
+        for (const std::string& name : o->parameters) {
+          if (!nominal->dispersions.count(name)) {
+            throw UsageError("--parameters: '" + name + "' is not dispersed in " + o->scenario);
+          }
+          settings.ce.adapted.insert(name);
+        }
+        std::signal(SIGINT, request_search_stop);
+        std::signal(SIGTERM, request_search_stop);
+        const verification::SearchRunResult r = verification::run_search(
+            nominal, settings, o->out,
+            {.jobs = o->jobs,
+             .stop = &g_stop,
+             .on_round =
+                 [](const verification::CeRound& round) {
+                   std::cerr << "round " << round.index << ": runs " << round.first_run << ".."
+                             << round.first_run + round.runs - 1
+                             << (round.index == 0 ? " from the nominal dispersions"
+                                                  : round.estimation ? " from the final proposal (estimation)"
+                                                                     : " from the refitted proposal")
+                             << "\n";
+                 },
+             .on_progress =
+                 [](const verification::CampaignProgress& p) {
+                   std::cerr << "  " << p.done << "/" << p.total << " runs stored\n";
+                 }});
+        const nlohmann::json summary = verification::write_search_report(o->out, campaign);
+        const nlohmann::json& e = summary["estimates"][o->failure_class];
+        std::cout << "search " << nominal->name << ": " << r.committed << " runs this time, " << summary["runs"]
+                  << " of " << o->budget << " stored; " << summary["failures"].size() << " " << o->failure_class
+                  << " failures";
+        if (!summary["first_failure_run"].is_null()) std::cout << ", the first at run " << summary["first_failure_run"];
+        std::cout << "\nestimate of P(" << o->failure_class << " failure): " << e["p_hat"].get<double>();
+        if (e["failures"].get<std::int64_t>() > 0) {
+          std::cout << ", 95 % interval [" << e["lower"].get<double>() << ", " << e["upper"].get<double>() << "]";
+        }
+        std::cout << " (from " << e["runs"] << " runs of round " << e["round"] << ")\nwrote " << o->out
+                  << "/results.sqlite, report.md, search_summary.json, margins.csv\n";
+        if (!r.complete) {
+          std::cout << "interrupted: run the same command again to resume\n";
+          return 130;
+        }
+        return 0;
+      };
+    }};
+
+}  // namespace
+}  // namespace shelfcross::app

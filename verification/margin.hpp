@@ -1,0 +1,57 @@
+#pragma once
+// Margins of one run: how close it came to each failure class, in one number per class,
+// negative when the run failed in that class (a continuous measure for the rare-event search,
+// rare_event.hpp; documented in docs/search.md). They are computed from what a run stores
+// (its outcome and metrics JSON, cosim.hpp) and the nominal scenario, so they apply to
+// campaign runs as well as to search runs.
+//
+//   contact   m: the minimum clearance between the vehicle box and any shelf part while near a
+//             shelf (RunMetrics::min_clearance_m); after a contact with anything (a shelf part,
+//             a wall, the ceiling) minus its penetration depth, and at most -1e-6 m, so every
+//             contact is negative; NaN when the run never came near a shelf and touched nothing.
+//             A near miss of a wall does not lower it (clearance is to shelves only).
+//   crossing  m: the room left at the front face of the cell the vehicle entered: with e_y, e_z
+//             the body origin's offsets from the cell centre at the front face (entry_offset_*),
+//             the cell's clear half-opening h_y = (column pitch - post thickness) / 2,
+//             h_z = (row pitch - beam thickness) / 2, and the vehicle box's half-extents s_y, s_z
+//             (size_m / 2 + cosim.vehicle_margin_m),
+//                 min(h_y - s_y - |e_y|, h_z - s_z - |e_z|)
+//             (the box taken level and square to the shelf): negative when the box overlapped
+//             the opening's edge as it entered. The cell is the one crossed, else the target,
+//             else (neither known) the shelf's narrowest column and lowest row pitch. NaN when
+//             the vehicle never entered a cell of shelf 0.
+//   mission   (no unit): success: 1 - mission_time_s / cosim.timeout_s, the time to spare
+//             (in (0, 1]); any other outcome: -(1 - 0.9 c), c = shelves crossed through their
+//             chosen cell / mission shelves: -1 when no shelf was crossed, -0.1 when every
+//             shelf was and the mission still failed (a wrong inventory, a contact after the
+//             last crossing, no landing).
+
+#include <optional>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "verification/scenario.hpp"
+
+namespace shelfcross::verification {
+
+enum class FailureClass { contact, crossing, mission };
+const char* failure_class_name(FailureClass c);
+/// "contact", "crossing", "mission"; nullopt for anything else.
+std::optional<FailureClass> parse_failure_class(const std::string& name);
+inline constexpr FailureClass kFailureClasses[] = {FailureClass::contact, FailureClass::crossing,
+                                                   FailureClass::mission};
+
+struct RunMargins {
+  double contact_m = 0.0;
+  double crossing_m = 0.0;
+  double mission = 0.0;
+  double of(FailureClass c) const;
+  /// The margin of class c is a number below zero.
+  bool failed(FailureClass c) const { return of(c) < 0.0; }
+};
+
+/// The margins of a run of `nominal` from its stored outcome and metrics (run_metrics_json).
+RunMargins run_margins(const Scenario& nominal, const std::string& outcome, const nlohmann::json& metrics);
+
+}  // namespace shelfcross::verification
