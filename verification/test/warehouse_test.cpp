@@ -55,10 +55,11 @@ TEST(Warehouse, FiveShelfScenarioIsARowWithRoomForEveryStrategy) {
 
 TEST(Warehouse, EveryStrategyInventoriesFiveShelvesAndThroughTheCellsIsShortest) {
   const Scenario nominal = load_scenario(kWarehouse);
-  // Seed 12 over the shipped sdk link (the Tello's datagrams through tello_pilot's loop),
-  // seed 11 over the ideal link: both links, in half the time of two sdk seeds. (Seed 11 over
-  // the sdk link loses its target at the third shelf and aborts safely, commit 3303ed0: a
-  // lossy run's legitimate outcome, not what this test is about.)
+  // Seed 12 over the shipped sdk link (the Tello's datagrams through tello_pilot's loop) with
+  // no datagram lost, seed 11 over the ideal link: both links, in half the time of two sdk
+  // seeds. A lossy link makes each of the five crossings a safe abort now and then (about one
+  // crossing in eight at the default scenario's 0 to 2 % video loss, session 6): a lossy run's
+  // legitimate outcome, which campaigns measure, not what this test is about.
   const std::array<std::pair<std::uint64_t, const char*>, 2> seeds{{{12, "sdk"}, {11, "ideal"}}};
   const auto& strategies = compared_strategies();
   for (const auto& [seed, link] : seeds) {
@@ -67,6 +68,8 @@ TEST(Warehouse, EveryStrategyInventoriesFiveShelvesAndThroughTheCellsIsShortest)
       Scenario s = nominal;
       s.cosim.strategy = strategies[k];
       s.cosim.link.model = link;
+      s.cosim.link.video_datagram_loss = 0.0;
+      s.dispersions.erase("video_datagram_loss");
       const RunSetup setup = disperse(s, seed);  // the same draws for every strategy
       render::Renderer renderer(setup.scenario->warehouse, setup.scenario->camera, render_options_for(*setup.scenario));
       results[k] = run_cosimulation(setup, renderer);
