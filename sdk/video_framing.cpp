@@ -82,11 +82,12 @@ std::vector<std::string> tello_datagrams(std::string_view au, std::size_t datagr
     out.emplace_back(body.substr(0, datagram_size));
     body.remove_prefix(datagram_size);
   }
-  if (body.size() == datagram_size) {  // keep the last datagram short
-    out.emplace_back(body.substr(0, datagram_size - 1));
-    body.remove_prefix(datagram_size - 1);
-  }
+  // The last datagram must be short: receivers end a frame at the first short one. An exact
+  // multiple of the datagram size ends with an empty datagram (splitting it as size - 1 and 1
+  // instead, as before, made the size - 1 piece end the frame a byte early: a damaged picture,
+  // and its group of pictures, on a clean link).
   if (!body.empty()) out.emplace_back(body);
+  if (body.size() == datagram_size) out.emplace_back();
   return out;
 }
 

@@ -72,14 +72,15 @@ TEST(SdkVideoFraming, TelloDatagramsCutAsTheTelloDoes) {
   EXPECT_FALSE(only_parameter_sets(d[2]));
   for (std::size_t i = 3; i < d.size(); ++i) EXPECT_FALSE(begins_access_unit(d[i])) << i;
 
-  // An exact multiple of the datagram size: the last byte goes alone, so the end stays short.
+  // An exact multiple of the datagram size: full datagrams, then an empty one, so that the
+  // first short datagram is the frame's last.
   const std::string exact = nal(1, slice_payload(true, 2 * 100 - 5));
   ASSERT_EQ(exact.size(), 200u);
   const auto e = tello_datagrams(exact, 100);
   ASSERT_EQ(e.size(), 3u);
   EXPECT_EQ(e[0].size(), 100u);
-  EXPECT_EQ(e[1].size(), 99u);
-  EXPECT_EQ(e[2].size(), 1u);
+  EXPECT_EQ(e[1].size(), 100u);
+  EXPECT_EQ(e[2].size(), 0u);
 }
 
 }  // namespace
