@@ -118,12 +118,13 @@ TEST(TelloDatagrams, ParameterSetsAloneAndAShortLastDatagram) {
   // SPS and PPS come again before the next key frame, not before P-frames.
   for (int k = 1; k < kKeyInterval; ++k) EXPECT_NE(nal_unit_types(encoder.encode(synthetic_frame(k)))[0], 7);
   EXPECT_EQ(nal_unit_types(encoder.encode(synthetic_frame(kKeyInterval)))[0], 7);
-  // A body that is an exact multiple of the datagram size still ends short.
+  // A body that is an exact multiple of the datagram size ends with an empty datagram: the
+  // first short one is the last.
   const std::string body(3 * 1460, 'x');
   const auto e = tello_datagrams(body);
   ASSERT_EQ(e.size(), 4u);
-  EXPECT_EQ(e[2].size(), 1459u);
-  EXPECT_EQ(e[3].size(), 1u);
+  EXPECT_EQ(e[2].size(), 1460u);
+  EXPECT_EQ(e[3].size(), 0u);
 }
 
 TEST(VideoReceiver, DecodesEachFrameCloseToItsSource) {
