@@ -86,7 +86,7 @@ verification::WorkerFactory worker_factory(std::shared_ptr<const verification::S
 /// Writes the report and prints the outcome; 0 when every run (of the shard) is stored.
 int finish(const CampaignOptions& o, const verification::Shard& shard, verification::ResultsStore& store,
            const std::string& name, std::int64_t added, double elapsed_s) {
-  const nlohmann::json summary = verification::write_campaign_report(o.out);
+  const verification::CampaignSummary summary = verification::write_campaign_report(o.out);
   verification::CampaignCollector::Options only_shard;
   only_shard.shard = shard;
   const verification::CampaignCollector stored(store, o.runs, only_shard);
@@ -102,10 +102,11 @@ int finish(const CampaignOptions& o, const verification::Shard& shard, verificat
     std::cout << "; shard " << shard.index << "/" << shard.count << ": " << p.done << " of its " << p.total
               << " runs stored (merge the shards with `shelfcross merge`)\n";
   } else {
-    std::cout << ", " << summary["runs"] << " of " << o.runs << " stored; " << summary["successes"]
-              << " successes, success rate " << summary["success_rate"] << ", 95 % lower bound "
-              << summary["success_lower_95"] << "\n";
-    if (p.done == p.total) std::cout << "campaign hash " << summary["campaign_hash"].get<std::string>() << "\n";
+    // Rates as JSON writes them: the shortest text that reads back to the same double.
+    std::cout << ", " << summary.runs << " of " << o.runs << " stored; " << summary.successes
+              << " successes, success rate " << nlohmann::json(summary.success_rate) << ", 95 % lower bound "
+              << nlohmann::json(summary.success_lower_95) << "\n";
+    if (p.done == p.total) std::cout << "campaign hash " << summary.campaign_hash << "\n";
   }
   std::cout << "wrote " << o.out << "/results.sqlite, summary.json, report.md\n";
   if (p.done < p.total) {

@@ -31,13 +31,12 @@ const CommandRegistration kMerge{
         }
         fs::create_directories(o->out);
         const verification::MergeCounts counts = verification::merge_campaigns(dbs, fs::path(o->out) / "results.sqlite");
-        const nlohmann::json summary = verification::write_campaign_report(o->out);
-        const std::int64_t stored = summary["runs"].get<std::int64_t>();
-        const std::int64_t requested = summary["runs_requested"].get<std::int64_t>();
+        const verification::CampaignSummary summary = verification::write_campaign_report(o->out);
+        const std::int64_t stored = summary.runs, requested = summary.runs_requested;
         std::cout << "merged " << dbs.size() << " databases: " << counts.added << " runs added, " << counts.duplicates
                   << " already present; " << stored << " of " << requested << " runs stored\n";
         if (stored == requested) {
-          std::cout << "campaign hash " << summary["campaign_hash"].get<std::string>() << "\n";
+          std::cout << "campaign hash " << summary.campaign_hash << "\n";
         } else {
           std::cout << requested - stored << " runs missing: merge again when the remaining shards are done\n";
         }

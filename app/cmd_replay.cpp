@@ -4,6 +4,7 @@
 #include "command_registry.hpp"
 #include "run_output.hpp"
 #include "verification/results_store.hpp"
+#include "verification/run_metrics_json.hpp"
 #include "verification/scenario.hpp"
 #include "verification/search.hpp"
 
@@ -43,7 +44,7 @@ const CommandRegistration kReplay{
         const bool search = verification::is_search_database(db);
         if (search && !stored) throw UsageError("run " + std::to_string(o->run) + " of this search is not stored yet");
         const verification::RunSetup setup =
-            search ? verification::disperse(nominal, seed, nlohmann::json::parse(stored->dispersion_json).get<verification::DrawnValues>())
+            search ? verification::disperse(nominal, seed, verification::stored_draws(*stored))
                    : verification::disperse(nominal, seed);
         const verification::RunResult r = run_and_write(setup, out, o->video);
         std::cout << "replay of run " << o->run << ": " << verification::outcome_name(r.outcome) << ", hash " << r.run_hash

@@ -12,9 +12,9 @@ const CommandRegistration kReport{
       auto dir = std::make_shared<std::string>();
       sub.add_option("dir", *dir, "campaign folder (holds results.sqlite)")->required();
       return [dir]() -> int {
-        const nlohmann::json summary = verification::write_campaign_report(*dir);
-        std::cout << "wrote " << *dir << "/report.md, summary.json: " << summary["successes"] << " of "
-                  << summary["runs"] << " runs succeeded\n";
+        const verification::CampaignSummary summary = verification::write_campaign_report(*dir);
+        std::cout << "wrote " << *dir << "/report.md, summary.json: " << summary.successes << " of " << summary.runs
+                  << " runs succeeded\n";
         return 0;
       };
     }};

@@ -13,6 +13,7 @@
 
 #include "command_registry.hpp"
 #include "verification/campaign.hpp"
+#include "verification/run_metrics_json.hpp"
 
 namespace shelfcross::app {
 namespace {
@@ -176,7 +177,7 @@ verification::RunResult run_and_write(const verification::RunSetup& setup, const
            {"drawn", setup.drawn},
            {"outcome", verification::outcome_name(result.outcome)},
            {"detail", result.detail},
-           {"metrics", json::parse(verification::run_metrics_json(result.metrics))},
+           {"metrics", json(result.metrics)},
            {"run_hash", result.run_hash},
            {"inventory", json::parse(result.inventory_json)},
            {"renderer", renderer.backend_description()}};

@@ -1,11 +1,15 @@
 #include "verification/campaign.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <utility>
 
 #include "verification/run_hash.hpp"
+#include "verification/run_metrics_json.hpp"
 #include "verification/statistics.hpp"
+#include "verification/strict_json.hpp"
 
 namespace shelfcross::verification {
 
@@ -36,9 +40,7 @@ RunRecord make_run_record(std::int64_t index, const RunSetup& setup, const RunRe
   r.seed = setup.seed;
   r.dispersion_json = nlohmann::json(setup.drawn).dump();
   r.outcome = outcome_name(result.outcome);
-  nlohmann::json metrics = nlohmann::json::parse(run_metrics_json(result.metrics));
-  metrics["detail"] = result.detail;
-  r.metrics_json = metrics.dump();
+  r.metrics_json = stored_metrics_json({result.metrics, result.detail, std::nullopt});
   r.run_hash = result.run_hash;
   r.wall_s = wall_s;
   r.trace_json = trace_json(result);
@@ -65,68 +67,158 @@ std::string trace_json(const RunResult& result) {
   return j.dump();
 }
 
-nlohmann::json summarize_campaign(const std::vector<RunRecord>& runs, std::int64_t runs_requested) {
-  using nlohmann::json;
-  std::int64_t count = 0, successes = 0;
-  std::map<std::string, std::int64_t> outcomes;
-  std::map<std::string, std::vector<double>> values;
-  std::vector<std::string> hashes;
-  const auto collect = [&](const std::string& name, const json& v) {
-    if (v.is_number()) values[name].push_back(v.get<double>());
-  };
+namespace {
+
+/// The one list of summarized metrics: (name, value) for a run, in summary order.
+std::vector<std::pair<std::string, std::optional<double>>> named_summary_values(const RunMetrics& m) {
+  using Value = std::optional<double>;
+  const auto abs_of = [](const Value& v) { return v ? Value(std::abs(*v)) : Value(); };
+  std::vector<std::pair<std::string, Value>> v{{"mission_time_s", m.mission_time_s},
+                                               {"path_length_m", m.path_length_m},
+                                               {"min_clearance_m", m.min_clearance_m},
+                                               {"entry_offset_y_abs_m", abs_of(m.entry_offset_y_m)},
+                                               {"entry_offset_z_abs_m", abs_of(m.entry_offset_z_m)}};
+  const std::pair<const char*, const std::optional<StepResponse>*> axes[] = {
+      {"altitude", &m.altitude}, {"heading", &m.heading}, {"lateral", &m.lateral}};
+  for (const auto& [axis, r] : axes) {
+    v.push_back({std::string(axis) + "_settling_time_s", *r ? (*r)->settling_time_s : Value()});
+    v.push_back({std::string(axis) + "_overshoot", *r ? (*r)->overshoot : Value()});
+    v.push_back({std::string(axis) + "_overshoot_abs", *r ? Value((*r)->overshoot_abs) : Value()});
+  }
+  v.push_back({"inventory_precision", m.inventory.precision});
+  v.push_back({"inventory_recall", m.inventory.recall});
+  // What the link did (sdk: datagrams; ideal: whole frames and commands).
+  const LinkMetrics& l = m.link;
+  const auto count = [](std::int64_t n) { return Value(static_cast<double>(n)); };
+  v.push_back({"link_video_datagrams", count(l.video_datagrams)});
+  v.push_back({"link_video_datagrams_lost", count(l.video_datagrams_lost)});
+  v.push_back({"link_frames_decoded", count(l.frames_decoded)});
+  v.push_back({"link_frames_damaged", count(l.frames_damaged)});
+  v.push_back({"link_commands_sent", count(l.commands_sent)});
+  v.push_back({"link_commands_lost", count(l.commands_lost)});
+  v.push_back({"link_replies_lost", count(l.replies_lost)});
+  v.push_back({"link_state_records_lost", count(l.state_records_lost)});
+  v.push_back({"link_command_retries", count(l.command_retries)});
+  v.push_back({"link_video_datagram_loss", l.video_datagrams > 0 ? Value(l.video_datagram_loss()) : Value()});
+  v.push_back({"link_damaged_frame_fraction",
+               l.frames_handed > 0 ? Value(static_cast<double>(l.frames_damaged) / static_cast<double>(l.frames_handed))
+                                   : Value()});
+  return v;
+}
+
+}  // namespace
+
+const std::vector<std::string>& summary_metric_names() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> n;
+    for (const auto& [name, value] : named_summary_values(RunMetrics{})) n.push_back(name);
+    return n;
+  }();
+  return names;
+}
+
+std::vector<std::optional<double>> summary_metric_values(const RunMetrics& m) {
+  std::vector<std::optional<double>> values;
+  for (const auto& [name, value] : named_summary_values(m)) values.push_back(value);
+  return values;
+}
+
+CampaignSummary summarize_campaign(const std::vector<RunRecord>& runs, std::int64_t runs_requested) {
+  CampaignSummary summary;
+  summary.runs_requested = runs_requested;
+  const std::vector<std::string>& names = summary_metric_names();
+  std::vector<std::vector<double>> values(names.size());
+  std::vector<std::string> hashes, outcomes;
   for (const RunRecord& r : runs) {
     if (r.index >= runs_requested) continue;
-    ++count;
-    successes += r.outcome == "success";
-    ++outcomes[r.outcome];
+    ++summary.runs;
+    summary.successes += r.outcome == "success";
+    ++summary.outcomes[r.outcome];
+    outcomes.push_back(r.outcome);
     hashes.push_back(r.run_hash);
-    const json m = json::parse(r.metrics_json);
-    collect("mission_time_s", m.value("mission_time_s", json()));
-    collect("path_length_m", m.value("path_length_m", json()));
-    collect("min_clearance_m", m.value("min_clearance_m", json()));
-    const auto abs_of = [](const json& v) { return v.is_number() ? json(std::abs(v.get<double>())) : json(); };
-    collect("entry_offset_y_abs_m", abs_of(m.value("entry_offset_y_m", json())));
-    collect("entry_offset_z_abs_m", abs_of(m.value("entry_offset_z_m", json())));
-    for (const char* axis : {"altitude", "heading", "lateral"}) {
-      const json a = m.value(axis, json());
-      if (!a.is_object()) continue;
-      collect(std::string(axis) + "_settling_time_s", a.value("settling_time_s", json()));
-      collect(std::string(axis) + "_overshoot", a.value("overshoot", json()));
-      collect(std::string(axis) + "_overshoot_abs", a.value("overshoot_abs", json()));
-    }
-    if (m.contains("inventory")) {
-      collect("inventory_precision", m["inventory"].value("precision", json()));
-      collect("inventory_recall", m["inventory"].value("recall", json()));
-    }
-    // What the link did (sdk: datagrams; ideal: whole frames and commands).
-    if (const json l = m.value("link", json()); l.is_object()) {
-      for (const char* key : {"video_datagrams", "video_datagrams_lost", "frames_decoded", "frames_damaged",
-                              "commands_sent", "commands_lost", "replies_lost", "state_records_lost",
-                              "command_retries"}) {
-        collect(std::string("link_") + key, l.value(key, json()));
-      }
-      const double datagrams = l.value("video_datagrams", 0.0);
-      if (datagrams > 0) collect("link_video_datagram_loss", l.value("video_datagrams_lost", 0.0) / datagrams);
-      const double handed = l.value("frames_handed", 0.0);
-      if (handed > 0) collect("link_damaged_frame_fraction", l.value("frames_damaged", 0.0) / handed);
+    const StoredMetrics stored = stored_metrics(r);
+    if (!stored.run) continue;  // a crashed, hung or failed worker measured nothing
+    const std::vector<std::optional<double>> v = summary_metric_values(*stored.run);
+    for (size_t i = 0; i < v.size(); ++i) {
+      if (v[i]) values[i].push_back(*v[i]);
     }
   }
-  json summary;
-  summary["runs"] = count;
-  summary["runs_requested"] = runs_requested;
-  summary["successes"] = successes;
-  summary["success_rate"] = count ? static_cast<double>(successes) / static_cast<double>(count) : 0.0;
-  summary["success_lower_95"] = count ? clopper_pearson_lower(successes, count, 0.95) : 0.0;
-  summary["outcomes"] = outcomes;
-  json stats = json::object();
-  for (const auto& [name, v] : values) {
-    const Summary s = summarize(v);
-    stats[name] = {{"count", s.count}, {"mean", s.mean}, {"min", s.min}, {"p50", s.p50},
-                   {"p95", s.p95},     {"p99", s.p99},   {"max", s.max}};
+  if (summary.runs > 0) {
+    summary.success_rate = static_cast<double>(summary.successes) / static_cast<double>(summary.runs);
+    summary.success_lower_95 = clopper_pearson_lower(summary.successes, summary.runs, 0.95);
   }
-  summary["metrics"] = stats;
-  summary["campaign_hash"] = count == runs_requested ? combine_run_hashes(hashes) : std::string();
+  summary.safety = summarize_safety(outcomes);
+  for (size_t i = 0; i < names.size(); ++i) {
+    if (!values[i].empty()) summary.metrics[names[i]] = summarize(values[i]);
+  }
+  summary.campaign_hash = summary.runs == runs_requested ? combine_run_hashes(hashes) : std::string();
   return summary;
+}
+
+void to_json(nlohmann::json& j, const CampaignSummary& s) {
+  using nlohmann::json;
+  json metrics = json::object();
+  for (const auto& [name, m] : s.metrics) {
+    metrics[name] = {{"count", m.count}, {"mean", m.mean}, {"min", m.min}, {"p50", m.p50},
+                     {"p95", m.p95},     {"p99", m.p99},   {"max", m.max}};
+  }
+  const SafetySummary& f = s.safety;
+  j = json{{"runs", s.runs},
+           {"runs_requested", s.runs_requested},
+           {"successes", s.successes},
+           {"success_rate", s.success_rate},
+           {"success_lower_95", s.success_lower_95},
+           {"outcomes", s.outcomes},
+           {"safety",
+            {{"runs", f.runs}, {"contacts", f.contacts}, {"shelf_contacts", f.shelf_contacts},
+             {"contact_rate", f.contact_rate}, {"contact_upper_95", f.contact_upper_95},
+             {"safe_aborts", f.safe_aborts}, {"inventory_errors", f.inventory_errors},
+             {"other_failures", f.other_failures}}},
+           {"metrics", metrics},
+           {"campaign_hash", s.campaign_hash}};
+}
+
+void from_json(const nlohmann::json& j, CampaignSummary& s) {
+  StrictObject o(j, "campaign summary");
+  s = CampaignSummary{};
+  s.runs = o.integer("runs");
+  s.runs_requested = o.integer("runs_requested");
+  s.successes = o.integer("successes");
+  s.success_rate = o.number("success_rate");
+  s.success_lower_95 = o.number("success_lower_95");
+  s.campaign_hash = o.text("campaign_hash");
+  StrictObject outcomes = o.object("outcomes");
+  const std::vector<std::string>& known = known_run_outcomes();
+  for (const std::string& name : outcomes.keys()) {
+    if (std::find(known.begin(), known.end(), name) == known.end()) outcomes.fail_at(outcomes.path_of(name), "unknown outcome");
+    s.outcomes[name] = outcomes.integer(name);
+  }
+  StrictObject f = o.object("safety");
+  s.safety.runs = f.integer("runs");
+  s.safety.contacts = f.integer("contacts");
+  s.safety.shelf_contacts = f.integer("shelf_contacts");
+  s.safety.contact_rate = f.number("contact_rate");
+  s.safety.contact_upper_95 = f.number("contact_upper_95");
+  s.safety.safe_aborts = f.integer("safe_aborts");
+  s.safety.inventory_errors = f.integer("inventory_errors");
+  s.safety.other_failures = f.integer("other_failures");
+  f.finish();
+  StrictObject metrics = o.object("metrics");
+  const std::vector<std::string>& names = summary_metric_names();
+  for (const std::string& name : metrics.keys()) {
+    if (std::find(names.begin(), names.end(), name) == names.end()) metrics.fail_at(metrics.path_of(name), "unknown metric");
+    StrictObject m = metrics.object(name);
+    Summary& out = s.metrics[name];
+    out.count = m.integer("count");
+    out.mean = m.number("mean");
+    out.min = m.number("min");
+    out.p50 = m.number("p50");
+    out.p95 = m.number("p95");
+    out.p99 = m.number("p99");
+    out.max = m.number("max");
+    m.finish();
+  }
+  o.finish();
 }
 
 }  // namespace shelfcross::verification

@@ -3,7 +3,9 @@
 // co-simulation, the records it stores, and the campaign's summary statistics.
 
 #include <cstdint>
+#include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -14,6 +16,7 @@
 #include "verification/cosim.hpp"
 #include "verification/results_store.hpp"
 #include "verification/scenario.hpp"
+#include "verification/statistics.hpp"
 
 namespace shelfcross::verification {
 
@@ -38,10 +41,33 @@ RunRecord make_run_record(std::int64_t index, const RunSetup& setup, const RunRe
 /// A compact trajectory (10 Hz: t, x, y, z, yaw; approach and crossing start times) as JSON.
 std::string trace_json(const RunResult& result);
 
-/// Campaign statistics over the stored runs 0..runs_requested-1 (summary.json):
-/// runs, successes, success_rate, success_lower_95 (one-sided Clopper-Pearson), outcomes,
-/// per-metric statistics (mean, p50, p95, p99, max), campaign_hash (over the run hashes in
-/// run order; empty while runs are missing).
-nlohmann::json summarize_campaign(const std::vector<RunRecord>& runs, std::int64_t runs_requested);
+/// The metrics a campaign summarizes, each a number or nothing per run: mission time, path,
+/// clearance, |entry offsets|, the approach responses' settling times and overshoots, the
+/// inventory's precision and recall, and the link's counts and loss fractions. Names and values
+/// come from one list (campaign.cpp), so a summary key cannot drift from what is computed.
+const std::vector<std::string>& summary_metric_names();
+/// The run's value of each (aligned with summary_metric_names(); nullopt where it has none).
+std::vector<std::optional<double>> summary_metric_values(const RunMetrics& m);
+
+/// A campaign's summary (summary.json), over the stored runs 0..runs_requested-1.
+struct CampaignSummary {
+  std::int64_t runs = 0;            ///< stored runs counted
+  std::int64_t runs_requested = 0;
+  std::int64_t successes = 0;
+  double success_rate = 0.0;
+  double success_lower_95 = 0.0;    ///< one-sided Clopper-Pearson
+  std::map<std::string, std::int64_t> outcomes;  ///< keys among known_run_outcomes()
+  SafetySummary safety;             ///< contacts apart from safe aborts (issue 17)
+  std::map<std::string, Summary> metrics;        ///< keys among summary_metric_names()
+  std::string campaign_hash;        ///< over the run hashes in run order; empty while runs are missing
+};
+void to_json(nlohmann::json& j, const CampaignSummary& s);
+/// Strict like the run metrics: unknown outcome or metric names, missing keys and wrong types
+/// throw std::invalid_argument naming the key.
+void from_json(const nlohmann::json& j, CampaignSummary& s);
+
+/// Campaign statistics over the stored runs 0..runs_requested-1 (throws std::invalid_argument
+/// on a stored run whose metrics do not read back).
+CampaignSummary summarize_campaign(const std::vector<RunRecord>& runs, std::int64_t runs_requested);
 
 }  // namespace shelfcross::verification

@@ -4,9 +4,8 @@
 #include <charconv>
 #include <stdexcept>
 
-#include <nlohmann/json.hpp>
-
 #include "shelfcross/random.hpp"
+#include "verification/run_metrics_json.hpp"
 
 namespace shelfcross::verification {
 
@@ -28,8 +27,8 @@ Shard parse_shard(const std::string& text) {
 }
 
 RunRecord worker_error_record(std::int64_t index, std::uint64_t seed, const std::string& message) {
-  return RunRecord{index, seed, "{}", "worker_error", nlohmann::json{{"error", message}}.dump(), std::string(32, '0'),
-                   0.0, "{}"};
+  return RunRecord{index, seed, "{}", "worker_error", stored_metrics_json({std::nullopt, message, std::nullopt}),
+                   std::string(32, '0'), 0.0, "{}"};
 }
 
 // ---------------------------------------------------------------------------------------------

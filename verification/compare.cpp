@@ -9,6 +9,7 @@
 #include "verification/cosim.hpp"
 #include "verification/plot.hpp"
 #include "verification/report.hpp"
+#include "verification/run_metrics_json.hpp"
 #include "verification/statistics.hpp"
 
 namespace shelfcross::verification {
@@ -67,14 +68,12 @@ StrategyRow summarize_strategy(const std::string& strategy, const std::vector<Ru
     if (r.index >= runs_requested) continue;
     ++row.runs;
     outcomes.push_back(r.outcome);
-    const json m = json::parse(r.metrics_json);
-    if (m.contains("inventory") && m["inventory"].value("recall", json()).is_number()) {
-      recall.push_back(m["inventory"]["recall"].get<double>());
-    }
+    const StoredMetrics stored = stored_metrics(r);
+    if (stored.run) recall.push_back(stored.run->inventory.recall);
     if (r.outcome != "success") continue;
     ++row.successes;
-    distance.push_back(m.at("path_length_m").get<double>());
-    time.push_back(m.at("mission_time_s").get<double>());
+    distance.push_back(stored.run.value().path_length_m);  // a success always measured its run
+    time.push_back(stored.run.value().mission_time_s);
   }
   row.success_rate = row.runs ? static_cast<double>(row.successes) / static_cast<double>(row.runs) : 0.0;
   row.success_lower_95 = row.runs ? clopper_pearson_lower(row.successes, row.runs, 0.95) : 0.0;

@@ -10,8 +10,6 @@
 #include <queue>
 #include <variant>
 
-#include <nlohmann/json.hpp>
-
 #include "flight_sw/tello/datagram_channel.hpp"
 #include "flight_sw/tello/pilot_loop.hpp"
 #include "plant/collision.hpp"
@@ -21,6 +19,7 @@
 #include "shelfcross/random.hpp"
 #include "verification/link_model.hpp"
 #include "verification/run_hash.hpp"
+#include "verification/run_metrics_json.hpp"
 #include "verification/tello_emulator.hpp"
 #include "verification/tello_state_format.hpp"
 #include "verification/vehicle_truth.hpp"
@@ -727,67 +726,6 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
   hash.add(std::string_view(run_metrics_json(m)));
   result.run_hash = hash.hex();
   return result;
-}
-
-std::string run_metrics_json(const RunMetrics& m) {
-  using nlohmann::json;
-  const auto opt = [](const std::optional<double>& v) { return v ? json(*v) : json(nullptr); };
-  const auto cell = [](const std::optional<CellIndex>& c) {
-    return c ? json{{"level", c->level}, {"column", c->column}} : json(nullptr);
-  };
-  const auto response = [&](const std::optional<StepResponse>& r) {
-    if (!r) return json(nullptr);
-    return json{{"initial_error", r->initial_error}, {"band", r->band}, {"settling_time_s", opt(r->settling_time_s)},
-                {"overshoot", opt(r->overshoot)}, {"overshoot_abs", r->overshoot_abs},
-                {"peak_abs_error", r->peak_abs_error}};
-  };
-  json j{{"mission_time_s", m.mission_time_s},
-         {"strategy", m.strategy},
-         {"shelves", m.shelves},
-         {"shelves_crossed", m.shelves_crossed},
-         {"shelves_crossed_target", m.shelves_crossed_target},
-         {"path_length_m", m.path_length_m},
-         {"floor_touches", m.floor_touches},
-         {"target", cell(m.target)},
-         {"crossed", cell(m.crossed)},
-         {"crossed_target", m.crossed_target},
-         {"entry_offset_y_m", opt(m.entry_offset_y_m)},
-         {"entry_offset_z_m", opt(m.entry_offset_z_m)},
-         {"min_clearance_m", opt(m.min_clearance_m)},
-         {"altitude", response(m.altitude)},
-         {"heading", response(m.heading)},
-         {"lateral", response(m.lateral)},
-         {"inventory", {{"precision", m.inventory.precision}, {"recall", m.inventory.recall},
-                        {"correct", m.inventory.correct}, {"reported", m.inventory.reported},
-                        {"truth", m.inventory.truth}}},
-         {"flight_software_result", m.flight_software_result}};
-  const LinkMetrics& l = m.link;
-  j["link"] = {{"model", l.model},
-               {"video_datagrams", l.video_datagrams},
-               {"video_datagrams_lost", l.video_datagrams_lost},
-               {"frames_captured", l.frames_captured},
-               {"frames_lost", l.frames_lost},
-               {"frames_decoded", l.frames_decoded},
-               {"frames_damaged", l.frames_damaged},
-               {"frames_handed", l.frames_handed},
-               {"commands_sent", l.commands_sent},
-               {"commands_lost", l.commands_lost},
-               {"replies_lost", l.replies_lost},
-               {"state_records_lost", l.state_records_lost},
-               {"command_retries", l.command_retries},
-               {"stale_replies", l.stale_replies},
-               {"injected_errors", l.injected_errors}};
-  if (m.contact) {
-    j["contact"] = {{"t_s", ns_to_seconds(m.contact->t_ns)},
-                    {"element", m.contact->element.name},
-                    {"kind", plant::to_string(m.contact->element.kind)},
-                    {"point_W_m", {m.contact->point_W_m.x(), m.contact->point_W_m.y(), m.contact->point_W_m.z()}},
-                    {"depth_m", m.contact->depth_m}};
-  } else {
-    j["contact"] = nullptr;
-  }
-  // Exact doubles: nlohmann writes the shortest text that reads back to the same double.
-  return j.dump();
 }
 
 }  // namespace shelfcross::verification

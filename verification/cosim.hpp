@@ -80,7 +80,7 @@ struct LinkMetrics {
   }
 };
 
-/// Everything a run measured (JSON form: run_metrics_json).
+/// Everything a run measured (JSON form, both ways: run_metrics_json.hpp).
 struct RunMetrics {
   double mission_time_s = 0.0;     ///< start to the end of the run
   double path_length_m = 0.0;      ///< of the body origin
@@ -153,8 +153,5 @@ std::set<InventoryEntry> true_inventory(const Scenario& scenario);
 /// warehouse and camera; the harness uses it only from the calling thread.
 RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer,
                            const FrameObserver& observer = {});
-
-/// The metrics as JSON (stored per run in the results database).
-std::string run_metrics_json(const RunMetrics& m);
 
 }  // namespace shelfcross::verification

@@ -4,28 +4,25 @@
 #include <map>
 #include <sstream>
 
-#include <nlohmann/json.hpp>
-
 #include "verification/plot.hpp"
+#include "verification/run_metrics_json.hpp"
 #include "verification/success_bins.hpp"
 
 namespace shelfcross::verification {
 
 std::string link_section(const std::vector<RunRecord>& runs, const std::filesystem::path& dir) {
-  using nlohmann::json;
   constexpr double kBin = 0.005;  // 0.5 % of the video datagrams
   std::map<std::string, std::int64_t> models;
   SuccessBins bins(kBin);
   for (const RunRecord& r : runs) {
-    const json m = json::parse(r.metrics_json);
-    const json l = m.value("link", json());
-    if (!l.is_object()) {
-      ++models["(not recorded)"];
+    const StoredMetrics stored = stored_metrics(r);
+    if (!stored.run) {
+      ++models["(not measured: " + r.outcome + ")"];
       continue;
     }
-    ++models[l.value("model", std::string("?"))];
-    const double sent = l.value("video_datagrams", 0.0);
-    if (sent > 0) bins.add(l.value("video_datagrams_lost", 0.0) / sent, r.outcome == "success");
+    const LinkMetrics& l = stored.run->link;
+    ++models[l.model];
+    if (l.video_datagrams > 0) bins.add(l.video_datagram_loss(), r.outcome == "success");
   }
   std::ostringstream md;
   md << "## The link\n\n";

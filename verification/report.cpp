@@ -12,6 +12,7 @@
 #include "verification/link_report.hpp"
 #include "verification/plot.hpp"
 #include "verification/results_store.hpp"
+#include "verification/run_metrics_json.hpp"
 #include "verification/scenario.hpp"
 #include "verification/statistics.hpp"
 #include "verification/success_bins.hpp"
@@ -37,8 +38,8 @@ std::string fixed(double v, int decimals) {
 
 /// Latency in the loop: when the campaign disperses the video latency, the success rate
 /// against each run's total latency from capture to command (its link's mean video latency
-/// plus the flight software's compute latency, both as drawn for that run: disperse() is
-/// re-run from the run's seed), in 50 ms bins: a markdown section and latency_sweep.png.
+/// plus the flight software's compute latency, both as drawn for that run: its stored draws applied
+/// to the scenario), in 50 ms bins: a markdown section and latency_sweep.png.
 /// Empty when the video latency is not dispersed.
 std::string latency_sweep_section(const Scenario& scenario, const std::vector<RunRecord>& runs,
                                   const std::filesystem::path& dir) {
@@ -46,7 +47,9 @@ std::string latency_sweep_section(const Scenario& scenario, const std::vector<Ru
   constexpr double kBin_s = 0.05;
   SuccessBins bins(kBin_s);
   for (const RunRecord& r : runs) {
-    const RunSetup setup = disperse(scenario, r.seed);
+    const DrawnValues drawn = stored_draws(r);
+    if (drawn.empty()) continue;  // a worker_error record: its draws were never stored
+    const RunSetup setup = disperse(scenario, r.seed, drawn);
     const LinkSettings& l = setup.scenario->cosim.link;
     bins.add(l.video_latency_mean_s + l.compute_latency_s, r.outcome == "success");
   }
@@ -104,27 +107,12 @@ std::string safety_section(const SafetySummary& s) {
   return md.str();
 }
 
-json write_campaign_report(const std::filesystem::path& dir) {
+CampaignSummary write_campaign_report(const std::filesystem::path& dir) {
   ResultsStore store = ResultsStore::open_existing(dir / "results.sqlite");
   const Scenario scenario = parse_scenario(store.meta().scenario_yaml, (dir / "results.sqlite").string() + " (scenario)");
   const std::vector<RunRecord> runs = store.runs();
-  json summary = summarize_campaign(runs, store.meta().runs_requested);
-  // Safety apart from mission success (issue 17): contacts with their upper bound, safe aborts,
-  // inventory errors, over the same runs as the success rate.
-  std::vector<std::string> outcomes;
-  for (const RunRecord& r : runs) {
-    if (r.index < store.meta().runs_requested) outcomes.push_back(r.outcome);
-  }
-  const SafetySummary safety = summarize_safety(outcomes);
-  summary["safety"] = {{"runs", safety.runs},
-                       {"contacts", safety.contacts},
-                       {"shelf_contacts", safety.shelf_contacts},
-                       {"contact_rate", safety.contact_rate},
-                       {"contact_upper_95", safety.contact_upper_95},
-                       {"safe_aborts", safety.safe_aborts},
-                       {"inventory_errors", safety.inventory_errors},
-                       {"other_failures", safety.other_failures}};
-  std::ofstream(dir / "summary.json") << summary.dump(2) << "\n";
+  const CampaignSummary summary = summarize_campaign(runs, store.meta().runs_requested);
+  std::ofstream(dir / "summary.json") << json(summary).dump(2) << "\n";
 
   // The approach responses are measured on the first shelf (the metrics' target is its cell).
   const ShelfSpec& shelf = scenario.warehouse.shelves.at(0);
@@ -161,7 +149,7 @@ json write_campaign_report(const std::filesystem::path& dir) {
   int failures = 0;
   for (const RunRecord& r : runs) {
     const json trace = json::parse(r.trace_json.empty() ? "{}" : r.trace_json);
-    const json m = json::parse(r.metrics_json);
+    const StoredMetrics stored = stored_metrics(r);
     const bool ok = r.outcome == "success";
     const cv::Scalar colour = ok ? kGood : kBad;
     if (trace.contains("t")) {
@@ -169,11 +157,11 @@ json write_campaign_report(const std::filesystem::path& dir) {
                  yaw = numbers(trace["yaw"]);
       top.add_line(x, y, colour);
       side.add_line(x, z, colour);
-      const json target = m.value("target", json());
-      if (trace["approach_start_s"].is_number() && target.is_object()) {
+      const std::optional<flight_sw::CellIndex> target = stored.run ? stored.run->target : std::nullopt;
+      if (trace["approach_start_s"].is_number() && target) {
         const double t0 = trace["approach_start_s"].get<double>();
         const double t1 = trace["cross_start_s"].is_number() ? trace["cross_start_s"].get<double>() : t.back();
-        const Eigen::Vector3d c = cell_centre_S_m(shelf, target["level"].get<int>(), target["column"].get<int>());
+        const Eigen::Vector3d c = cell_centre_S_m(shelf, target->level, target->column);
         std::vector<double> tt, ez, eyaw, ey;
         for (size_t i = 0; i < t.size(); ++i) {
           if (t[i] < t0 || t[i] > t1) continue;
@@ -188,17 +176,16 @@ json write_campaign_report(const std::filesystem::path& dir) {
         lateral.add_line(tt, ey, colour);
       }
     }
-    const auto settling = [&](const char* axis) {
-      const json a = m.value(axis, json());
-      return a.is_object() && a["settling_time_s"].is_number() ? a["settling_time_s"].get<double>() : NAN;
-    };
-    settle_z.push_back(settling("altitude"));
-    settle_yaw.push_back(settling("heading"));
-    if (m["entry_offset_y_m"].is_number()) offset_y.push_back(m["entry_offset_y_m"].get<double>());
-    if (m["entry_offset_z_m"].is_number()) offset_z.push_back(m["entry_offset_z_m"].get<double>());
+    if (stored.run) {
+      const RunMetrics& m = *stored.run;
+      settle_z.push_back(m.altitude && m.altitude->settling_time_s ? *m.altitude->settling_time_s : NAN);
+      settle_yaw.push_back(m.heading && m.heading->settling_time_s ? *m.heading->settling_time_s : NAN);
+      if (m.entry_offset_y_m) offset_y.push_back(*m.entry_offset_y_m);
+      if (m.entry_offset_z_m) offset_z.push_back(*m.entry_offset_z_m);
+    }
     if (!ok) {
       ++failures;
-      failed << "| " << r.index << " | " << r.outcome << " | " << m.value("detail", std::string()) << " | `shelfcross replay "
+      failed << "| " << r.index << " | " << r.outcome << " | " << stored.detail << " | `shelfcross replay "
              << dir.string() << " --run " << r.index << "` |\n";
     }
   }
@@ -217,21 +204,19 @@ json write_campaign_report(const std::filesystem::path& dir) {
 
   std::ofstream md(dir / "report.md");
   md << "# Crossing campaign: " << scenario.name << "\n\n";
-  md << "Campaign seed " << store.meta().campaign_seed << ", " << summary["runs"].get<std::int64_t>() << " of "
-     << store.meta().runs_requested << " runs stored. Campaign hash `" << summary["campaign_hash"].get<std::string>()
-     << "`.\n\n";
+  md << "Campaign seed " << store.meta().campaign_seed << ", " << summary.runs << " of " << store.meta().runs_requested
+     << " runs stored. Campaign hash `" << summary.campaign_hash << "`.\n\n";
   md << "| | |\n|---|---|\n";
-  md << "| successes | " << summary["successes"].get<std::int64_t>() << " |\n";
-  md << "| success rate | " << fixed(summary["success_rate"].get<double>(), 4) << " |\n";
-  md << "| one-sided 95 % lower bound (Clopper-Pearson) | " << fixed(summary["success_lower_95"].get<double>(), 4) << " |\n\n";
-  md << safety_section(safety);
+  md << "| successes | " << summary.successes << " |\n";
+  md << "| success rate | " << fixed(summary.success_rate, 4) << " |\n";
+  md << "| one-sided 95 % lower bound (Clopper-Pearson) | " << fixed(summary.success_lower_95, 4) << " |\n\n";
+  md << safety_section(summary.safety);
   md << "## Outcomes\n\n| outcome | runs |\n|---|---|\n";
-  for (const auto& [name, n] : summary["outcomes"].items()) md << "| " << name << " | " << n.get<std::int64_t>() << " |\n";
+  for (const auto& [name, n] : summary.outcomes) md << "| " << name << " | " << n << " |\n";
   md << "\n## Metrics\n\n| metric | runs | mean | p50 | p95 | p99 | max |\n|---|---|---|---|---|---|---|\n";
-  for (const auto& [name, s] : summary["metrics"].items()) {
-    md << "| " << name << " | " << s["count"].get<std::int64_t>() << " | " << fixed(s["mean"].get<double>(), 3) << " | "
-       << fixed(s["p50"].get<double>(), 3) << " | " << fixed(s["p95"].get<double>(), 3) << " | "
-       << fixed(s["p99"].get<double>(), 3) << " | " << fixed(s["max"].get<double>(), 3) << " |\n";
+  for (const auto& [name, s] : summary.metrics) {
+    md << "| " << name << " | " << s.count << " | " << fixed(s.mean, 3) << " | " << fixed(s.p50, 3) << " | "
+       << fixed(s.p95, 3) << " | " << fixed(s.p99, 3) << " | " << fixed(s.max, 3) << " |\n";
   }
   md << "\nSettling: from the start of the approach until the error stays inside max(" << scenario.cosim.settling_fraction * 100
      << " % of its initial value, " << scenario.cosim.settling_floor_z_m * 100 << " cm / "

@@ -11,15 +11,14 @@
 #include <filesystem>
 #include <string>
 
-#include <nlohmann/json.hpp>
+#include "verification/campaign.hpp"
 
 namespace shelfcross::verification {
 
 /// Writes DIR/summary.json and DIR/report.md with its plots; returns the summary.
 /// Throws ResultsMismatch when DIR holds no results database.
-nlohmann::json write_campaign_report(const std::filesystem::path& dir);
+CampaignSummary write_campaign_report(const std::filesystem::path& dir);
 
-struct SafetySummary;
 /// The report's "Safety apart from mission success" section (markdown): contacts with their
 /// rate and one-sided 95 % upper bound, safe aborts, inventory errors, other failures.
 std::string safety_section(const SafetySummary& safety);

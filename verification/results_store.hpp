@@ -35,9 +35,9 @@ struct CampaignMeta {
 struct RunRecord {
   std::int64_t index = 0;
   std::uint64_t seed = 0;
-  std::string dispersion_json;  ///< drawn values, {"name": value, ...}
+  std::string dispersion_json;  ///< drawn values, {"name": value, ...}; typed: stored_draws()
   std::string outcome;          ///< one of known_run_outcomes()
-  std::string metrics_json;
+  std::string metrics_json;     ///< StoredMetrics as JSON; read it typed with stored_metrics() (run_metrics_json.hpp)
   std::string run_hash;         ///< 32 hex digits (run_hash.hpp)
   double wall_s = 0.0;          ///< wall time the run took (informative, not hashed)
   std::string trace_json;       ///< a compact trajectory for the report's plots

@@ -22,6 +22,7 @@
 
 #include "verification/campaign.hpp"
 #include "verification/dispersion.hpp"
+#include "verification/run_metrics_json.hpp"
 
 namespace shelfcross::verification {
 namespace {
@@ -238,9 +239,8 @@ RunRecord ProcessRunWorker::lost_run_record(std::int64_t index, std::uint64_t se
                                             const std::string& detail, int signal_number) const {
   RunRecord r = worker_error_record(index, seed, detail);
   r.outcome = outcome;
-  json metrics{{"detail", detail}};
-  if (signal_number > 0) metrics["signal"] = signal_number;
-  r.metrics_json = metrics.dump();
+  r.metrics_json =
+      stored_metrics_json({std::nullopt, detail, signal_number > 0 ? std::optional<int>(signal_number) : std::nullopt});
   // The run's draws, for the report and replay: they depend on (scenario, seed) only.
   try {
     r.dispersion_json = json(disperse(*nominal_, seed).drawn).dump();

@@ -21,6 +21,7 @@
 #include "verification/campaign.hpp"
 #include "verification/cosim.hpp"
 #include "verification/h264_encoder.hpp"
+#include "verification/run_metrics_json.hpp"
 #include "verification/tello_state_format.hpp"
 
 namespace shelfcross::verification {
@@ -657,15 +658,7 @@ std::string emulator_report_json(const EmulatorReport& r) {
   json drawn = json::object();
   for (const auto& [name, value] : r.drawn) drawn[name] = {{"value", value}, {"applied", emulator_applies_dispersion(name)}};
   j["dispersions"] = drawn;
-  if (r.contact) {
-    j["contact"] = {{"t_s", ns_to_seconds(r.contact->t_ns)},
-                    {"element", r.contact->element.name},
-                    {"kind", plant::to_string(r.contact->element.kind)},
-                    {"point_W_m", {r.contact->point_W_m.x(), r.contact->point_W_m.y(), r.contact->point_W_m.z()}},
-                    {"depth_m", r.contact->depth_m}};
-  } else {
-    j["contact"] = nullptr;
-  }
+  j["contact"] = r.contact ? contact_json(*r.contact) : json(nullptr);
   return j.dump(2);
 }
 

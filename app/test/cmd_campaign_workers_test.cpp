@@ -121,7 +121,7 @@ TEST(CampaignWorkers, WorkerProcessesStoreTheRecordsOfInProcessWorkers) {
     a[i].wall_s = b[i].wall_s = 0.0;  // informative, not part of the result
     EXPECT_EQ(a[i], b[i]) << "run " << i;
   }
-  EXPECT_EQ(v::summarize_campaign(a, 3)["campaign_hash"], campaign_hash(out));
+  EXPECT_EQ(v::summarize_campaign(a, 3).campaign_hash, campaign_hash(out));
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "verification/campaign_merge.hpp"
 #include "verification/campaign_pool.hpp"
 #include "verification/run_hash.hpp"
+#include "verification/run_metrics_json.hpp"
 
 namespace shelfcross::verification {
 namespace {
@@ -29,7 +30,8 @@ class DrawWorker : public RunWorker {
     for (int i = 0; i < n; ++i) sum += draws.normal();
     hash.add(sum);
     if (index == 5) throw std::runtime_error("flight software bug");
-    return {index, seed, "{}", sum > 0 ? "success" : "timeout", "{}", hash.hex(), 0.0};
+    return {index, seed, "{}", sum > 0 ? "success" : "timeout", stored_metrics_json({std::nullopt, "", std::nullopt}),
+            hash.hex(), 0.0};
   }
 };
 
@@ -118,7 +120,7 @@ TEST(CampaignPool, ShardsMergeIntoTheWholeCampaign) {
     ResultsStore shard = ResultsStore::open_or_create(shard_dbs.back(), meta);
     EXPECT_EQ(run_pending(shard, 9, 23, factory, {.jobs = 2, .shard = {k, 3}}), k < 2 ? 8 : 7);
     for (std::int64_t index : shard.finished_indices()) EXPECT_EQ(index % 3, k);
-    EXPECT_EQ(summarize_campaign(shard.runs(), 23)["campaign_hash"], "");
+    EXPECT_EQ(summarize_campaign(shard.runs(), 23).campaign_hash, "");
   }
   const auto target = fresh_db("shard_merged");
   const MergeCounts counts = merge_campaigns(shard_dbs, target);
@@ -127,9 +129,9 @@ TEST(CampaignPool, ShardsMergeIntoTheWholeCampaign) {
   ResultsStore merged = ResultsStore::open_existing(target);
   EXPECT_EQ(merged.meta(), meta);
   EXPECT_EQ(without_wall_time(merged.runs()), without_wall_time(whole.runs()));
-  const auto hash = summarize_campaign(whole.runs(), 23)["campaign_hash"].get<std::string>();
+  const auto hash = summarize_campaign(whole.runs(), 23).campaign_hash;
   EXPECT_EQ(hash.size(), 32u);
-  EXPECT_EQ(summarize_campaign(merged.runs(), 23)["campaign_hash"], hash);
+  EXPECT_EQ(summarize_campaign(merged.runs(), 23).campaign_hash, hash);
   // Merging a shard again adds nothing.
   EXPECT_EQ(merge_campaigns({shard_dbs[1]}, target).duplicates, 8);
 

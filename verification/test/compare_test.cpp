@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include "verification/compare.hpp"
+#include "verification/run_metrics_json.hpp"
 #include "verification/statistics.hpp"
 
 namespace shelfcross::verification {
@@ -13,10 +14,11 @@ RunRecord record(std::int64_t index, const std::string& outcome, double distance
   RunRecord r;
   r.index = index;
   r.outcome = outcome;
-  r.metrics_json = nlohmann::json{{"path_length_m", distance_m},
-                                  {"mission_time_s", time_s},
-                                  {"inventory", {{"recall", recall}}}}
-                       .dump();
+  RunMetrics m;
+  m.path_length_m = distance_m;
+  m.mission_time_s = time_s;
+  m.inventory.recall = recall;
+  r.metrics_json = stored_metrics_json({m, "", std::nullopt});
   return r;
 }
 

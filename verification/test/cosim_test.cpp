@@ -72,8 +72,8 @@ TEST(Campaign, OneOrTwoWorkersGiveTheSameRunsAndCampaignHash) {
     EXPECT_GT(link["video_datagrams"].get<int>(), 0);
   }
   const auto sa = summarize_campaign(a, 3), sb = summarize_campaign(b, 3);
-  EXPECT_EQ(sa["campaign_hash"], sb["campaign_hash"]);
-  EXPECT_EQ(sa["campaign_hash"].get<std::string>().size(), 32u);
+  EXPECT_EQ(sa.campaign_hash, sb.campaign_hash);
+  EXPECT_EQ(sa.campaign_hash.size(), 32u);
 }
 
 TEST(Campaign, FlightSoftwareExceptionAndPlantDivergenceAreOutcomes) {

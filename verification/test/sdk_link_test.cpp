@@ -5,6 +5,7 @@
 
 #include "verification/campaign.hpp"
 #include "verification/cosim.hpp"
+#include "verification/run_metrics_json.hpp"
 
 namespace shelfcross::verification {
 namespace {
