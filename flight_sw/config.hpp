@@ -171,8 +171,8 @@ struct Timeouts {
   double go_to_viewpoint_s = 40.0;
   double take_inventory_s = 15.0;
   double approach_s = 40.0;
-  double target_lost_s = 3.0;    ///< hovering to re-acquire the target, then give up
-  double back_off_s = 5.0;       ///< backing off an off-centre approach, then give up
+  double target_lost_s = 3.0;    ///< hovering to re-acquire the target, then re-read (grid in view) or land
+  double back_off_s = 5.0;       ///< backing off an off-centre approach, then re-read the shelf
   double video_hover_s = 0.5;    ///< no frame for this long: hover
   double video_land_s = 3.0;     ///< no frame for this long: land
 };
@@ -189,7 +189,7 @@ struct MissionParams {
   Eigen::Vector3d vehicle_size_m = Eigen::Vector3d(0.098, 0.0925, 0.041);
   double crossing_margin_m = 0.03;  ///< kept clear on each side inside the opening
   double crossing_yaw_tolerance_rad = 0.15;
-  int crossing_attempts = 3;       ///< off-centre arrivals (each backed off) before giving up
+  int crossing_attempts = 3;       ///< off-centre arrivals (each backed off) before re-reading the shelf
   double cross_range_max_m = 0.9;  ///< tags leaving the view farther than this: lost, not close
   double beyond_distance_m = 0.5;  ///< flown past the back face before landing
   double edge_margin_px = 4.0;     ///< a tag this close to the border is leaving the view
@@ -213,8 +213,10 @@ struct MissionParams {
   /// The target's identity (target_tracker.hpp): lost with the pose continuity, it is
   /// re-established while backing off along the cell normal (the view widening until an edge
   /// or a known marker is in it); not within identity_confirm_s, or contradicted, the shelf is
-  /// re-read from the optimal viewpoint and the target chosen anew; the identity_rereads+1-th
-  /// such doubt aborts the mission (landing where it hovers, in front of the shelf).
+  /// re-read from the optimal viewpoint and the target chosen anew. A target lost with the
+  /// grid in view and an approach that could not centre are re-read the same way; the
+  /// identity_rereads+1-th doubt of any kind in a mission aborts it (landing where it hovers,
+  /// in front of the shelf).
   /// Continuity: a pose within pose_jump_window_s of the last identified one keeps the
   /// identity; up to this time, only with the box found within 0.3 of its width of where it
   /// was last identified (flight_software.cpp, measure_target).

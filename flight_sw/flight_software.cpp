@@ -286,10 +286,15 @@ void FlightSoftware::supervise() {
     case Phase::Approach:
       if (timed_out(to.approach_s)) return land(Outcome::Aborted, "approach timed out");
       if (lost_since_ns_ && ns_to_seconds(now_ns_ - *lost_since_ns_) > to.target_lost_s) {
+        // The shelf's grid still in nearly whole pictures, only the target not found again
+        // near where it was last seen (the view moved on while the pictures were damaged, or
+        // the pose checks refused every candidate): choose it anew from the viewpoint. No
+        // grid in view: nothing to re-read from here; land where it hovers.
+        if (grid_in_view_while_lost_) return reread_shelf("target lost", "target lost");
         return land(Outcome::Aborted, "target lost");
       }
       if (back_off_since_ns_ && ns_to_seconds(now_ns_ - *back_off_since_ns_) > to.back_off_s) {
-        return land(Outcome::Aborted, "could not centre on the target cell");
+        return reread_shelf("could not centre on the target cell", "could not centre on the target cell");
       }
       break;
     case Phase::Cross:
@@ -932,13 +937,14 @@ void FlightSoftware::estimate_forward_gain(const Picture& pic, const PoseEstimat
   telemetry_.forward_gain = forward_gain_;
 }
 
-void FlightSoftware::reread_shelf(const std::string& why) {
+void FlightSoftware::reread_shelf(const std::string& why, const std::optional<std::string>& give_up_reason) {
   ++telemetry_.shelf_rereads;
   if (++rereads_ > config_.mission.identity_rereads) {
-    land(Outcome::Aborted, "target cell not identified: " + why);
+    land(Outcome::Aborted, give_up_reason.value_or("target cell not identified: " + why));
     return;
   }
   target_.reset();
+  crossing_refusals_ = 0;  // off-centre arrivals count per approach
   telemetry_.target.reset();
   pose_K_.reset();
   decision_pose_K_.reset();
@@ -1050,7 +1056,10 @@ void FlightSoftware::approach(const Picture& pic) {
   if (!pic.decides && !back_off_since_ns_) {
     // Not found in a damaged picture: the tags may sit in a guessed band. Nothing is decided
     // (no crossing, no re-acquisition) until a nearly whole picture shows where they are.
-    if (!lost_since_ns_) lost_since_ns_ = now_ns_;
+    if (!lost_since_ns_) {
+      lost_since_ns_ = now_ns_;
+      grid_in_view_while_lost_ = false;
+    }
     velocity_ = {};
     return;
   }
@@ -1105,7 +1114,7 @@ void FlightSoftware::approach(const Picture& pic) {
     }
     if (!back_off_since_ns_) {
       if (++crossing_refusals_ >= config_.mission.crossing_attempts) {
-        land(Outcome::Aborted, "could not centre on the target cell");
+        reread_shelf("could not centre on the target cell", "could not centre on the target cell");
         return;
       }
       back_off_since_ns_ = now_ns_;
@@ -1123,12 +1132,15 @@ void FlightSoftware::approach(const Picture& pic) {
   // Lost: hover, and look for the target among the tags of the whole frame.
   if (!lost_since_ns_) {
     lost_since_ns_ = now_ns_;
+    grid_in_view_while_lost_ = false;
     telemetry_.event = "target lost: hovering to re-acquire";
   }
   hover();
   if (reacquire(pic)) {
     lost_since_ns_.reset();
     telemetry_.event = "target re-acquired";
+  } else if (pic.decides) {
+    grid_in_view_while_lost_ = view_.grid.valid;
   }
 }
 

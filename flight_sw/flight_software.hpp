@@ -39,10 +39,13 @@
 // toward an empty cell.
 // Failsafes: no frame for video_hover_s: hover (rc 0 0 0 0); for video_land_s: land (not while
 // crossing: the crossing is open loop and stopping inside the shelf is worse). Target lost:
-// hover and re-acquire from the tags, give up after target_lost_s and land. Battery below
+// hover and re-acquire from the tags; after target_lost_s re-read the shelf from the viewpoint
+// if its grid is still in view on nearly whole pictures, else land. Battery below
 // low_battery_pct: land (after the crossing if crossing). Corner tags leaving the view while
-// not centred: back off until they are back (then approach again), give up after back_off_s
-// of backing off or at the crossing_attempts-th off-centre arrival. Takeoff refused or
+// not centred: back off until they are back (then approach again); after back_off_s of
+// backing off or at the crossing_attempts-th off-centre arrival, re-read the shelf from the
+// viewpoint. Every re-read (these and the identity check's) counts toward
+// mission.identity_rereads; the next doubt lands in front of the shelf. Takeoff refused or
 // unanswered: retried command_retries times, then the mission ends on the ground.
 //
 // Lateral law sign (paper Fig. 19): the yaw loop keeps the target cell centred in the image,
@@ -256,9 +259,11 @@ class FlightSoftware {
   /// The target's identity on a picture where it is not confirmed (target_tracker.hpp):
   /// confirmed, kept unknown, or the shelf re-read (returns false: the approach is over).
   bool check_identity(const Picture& pic, const PoseEstimate& pose_K);
-  /// The target is in doubt: forget it and re-read the shelf from the optimal viewpoint, or
-  /// abort (land where it hovers, in front of the shelf) after mission.identity_rereads.
-  void reread_shelf(const std::string& why);
+  /// The target is in doubt (its identity, or lost, or never centred): forget it and re-read
+  /// the shelf from the optimal viewpoint, or, after mission.identity_rereads re-reads in the
+  /// mission, abort (land where it hovers, in front of the shelf) with `give_up_reason`
+  /// (default: "target cell not identified: " + why).
+  void reread_shelf(const std::string& why, const std::optional<std::string>& give_up_reason = std::nullopt);
   void estimate_forward_gain(const Picture& pic, const PoseEstimate& pose_K);
   // Actions
   void enter(Phase phase, const std::string& event);
@@ -327,6 +332,7 @@ class FlightSoftware {
   std::optional<TimeNs> hold_since_ns_;  ///< holding short of the shelf to settle
   bool near_edge_ = false;              ///< a corner tag was about to leave the view
   std::optional<TimeNs> lost_since_ns_;
+  bool grid_in_view_while_lost_ = false;  ///< the last nearly whole picture since then showed the shelf's grid
   std::optional<TimeNs> back_off_since_ns_;
   int crossing_refusals_ = 0;           ///< off-centre arrivals at the cell so far
   // Identity (target_tracker.hpp): confirmed on the full view the target was chosen on and kept
