@@ -16,6 +16,12 @@ constexpr double kStateFresh_s = 0.3;
 // kMinCellHeightSamples of them (sample_cell_height).
 constexpr size_t kCellHeightSamples = 15;
 constexpr size_t kMinCellHeightSamples = 3;
+// The autopilot's horizontal velocity lag assumed (a first-order response; the Tello's time
+// constant is unidentified, docs/tello_sdk.md: 0.3 to 0.7 s).
+constexpr double kVelocityLag_s = 0.5;
+// A crossing timed (state records stale) or ended by odometry never lasts longer than this
+// times its timed duration: bounds the overshoot of an odometry that under-reads.
+constexpr double kCrossMaxOverTime = 1.5;
 }  // namespace
 
 const char* phase_name(Phase p) {
@@ -301,7 +307,7 @@ void FlightSoftware::supervise() {
       // No fresh state record: no height to hold by; zero vertical stick (the autopilot holds
       // its own height reference) rather than a correction computed on an old height.
       if (!state_fresh()) velocity_.vz_mps = 0.0;
-      if (now_ns_ - phase_start_ns_ >= cross_duration_ns_) {
+      if (crossing_flown()) {
         if (!last_shelf()) {
           hover();
           return next_shelf("crossed cell " + cell_text(*target_) + " of shelf " + std::to_string(shelf_) +
@@ -834,6 +840,16 @@ std::optional<double> FlightSoftware::measured_cell_height_m() const {
 }
 
 // A state record within kStateFresh_s: the Tello sends them at 10 Hz.
+// The crossing is over when the state odometry has flown the line (p_O advances on each state
+// record by R_z(yaw) v_H dt, on_state); while the records are stale, when its timed duration
+// has passed; and at kCrossMaxOverTime times that in any case.
+bool FlightSoftware::crossing_flown() const {
+  const TimeNs t_ns = now_ns_ - phase_start_ns_;
+  if (t_ns >= static_cast<TimeNs>(kCrossMaxOverTime * static_cast<double>(cross_duration_ns_))) return true;
+  if (!state_fresh()) return t_ns >= cross_duration_ns_;
+  return (p_O_m_.head<2>() - cross_start_O_m_).dot(cross_axis_O_) >= cross_line_m_;
+}
+
 bool FlightSoftware::state_fresh() const {
   return state_ && ns_to_seconds(now_ns_ - state_->t_ns) <= kStateFresh_s;
 }
@@ -916,7 +932,7 @@ bool FlightSoftware::check_identity(const Picture& pic, const PoseEstimate& pose
 // 0.35 s moves the estimate by at most 0.25 m/s x 0.35 s / 0.8 m = 11 %; it is refined as D
 // grows. Clamped to 0.5..2; 1 until then.
 void FlightSoftware::estimate_forward_gain(const Picture& pic, const PoseEstimate& pose) {
-  constexpr double kLag_s = 0.7, kMinCommanded_m = 0.8;
+  constexpr double kLag_s = 0.2 + kVelocityLag_s, kMinCommanded_m = 0.8;
   if (!pic.decides) return;
   if (!gain_start_) {
     gain_start_ = std::make_pair(now_ns_, pose.p_FB_m().x());
@@ -1095,9 +1111,23 @@ void FlightSoftware::approach(const Picture& pic) {
       // Along the crossing line at crossing_speed_mps, heading held (yaw rate 0); the line in
       // K turned into the body frame by the heading: v_B = R_z(-yaw) v_K.
       const Eigen::Vector3d d = crossing_direction_K(config_.shelf, pose);
-      // Timed at the speed the vehicle really flies: the commanded one times the gain measured
-      // in the approach (the rc-to-speed gain of a Tello varies by tens of percent).
-      cross_duration_ns_ = seconds_to_ns(distance / (d.x() * g.crossing_speed_mps * forward_gain_));
+      // Ended by distance flown, not by time (crossing_flown): the line's horizontal length,
+      // distance / d_x along the normal times |d_xy|, along the line's direction in the
+      // odometry frame O (the body direction turned by the state heading). Timed only as a
+      // fallback: at the speed the vehicle really flies (the commanded one times the gain
+      // measured in the approach; the rc-to-speed gain of a Tello varies by tens of percent)
+      // plus the autopilot's lag (from rest, a first-order response flies
+      // v (T - tau (1 - e^(-T/tau))) >= v (T - tau) in T). Timed alone, a gain over-estimated by
+      // a fifth and the lag left a vehicle starting from rest 0.6 m short, landing onto the
+      // back face's beam (default campaign, ideal link, run 852 of seed 1).
+      const double cy = std::cos(pose.yaw_rad), sy = std::sin(pose.yaw_rad);
+      const Eigen::Vector2d dir_B(cy * d.x() + sy * d.y(), -sy * d.x() + cy * d.y());  // |dir_B| = |d_xy|
+      cross_line_m_ = distance / d.x() * dir_B.norm();
+      cross_start_O_m_ = p_O_m_.head<2>();
+      const double yaw_O = state_ ? state_->yaw_rad : 0.0;
+      cross_axis_O_ = Eigen::Rotation2Dd(yaw_O) * dir_B.normalized();
+      cross_duration_ns_ =
+          seconds_to_ns(distance / (d.x() * g.crossing_speed_mps * forward_gain_) + kVelocityLag_s);
       enter(Phase::Cross, "corner tags left the view: crossing " + cell_text(*target_) + " (" + format_m(beyond_m) +
                               " m past the back face; speed gain " + format_m(forward_gain_) + "; " +
                               format_m(*gate.height_above_cell_m) + " m above the cell centre by the state height" +
@@ -1106,8 +1136,7 @@ void FlightSoftware::approach(const Picture& pic) {
       // height (on_state), not the line's slope: that slope came from a pose a video latency
       // old, and open loop it flew a vehicle still settling vertically into the beam below.
       crossing_height_m_ = cell_centre_h_m;
-      const double cy = std::cos(pose.yaw_rad), sy = std::sin(pose.yaw_rad);
-      set_velocity({g.crossing_speed_mps * (cy * d.x() + sy * d.y()), g.crossing_speed_mps * (-sy * d.x() + cy * d.y()),
+      set_velocity({g.crossing_speed_mps * dir_B.x(), g.crossing_speed_mps * dir_B.y(),
                     height_hold_vz_mps(*cell_centre_h_m, state_->height_m, g.crossing_kp_z, g.crossing_z_speed_max_mps),
                     0.0});
       return;

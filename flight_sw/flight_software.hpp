@@ -68,9 +68,13 @@
 // the cell centre's height in h's frame, measured on close, vertically still poses of the
 // approach) and where the vertical speed carries it: both inside the opening between the
 // beams. Flown along the straight line from the last pose through the cell centre at
-// mid-depth, heading held, at crossing_speed_mps, horizontally open loop; vertically the cell
-// centre's height is held by the state height (vz = crossing_kp_z (z_cell - h)), zero vertical
-// stick while no fresh state record comes.
+// mid-depth, heading held, at crossing_speed_mps, horizontally open loop (no picture shows the
+// cell from inside it) and ended when the state odometry (the records' heading-frame
+// velocities integrated) has flown the line to beyond_distance_m past the back face; timed, at
+// the approach's measured speed gain plus the autopilot's lag, only while the state records
+// are stale, and never beyond 1.5 times that. Vertically the cell centre's height is held by
+// the state height (vz = crossing_kp_z (z_cell - h)), zero vertical stick while no fresh state
+// record comes.
 // Vertical: dy_im = cy - v_box (pixels, > 0 when the target is above the principal point);
 // e_z = dy_im * range / fy (metres, eq. 11 with k_e = fy / range); vz = PI(e_z) climbs toward
 // it. Heading: dx_im = u_box - cx; e_psi = atan(-dx_im / fx) (eq. 13-14 with k_dpsi = 1,
@@ -255,6 +259,7 @@ class FlightSoftware {
   void sample_cell_height(const Picture& pic, const PoseEstimate& pose);
   std::optional<double> measured_cell_height_m() const;
   bool state_fresh() const;
+  bool crossing_flown() const;
   void start_tracker(const cv::Mat& bgr, const cv::Rect2d& box);
   /// The target's identity on a picture where it is not confirmed (target_tracker.hpp):
   /// confirmed, kept unknown, or the shelf re-read (returns false: the approach is over).
@@ -356,7 +361,12 @@ class FlightSoftware {
   std::vector<double> cell_height_samples_m_;
   std::optional<TimeNs> vertical_motion_ns_;  ///< last state record showing vertical motion
   // Crossing
-  TimeNs cross_duration_ns_ = 0;
+  // The crossing's end (crossing_flown): the line flown by the state odometry, timed only
+  // while the state records are stale.
+  TimeNs cross_duration_ns_ = 0;          ///< timed: at the measured speed gain, plus the autopilot's lag
+  double cross_line_m_ = 0.0;             ///< the line's horizontal length, m
+  Eigen::Vector2d cross_start_O_m_ = Eigen::Vector2d::Zero();  ///< where it began, odometry frame O
+  Eigen::Vector2d cross_axis_O_ = Eigen::Vector2d::UnitX();    ///< the line's direction in O, unit
   std::optional<double> crossing_height_m_;   ///< the height the crossing holds, h's frame
   // Shelves
   int shelf_ = 0;

@@ -41,6 +41,10 @@ struct Options {
   /// A vertical speed nobody commanded, added in the crossing (m/s, up positive): a slow sink
   /// the open-loop crossing cannot see (run 19 of grid_2x2 seed 2 sank 21 cm in its crossing).
   double crossing_sink_mps = 0.0;
+  /// A headwind met in the crossing (m/s, along the heading, slowing the vehicle over the
+  /// ground): the open-loop crossing cannot see it; the state's velocities (the Tello's
+  /// downward optical flow measures ground speed) do.
+  double crossing_headwind_mps = 0.0;
   /// > 0: error-concealed video in groups of pictures of this many frames: frames k of a group
   /// (k = 0 the key frame) are whole up to damage_first_frame, then one more band is lost in
   /// each (damage_events = k - damage_first_frame + 1), and the lower half of a damaged frame
@@ -104,8 +108,9 @@ class Harness {
         s.yaw_rad = yaw_;
         s.height_m = p_WB_.z();
         // Velocities in the heading frame at the SDK's resolution (vgx, vgy: 0.1 m/s).
-        s.vx_H_mps = std::round(v_H_.x() * 10.0) / 10.0;
-        s.vy_H_mps = std::round(v_H_.y() * 10.0) / 10.0;
+        const Eigen::Vector2d v_ground_H = ground_velocity_H();
+        s.vx_H_mps = std::round(v_ground_H.x() * 10.0) / 10.0;
+        s.vy_H_mps = std::round(v_ground_H.y() * 10.0) / 10.0;
         s.vz_H_mps = std::round(vz_ * 10.0) / 10.0;
         s.battery_pct = o_.battery(t_);
         handle(fsw_.step(s));
@@ -218,6 +223,12 @@ class Harness {
     }
   }
 
+  /// Over the ground, in the heading frame: the autopilot's velocity less a crossing headwind.
+  Eigen::Vector2d ground_velocity_H() const {
+    const double headwind = fsw_.phase() == Phase::Cross ? o_.crossing_headwind_mps : 0.0;
+    return v_H_ - Eigen::Vector2d(headwind, 0.0);
+  }
+
   // Kinematics: rc through the configured gains, in the heading frame.
   void advance(TimeNs t_next) {
     while (t_ < t_next) {
@@ -229,7 +240,7 @@ class Harness {
                                     -rc_.a / config_.rc.rc_per_mps_horizontal);
         const double tau = o_.velocity_time_constant_s;
         v_H_ = tau > 0.0 ? Eigen::Vector2d(v_H_ + (v_cmd - v_H_) * std::min(1.0, dt / tau)) : v_cmd;
-        const double vx = v_H_.x(), vy = v_H_.y();
+        const double vx = ground_velocity_H().x(), vy = ground_velocity_H().y();
         p_WB_.x() += (std::cos(yaw_) * vx - std::sin(yaw_) * vy) * dt;
         p_WB_.y() += (std::sin(yaw_) * vx + std::cos(yaw_) * vy) * dt;
         const double vz_cmd = rc_.c / config_.rc.rc_per_mps_vertical;
@@ -577,6 +588,34 @@ TEST(FlightSoftware, WithoutTheLevelCheckTheIdentityCheckCatchesTheLevelAbove) {
   EXPECT_GE(fsw.telemetry().identity_contradictions, 1);
   EXPECT_EQ(fsw.result().outcome, Outcome::Crossed) << fsw.result().reason;
   expect_through_cell_2_3(h);
+}
+
+// The crossing ends where the state odometry has flown the line, not when a timer runs out.
+// A headwind of 0.1 m/s in the crossing slows the 0.3 m/s crossing by a third: timed on the
+// approach's speed (commit 51de687) it sent `land` at x = 3.39 m, 0.05 m past the back face
+// with the vehicle's rear still over the back beam (the default campaign's run 852 of seed 1,
+// ideal link, landed onto that beam the same way: a speed gain over-estimated by a fifth and
+// the autopilot's lag left it 0.6 m short). Ended by odometry, `land` is sent
+// beyond_distance_m past the back face (x = 3.34 m), within the state's 0.1 m/s steps.
+TEST(FlightSoftware, TheCrossingEndsWhereTheOdometryHasFlownTheLine) {
+  Options o;
+  o.velocity_time_constant_s = 0.5;
+  o.crossing_headwind_mps = 0.1;
+  Harness h(o);
+  h.run(60.0);
+  ASSERT_EQ(h.fsw().result().outcome, Outcome::Crossed) << h.fsw().result().reason;
+  const auto& cmds = h.commands();
+  const auto land = std::find_if(cmds.begin(), cmds.end(), [](const SdkCommand& c) { return c.text == "land"; });
+  ASSERT_NE(land, cmds.end());
+  std::optional<double> x_at_land_m;
+  for (const auto& s : h.track()) {
+    if (s[0] >= ns_to_seconds(land->t_ns)) {
+      x_at_land_m = s[1];
+      break;
+    }
+  }
+  ASSERT_TRUE(x_at_land_m);
+  EXPECT_NEAR(*x_at_land_m, 3.34 + FlightConfig{}.mission.beyond_distance_m, 0.1);
 }
 
 TEST(FlightSoftware, WholeMissionInventoriesAndCrossesTheEmptyCell) {
