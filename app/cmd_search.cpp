@@ -27,6 +27,9 @@ struct SearchOptions {
   std::int64_t round_runs = 10;
   std::int64_t estimation_runs = -1;  ///< -1: half the budget
   double elite_fraction = 0.1;
+  std::int64_t min_elites = 3;
+  double smoothing = 0.8;
+  double min_stddev_fraction = 0.5;
   double nominal_share = 0.1;
   std::string campaign;
   std::vector<std::string> parameters;
@@ -57,6 +60,18 @@ const CommandRegistration kSearch{
       sub.add_option("--elite-fraction", o->elite_fraction, "rho: the fraction of a round kept as elites")
           ->capture_default_str()
           ->check(CLI::Range(0.01, 0.5));
+      sub.add_option("--min-elites", o->min_elites, "at least this many elites per round, whatever rho says")
+          ->capture_default_str()
+          ->check(CLI::Range(1, 1000000));
+      sub.add_option("--smoothing", o->smoothing,
+                     "alpha: the next proposal's parameters are alpha x the elites' fit + (1 - alpha) x the current")
+          ->capture_default_str()
+          ->check(CLI::Range(0.01, 1.0));
+      sub.add_option("--min-stddev-fraction", o->min_stddev_fraction,
+                     "a proposal's stddev floor on a bounded support, times the nominal's scale (stddev, or "
+                     "width / sqrt 12 when smaller)")
+          ->capture_default_str()
+          ->check(CLI::Range(0.01, 10.0));
       sub.add_option("--nominal-share", o->nominal_share,
                      "the nominal's share in every proposal (defensive mixture; bounds each parameter's ratio by 1/share)")
           ->capture_default_str()
@@ -76,6 +91,9 @@ const CommandRegistration kSearch{
         settings.target = *target;
         settings.ce.round_runs = o->round_runs;
         settings.ce.elite_fraction = o->elite_fraction;
+        settings.ce.min_elites = o->min_elites;
+        settings.ce.smoothing = o->smoothing;
+        settings.ce.min_stddev_fraction = o->min_stddev_fraction;
         settings.ce.nominal_share = o->nominal_share;
         settings.ce.estimation_runs = o->estimation_runs < 0 ? o->budget / 2 : o->estimation_runs;
         if (settings.ce.estimation_runs > o->budget) {

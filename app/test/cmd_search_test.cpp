@@ -103,6 +103,10 @@ TEST(CmdSearch, RefusesBadInput) {
   EXPECT_EQ(wait_exit(spawn(with("--budget", "lots"))), 2);
   EXPECT_EQ(wait_exit(spawn(with("--estimation-runs", "7"))), 2);  // more than the budget
   EXPECT_EQ(wait_exit(spawn(with("--elite-fraction", "0.9"))), 2);
+  EXPECT_EQ(wait_exit(spawn(with("--min-elites", "0"))), 2);
+  EXPECT_EQ(wait_exit(spawn(with("--smoothing", "0"))), 2);
+  EXPECT_EQ(wait_exit(spawn(with("--smoothing", "1.5"))), 2);
+  EXPECT_EQ(wait_exit(spawn(with("--min-stddev-fraction", "0"))), 2);
   EXPECT_EQ(wait_exit(spawn(with("--campaign", (root / "nowhere").string()))), 2);
   EXPECT_EQ(wait_exit(spawn(with("--parameters", "start_distance_m,not_a_parameter"))), 2);
   EXPECT_EQ(wait_exit(spawn({SHELFCROSS_PROGRAM, "search", "--scenario", scenario, "--frobnicate"})), 2);
