@@ -190,12 +190,17 @@ json write_campaign_report(const std::filesystem::path& dir) {
     }
     const auto settling = [&](const char* axis) {
       const json a = m.value(axis, json());
-      return a.is_object() && a["settling_time_s"].is_number() ? a["settling_time_s"].get<double>() : NAN;
+      // contains() first: a const json's operator[] on a missing key is undefined (an
+      // assertion in the debug preset: a run without these metrics, as a crashed one).
+      return a.is_object() && a.contains("settling_time_s") && a["settling_time_s"].is_number()
+                 ? a["settling_time_s"].get<double>() : NAN;
     };
     settle_z.push_back(settling("altitude"));
     settle_yaw.push_back(settling("heading"));
-    if (m["entry_offset_y_m"].is_number()) offset_y.push_back(m["entry_offset_y_m"].get<double>());
-    if (m["entry_offset_z_m"].is_number()) offset_z.push_back(m["entry_offset_z_m"].get<double>());
+    if (m.contains("entry_offset_y_m") && m["entry_offset_y_m"].is_number())
+      offset_y.push_back(m["entry_offset_y_m"].get<double>());
+    if (m.contains("entry_offset_z_m") && m["entry_offset_z_m"].is_number())
+      offset_z.push_back(m["entry_offset_z_m"].get<double>());
     if (!ok) {
       ++failures;
       failed << "| " << r.index << " | " << r.outcome << " | " << m.value("detail", std::string()) << " | `shelfcross replay "
