@@ -25,6 +25,10 @@ std::vector<std::string> mpirun(int ranks, const std::vector<std::string>& extra
   // "<unknown module>", and match nothing; unwinding by DWARF tables on every allocation
   // (fast_unwind_on_malloc=0) gives whole stacks that reach libmpi or libopen-pal. Slower, so
   // only for the ranks (and their worker processes) started here; harmless without ASan.
+  // OPEN (issue 18): under the debug preset on the 2-core machine (load about 10) every run of
+  // ThreeRanksEqualOneProcess then passed its worker's 60 s wall-clock limit and was stored
+  // `hung`, while the same runs in one process (no MPI, default unwinding) completed: the
+  // unwinding is too slow for the worker processes; it should be limited to the ranks.
   setenv("LSAN_OPTIONS",
          "suppressions=" SHELFCROSS_SOURCE_DIR "/scripts/lsan.supp:print_suppressions=0:fast_unwind_on_malloc=0", 1);
   std::vector<std::string> c{SHELFCROSS_MPIEXEC, "-np", std::to_string(ranks), "--oversubscribe", "--bind-to", "none",
