@@ -46,19 +46,29 @@ bool has_extension(const char* list, const char* name) {
 // EGL displays are per (platform, native display), shared by every context of the process.
 // A display, once initialised, stays initialised until the process exits: eglTerminate is
 // never called. Why (issue 18): with Mesa 22.3 (egl_dri2), terminating the display's last
-// user destroys the screen and dlcloses the driver, swrast_dri.so with LLVM; the next
-// renderer's eglInitialize maps it again, possibly elsewhere. A thread that used the driver
-// and is still exiting (its thread-local destructors), or any pointer kept across the unload,
-// then runs code that is no longer there. A general protection fault in swrast_dri.so at an
-// offset that is not an instruction boundary (this machine's kernel log: 0x7700dc, inside
-// the 5-byte lea at 0x7700d9) is what a jump through such a stale pointer looks like. Both
-// reported crashes had renderers of several threads in one process (a campaign's worker
-// threads, three co-simulations in threads); the stress test (render/test/renderer_threads_
-// test.cpp) did not reproduce it in 27 x 8 rounds of 4 threads nor 10 x 16 rounds of the
-// last-user race, so this is the cause as inferred, removed rather than proven. Not unloading
-// the driver also keeps its globals mapped, so LeakSanitizer sees what they point to as
-// reachable instead of reporting Mesa's driver state as leaked. Cost: one display's state
-// (the driver, kept until exit) after the last renderer is gone.
+// user destroys the screen and dlcloses the driver, swrast_dri.so with LLVM, and the next
+// renderer's eglInitialize maps it again: a thread still exiting or a pointer kept across the
+// unload would run code that is gone, and LeakSanitizer reported the unloaded driver's state
+// as leaked (19 tests under the debug preset). Cost: the driver stays loaded until exit.
+// This is NOT the cause of the general protection fault in swrast_dri.so seen in campaigns
+// (issue 18), as first thought. The kernel's line, "general protection fault ip:...00dc ...
+// in swrast_dri.so[6e00dc,<base>+1049000]", gives the file offset first: 0x6e00dc, the same
+// in both crashes logged on the build machine (11:44 and 13:05 UTC on 2026-11-24, the second
+// 14 minutes after this change was committed; which code that process ran is not known). It is
+// an instruction boundary, a load (movslq 0x100(%rcx),%rdx) in a loop over a list of 32-pointer
+// blocks with a count at 0x100 and a next pointer at 0x108, called only from a function that
+// checks a setup's framebuffer and then each of its active scenes and returns 3: by that
+// layout, llvmpipe's lp_scene_is_resource_referenced() from lp_setup_is_resource_referenced()
+// (inferred from the layout: Debian's driver has no symbols). A general protection fault on a
+// load is a non-canonical address: the scene's resource list read while it is being reset or
+// freed, a race inside llvmpipe between the context's thread (mapping a resource, as reading
+// pixels back does) and llvmpipe's rasteriser threads. Not reproduced: both stress tests of
+// render/test/renderer_threads_test.cpp repeated in a loop (release build, then ASan) never
+// failed, and helgrind (valgrind 3.19) did not finish one of them in 15 minutes; its reports
+// were all inside Mesa without symbols, several on the display's second word, likely a lock
+// built on a futex that it cannot see. Campaign runs now live in worker processes, so such
+// a crash costs one run, recorded `crashed`. An untried workaround: LP_NUM_THREADS=0 (llvmpipe
+// rasterises on the calling thread, no rasteriser threads to race with).
 std::mutex g_display_mutex;
 
 bool acquire_display(EGLDisplay d) {
