@@ -144,7 +144,11 @@ const CommandRegistration kSearch{
         if (e["failures"].get<std::int64_t>() > 0) {
           std::cout << ", 95 % interval [" << e["lower"].get<double>() << ", " << e["upper"].get<double>() << "]";
         }
-        std::cout << " (from " << e["runs"] << " runs of round " << e["round"] << ")\nwrote " << o->out
+        std::cout << " (from " << e["runs"] << " runs of round " << e["round"] << ")";
+        if (!e["doubts"].get<std::string>().empty()) {
+          std::cout << "; not to be trusted: " << e["doubts"].get<std::string>();
+        }
+        std::cout << "\nwrote " << o->out
                   << "/results.sqlite, report.md, search_summary.json, margins.csv\n";
         if (!r.complete) {
           std::cout << "interrupted: run the same command again to resume\n";

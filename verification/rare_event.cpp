@@ -162,6 +162,15 @@ std::optional<CeRound> next_ce_round(const ParameterDistributions& nominal, cons
   return next;
 }
 
+std::string estimate_doubts(const IsEstimate& e) {
+  std::string doubts;
+  if (e.runs > 0 && (e.mean_weight < 0.5 || e.mean_weight > 2.0)) doubts = "uneven weights";
+  if (e.failures > 0 && e.failure_ess < std::max(2.0, 0.3 * static_cast<double>(e.failures))) {
+    doubts += (doubts.empty() ? "" : "; ") + std::string("few effective failures");
+  }
+  return doubts;
+}
+
 IsEstimate importance_estimate(const std::vector<double>& log_weights, const std::vector<bool>& failed,
                                double confidence) {
   assert(log_weights.size() == failed.size());

@@ -145,6 +145,14 @@ struct IsEstimate {
   double mean_weight = 0.0;
 };
 
+/// Why an estimate's interval is not to be trusted, empty when nothing speaks against it:
+/// "uneven weights" when the mean weight is outside [0.5, 2] (it estimates 1); "few effective
+/// failures" when the failures' Kish ESS is below max(2, 0.3 x failures), i.e. one or two
+/// failures carry the estimate, so its variance, read off the same few weights, is itself
+/// unreliable (gust_rare_ideal, docs/search.md: ESS 1.4 of 12 failures, p_hat 50 x below the
+/// plain campaign's rate). Heuristics, not a test: both thresholds are rules of thumb.
+std::string estimate_doubts(const IsEstimate& e);
+
 /// The estimate from i.i.d. draws of one proposal: log_weight_i = log f(x_i) - log q(x_i),
 /// failed_i = g(x_i) < 0. See the file comment for the interval.
 IsEstimate importance_estimate(const std::vector<double>& log_weights, const std::vector<bool>& failed,

@@ -231,7 +231,8 @@ nlohmann::json write_search_report(const std::filesystem::path& dir, const std::
     json j{{"round", e.round},          {"runs", e.is.runs},       {"failures", e.is.failures},
            {"p_hat", e.is.p_hat},       {"standard_error", number_or_null(e.is.standard_error)},
            {"confidence", e.is.confidence}, {"lower", e.is.lower}, {"upper", e.is.upper},
-           {"clt_lower", e.is.clt_lower}, {"clt_upper", e.is.clt_upper}, {"failure_ess", e.is.failure_ess}, {"mean_weight", e.is.mean_weight}};
+           {"clt_lower", e.is.clt_lower}, {"clt_upper", e.is.clt_upper}, {"failure_ess", e.is.failure_ess}, {"mean_weight", e.is.mean_weight},
+           {"doubts", estimate_doubts(e.is)}};
     if (plain.count(c)) {
       const auto& p = plain.at(c);
       j["plain_monte_carlo"] = {{"runs", p.runs}, {"failures", p.failures}, {"lower_95", p.lower},
@@ -280,7 +281,9 @@ nlohmann::json write_search_report(const std::filesystem::path& dir, const std::
      << (rounds.empty() || !rounds.back().estimation ? " (adaptation not finished: the last round's proposal)" : "")
      << ": p_hat = mean of 1[failed] f(x) / q(x); interval: 95 % CLT on the log scale, p_hat exp(-+1.96 se / p_hat) "
         "(rare_event.hpp); the plain CLT interval p_hat -+ 1.96 se beside it; ESS: the failures' effective sample "
-        "size (Kish); mean weight: mean f / q over all the round's runs, an unbiased estimate of 1 (far from 1, \"(uneven)\" marks an interval not to be trusted).";
+        "size (Kish); mean weight: mean f / q over all the round's runs, an unbiased estimate of 1; a mark after "
+        "them says why an interval is not to be trusted (weights uneven: mean weight outside [0.5, 2]; few "
+        "effective failures: ESS below max(2, 0.3 x failures)).";
   if (campaign_dir) md << " Plain Monte Carlo: the campaign in `" << campaign_dir->string() << "`, failures over runs, two-sided 95 % Clopper-Pearson.";
   md << "\n\n| class | runs | failures | p_hat | 95 % interval | CLT interval | ESS | mean weight |"
      << (campaign_dir ? " plain Monte Carlo | its 95 % interval | its first failure |" : "") << "\n|---|---|---|---|---|---|---|---|"
@@ -290,7 +293,7 @@ nlohmann::json write_search_report(const std::filesystem::path& dir, const std::
        << (e.is.failures ? "[" + fmt(e.is.lower) + ", " + fmt(e.is.upper) + "]" : std::string("no failure sampled"))
        << " | " << (e.is.failures ? "[" + fmt(e.is.clt_lower) + ", " + fmt(e.is.clt_upper) + "]" : std::string("-"))
        << " | " << fmt(e.is.failure_ess, "%.1f") << " | " << fmt(e.is.mean_weight, "%.3g")
-       << (e.is.mean_weight < 0.5 || e.is.mean_weight > 2.0 ? " (uneven)" : "") << " |";
+       << (estimate_doubts(e.is).empty() ? "" : " (" + estimate_doubts(e.is) + ")") << " |";
     if (campaign_dir) {
       const auto& p = plain.at(c);
       md << " " << p.failures << " / " << p.runs << " | [" << fmt(p.lower) << ", " << fmt(p.upper) << "] | "

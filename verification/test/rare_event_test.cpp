@@ -128,6 +128,37 @@ SearchResult search(const Toy& toy, std::uint64_t seed, std::int64_t budget, con
   return r;
 }
 
+// The marks the report puts on an estimate not to be trusted (rare_event.hpp).
+TEST(CrossEntropy, DoubtsOnUnevenWeightsAndFewEffectiveFailures) {
+  IsEstimate e;
+  e.runs = 30;
+  e.failures = 12;
+  e.mean_weight = 0.84;
+  e.failure_ess = 11.0;
+  EXPECT_EQ(estimate_doubts(e), "");
+  e.failure_ess = 1.4;  // gust_rare_ideal, docs/search.md: one failure carries the estimate
+  EXPECT_EQ(estimate_doubts(e), "few effective failures");
+  e.mean_weight = 2.5;
+  EXPECT_EQ(estimate_doubts(e), "uneven weights; few effective failures");
+  e.failures = 2;  // two failures of equal weight: ESS 2, as even as two can be
+  e.failure_ess = 2.0;
+  e.mean_weight = 1.0;
+  EXPECT_EQ(estimate_doubts(e), "");
+  e.failures = 0;  // nothing sampled: no interval to doubt
+  e.failure_ess = 0.0;
+  EXPECT_EQ(estimate_doubts(e), "");
+  // From weights: one failure of weight 1 among failures of weight 0.01 gives ESS near 1.
+  std::vector<double> log_w(30, 0.0);
+  std::vector<bool> failed(30, false);
+  for (int i = 0; i < 6; ++i) {
+    failed[static_cast<size_t>(i)] = true;
+    log_w[static_cast<size_t>(i)] = i == 0 ? 0.0 : std::log(0.01);
+  }
+  const IsEstimate skewed = importance_estimate(log_w, failed);
+  EXPECT_LT(skewed.failure_ess, 1.3);
+  EXPECT_NE(estimate_doubts(skewed).find("few effective failures"), std::string::npos);
+}
+
 TEST(CrossEntropy, EstimateCoversTheKnownProbabilityIn19Of20Seeds) {
   const Toy toy;
   ASSERT_NEAR(toy.p, 1.5433e-4, 0.0001e-4);
