@@ -384,7 +384,9 @@ TEST(TelloPilot, VideoStallHoversThenLands) {
   const fs::path dir = temp_dir("stall");
   FakeTello drone;
   auto args = drone.args(dir);
-  args.insert(args.end(), {"--video-hover", "0.3", "--video-land", "0.8"});
+  // Wide enough that a loaded machine's scheduling gaps in the live stream are no stall (at
+  // 0.3 s the pilot hovered 3 times under a load average of 8 in a clean-clone CI run).
+  args.insert(args.end(), {"--video-hover", "0.6", "--video-land", "1.5"});
   Child pilot(args, dir);
   ASSERT_TRUE(drone.step_until("takeoff")) << read_file(pilot.err);
   for (int i = 0; i < 10; ++i) drone.step();
@@ -394,7 +396,7 @@ TEST(TelloPilot, VideoStallHoversThenLands) {
   EXPECT_EQ(pilot.exit_code, 1);
   const fs::path log = dir / "log.jsonl";
   EXPECT_EQ(log_lines(log, "failsafe", "event", "video stalled: hovering"), 1);
-  EXPECT_EQ(log_lines(log, "failsafe", "reason", "no video frame for 0.800000 s"), 1);
+  EXPECT_EQ(log_lines(log, "failsafe", "reason", "no video frame for 1.500000 s"), 1);
   // Between the stall and the land the sticks were zero.
   const size_t land = drone.index_of("land");
   ASSERT_GT(land, 0u);
