@@ -22,6 +22,8 @@ constexpr double kVelocityLag_s = 0.5;
 // A crossing timed (state records stale) or ended by odometry never lasts longer than this
 // times its timed duration: bounds the overshoot of an odometry that under-reads.
 constexpr double kCrossMaxOverTime = 1.5;
+// Why an approach that never centred gives up, once the re-reads are spent.
+constexpr const char* kCouldNotCentre = "could not centre on the target cell";
 }  // namespace
 
 const char* phase_name(Phase p) {
@@ -300,7 +302,7 @@ void FlightSoftware::supervise() {
         return land(Outcome::Aborted, "target lost");
       }
       if (back_off_since_ns_ && ns_to_seconds(now_ns_ - *back_off_since_ns_) > to.back_off_s) {
-        return reread_shelf("could not centre on the target cell", "could not centre on the target cell");
+        return reread_shelf(kCouldNotCentre, kCouldNotCentre);
       }
       break;
     case Phase::Cross:
@@ -839,7 +841,6 @@ std::optional<double> FlightSoftware::measured_cell_height_m() const {
   return *mid;
 }
 
-// A state record within kStateFresh_s: the Tello sends them at 10 Hz.
 // The crossing is over when the state odometry has flown the line (p_O advances on each state
 // record by R_z(yaw) v_H dt, on_state); while the records are stale, when its timed duration
 // has passed; and at kCrossMaxOverTime times that in any case.
@@ -848,6 +849,15 @@ bool FlightSoftware::crossing_flown() const {
   if (t_ns >= static_cast<TimeNs>(kCrossMaxOverTime * static_cast<double>(cross_duration_ns_))) return true;
   if (!state_fresh()) return t_ns >= cross_duration_ns_;
   return (p_O_m_.head<2>() - cross_start_O_m_).dot(cross_axis_O_) >= cross_line_m_;
+}
+
+// A state record within kStateFresh_s: the Tello sends them at 10 Hz.
+// The target's loss begins (once): the grid is not known to be in view until a nearly whole
+// picture shows it.
+void FlightSoftware::start_losing_target() {
+  if (lost_since_ns_) return;
+  lost_since_ns_ = now_ns_;
+  grid_in_view_while_lost_ = false;
 }
 
 bool FlightSoftware::state_fresh() const {
@@ -1072,10 +1082,7 @@ void FlightSoftware::approach(const Picture& pic) {
   if (!pic.decides && !back_off_since_ns_) {
     // Not found in a damaged picture: the tags may sit in a guessed band. Nothing is decided
     // (no crossing, no re-acquisition) until a nearly whole picture shows where they are.
-    if (!lost_since_ns_) {
-      lost_since_ns_ = now_ns_;
-      grid_in_view_while_lost_ = false;
-    }
+    start_losing_target();
     velocity_ = {};
     return;
   }
@@ -1143,7 +1150,7 @@ void FlightSoftware::approach(const Picture& pic) {
     }
     if (!back_off_since_ns_) {
       if (++crossing_refusals_ >= config_.mission.crossing_attempts) {
-        reread_shelf("could not centre on the target cell", "could not centre on the target cell");
+        reread_shelf(kCouldNotCentre, kCouldNotCentre);
         return;
       }
       back_off_since_ns_ = now_ns_;
@@ -1159,11 +1166,8 @@ void FlightSoftware::approach(const Picture& pic) {
     return;
   }
   // Lost: hover, and look for the target among the tags of the whole frame.
-  if (!lost_since_ns_) {
-    lost_since_ns_ = now_ns_;
-    grid_in_view_while_lost_ = false;
-    telemetry_.event = "target lost: hovering to re-acquire";
-  }
+  if (!lost_since_ns_) telemetry_.event = "target lost: hovering to re-acquire";
+  start_losing_target();
   hover();
   if (reacquire(pic)) {
     lost_since_ns_.reset();

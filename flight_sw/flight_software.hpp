@@ -260,6 +260,7 @@ class FlightSoftware {
   std::optional<double> measured_cell_height_m() const;
   bool state_fresh() const;
   bool crossing_flown() const;
+  void start_losing_target();
   void start_tracker(const cv::Mat& bgr, const cv::Rect2d& box);
   /// The target's identity on a picture where it is not confirmed (target_tracker.hpp):
   /// confirmed, kept unknown, or the shelf re-read (returns false: the approach is over).
