@@ -19,6 +19,9 @@ constexpr size_t kMinCellHeightSamples = 3;
 // The autopilot's horizontal velocity lag assumed (a first-order response; the Tello's time
 // constant is unidentified, docs/tello_sdk.md: 0.3 to 0.7 s).
 constexpr double kVelocityLag_s = 0.5;
+// After a refused `land`: how long to watch the state height before asking again (the
+// tello_pilot's own landing asks every 0.5 s too).
+constexpr double kLandRefusedWait_s = 0.5;
 // A crossing timed (state records stale) or ended by odometry never lasts longer than this
 // times its timed duration: bounds the overshoot of an odometry that under-reads.
 constexpr double kCrossMaxOverTime = 1.5;
@@ -258,18 +261,35 @@ void FlightSoftware::on_completion(const SdkLink::Completion& c) {
     // the last height in flight, so it can only keep the flight software trying.)
     const bool down_anyway = !c.ok && state_ && state_->height_m <= config_.mission.airborne_height_m;
     if (c.ok || down_anyway) {
-      result_.outcome = pending_outcome_;
-      result_.landed = true;
-      enter(Phase::Done, c.ok ? "landed" : "landed (no `ok`: the state height says on the ground)");
-    } else if (retry_left) {
+      finish_landing(true, c.ok ? "landed" : "landed (no `ok`: the state height says on the ground)");
+    } else if (!c.timed_out && !land_given_up()) {
+      // Refused in the air: the Tello refuses `land` while it is already landing (a duplicated
+      // datagram started the landing, and its `error` was taken for this `land`'s reply) and,
+      // now and then, with `error Not joystick`. Retrying at once would spend the retries in a
+      // fraction of a second and give up on a drone that is coming down; instead wait
+      // kLandRefusedWait_s watching the state height (supervise), then ask again, for up to
+      // land_reply_s, the longest a landing may take.
+      land_again_at_ns_ = now_ns_ + seconds_to_ns(kLandRefusedWait_s);
+      telemetry_.event = "'land' refused in the air (" + c.reply + "): waiting for the state height";
+    } else if (c.timed_out && retry_left) {
       retry(config_.timeouts.land_reply_s);
     } else {
-      result_.outcome = pending_outcome_;
-      result_.landed = false;
       result_.reason += "; land not acknowledged";
-      enter(Phase::Done, "land not acknowledged");
+      finish_landing(false, "land not acknowledged");
     }
   }
+}
+
+void FlightSoftware::finish_landing(bool landed, const std::string& why) {
+  result_.outcome = pending_outcome_;
+  result_.landed = landed;
+  land_again_at_ns_.reset();
+  enter(Phase::Done, why);
+}
+
+bool FlightSoftware::land_given_up() const {
+  // Refusals are waited out, not counted: the bound is the time a landing may take.
+  return ns_to_seconds(now_ns_ - phase_start_ns_) > config_.timeouts.land_reply_s;
 }
 
 // ---- Timers: failsafes, phase timeouts, keep-alive ----
@@ -324,6 +344,21 @@ void FlightSoftware::supervise() {
         return land(Outcome::Aborted, "transfer waypoint not reached");
       }
       break;
+    case Phase::Land:
+      // After a refused `land` (on_completion): down by a fresh state record (low and
+      // vertically still: a landing drone passes airborne_height_m still descending), or ask
+      // again.
+      if (land_again_at_ns_) {
+        if (state_fresh() && state_->height_m <= config_.mission.airborne_height_m &&
+            std::abs(state_->vz_H_mps) <= kVerticallyStill_mps) {
+          return finish_landing(true, "landed (`land` refused while landing; the state height says on the ground)");
+        }
+        if (now_ns_ >= *land_again_at_ns_) {
+          land_again_at_ns_.reset();
+          link_.request("land", config_.timeouts.land_reply_s);
+        }
+      }
+      return;
     default:
       break;
   }
@@ -475,6 +510,8 @@ void FlightSoftware::find_shelf(const Picture& pic) {
                                   -g.yaw_rate_max_radps, g.yaw_rate_max_radps);
     v.vz_mps = std::clamp(g.viewpoint_kp * (k.cy_px - c.y) / k.fy_px, -g.z_speed_max_mps,
                           g.z_speed_max_mps);
+  } else if (reread_back_until_ns_ && now_ns_ < *reread_back_until_ns_) {
+    v.vx_B_mps = -g.back_off_speed_mps;  // a re-read from close: back out first (reread_shelf)
   } else {
     v.yaw_rate_radps = g.search_yaw_rate_radps;  // nothing in view: turn and look
   }
@@ -968,6 +1005,16 @@ void FlightSoftware::reread_shelf(const std::string& why, const std::optional<st
   if (++rereads_ > config_.mission.identity_rereads) {
     land(Outcome::Aborted, give_up_reason.value_or("target cell not identified: " + why));
     return;
+  }
+  // Closer than the viewpoint, the shelf may not fit the view or show a single tag (an
+  // approach that gave up 0.6 m out sees the inside of a cell), and FindShelf would only turn
+  // on the spot looking for it (run 242 of the default sdk campaign, commit bfd468c: 30 s of
+  // turning, "shelf not found"). So, seeing nothing, it first backs straight out the way the
+  // approach came, to the viewpoint's range (the last pose's range: distance / back-off speed).
+  reread_back_until_ns_.reset();
+  if (pose_K_) {
+    const double back_m = std::max(0.0, -viewpoint_G_m_.x() + pose_K_->p_FB_m().x());
+    reread_back_until_ns_ = now_ns_ + seconds_to_ns(back_m / config_.control.back_off_speed_mps);
   }
   target_.reset();
   crossing_refusals_ = 0;  // off-centre arrivals count per approach

@@ -276,6 +276,10 @@ class FlightSoftware {
   void command_takeoff_if_ready();
   void command_takeoff();
   void land(Outcome outcome, const std::string& reason);
+  /// Ends the Land phase (Done) with the pending outcome; `landed` false: not acknowledged.
+  void finish_landing(bool landed, const std::string& why);
+  /// The Land phase has lasted longer than a landing may take (timeouts.land_reply_s).
+  bool land_given_up() const;
   void abort_on_ground(const std::string& reason);
   void set_velocity(const VelocityCommand& v);
   void hover();
@@ -304,6 +308,7 @@ class FlightSoftware {
   int attempts_ = 0;  ///< attempts of the current non-rc command
   MissionResult result_;
   Outcome pending_outcome_ = Outcome::Aborted;  ///< the outcome a Land phase ends in
+  std::optional<TimeNs> land_again_at_ns_;  ///< after a refused `land`: when to ask again
   std::optional<StateRecord> state_;
   std::optional<TimeNs> last_frame_ns_;
   TimeNs airborne_since_ns_ = 0;  ///< video-stall timer floor: frames are needed from here
@@ -332,6 +337,7 @@ class FlightSoftware {
   std::optional<PoseEstimate> pose_K_;  ///< last pose in the cell frame
   TimeNs pose_t_ns_ = 0;                ///< when the frame of pose_K_ was received
   std::optional<PoseEstimate> decision_pose_K_;  ///< last pose from a nearly whole picture
+  std::optional<TimeNs> reread_back_until_ns_;  ///< a re-read from close backs out until then
   std::optional<double> target_height_m_;  ///< target cell centre above the take-off point (state h)
   TimeNs decision_pose_t_ns_ = 0;
   TimeNs lateral_active_ns_ = 0;        ///< last time the lateral law commanded a speed

@@ -93,7 +93,7 @@ class PilotLoop::Impl {
         // A refused takeoff ("error No valid imu", ...) left the drone on the ground, unless
         // the state stream says otherwise.
         if (e.command == "takeoff" && e.kind == K::Reply && !ok &&
-            !(last_height_m_ && *last_height_m_ > kAirborneHeight_m)) {
+            !(last_height_m_ && *last_height_m_ > airborne_height_m())) {
           airborne_ = false;
         }
         if (e.tag == kTagFlightSoftware && e.kind == K::Reply) inputs.emplace_back(SdkReply{e.t_ns, e.reply});
@@ -365,8 +365,10 @@ class PilotLoop::Impl {
   const SdkDriver& driver() const { return *driver_; }
   const VideoReceiver& video() const { return *video_; }
   bool airborne() const { return airborne_; }
-  /// The newest state record puts the drone on the ground (at or below kAirborneHeight_m).
-  bool grounded() const { return last_height_m_ && *last_height_m_ <= kAirborneHeight_m; }
+  /// The newest state record puts the drone on the ground: at or below the flight software's
+  /// own airborne height (mission.airborne_height_m), so that the two agree on "down".
+  bool grounded() const { return last_height_m_ && *last_height_m_ <= airborne_height_m(); }
+  double airborne_height_m() const { return fsw_.config().mission.airborne_height_m; }
   const std::string& failsafe_reason() const { return failsafe_reason_; }
 
  private:
@@ -385,7 +387,6 @@ class PilotLoop::Impl {
   std::optional<TimeNs> last_frame_ns_;
   int battery_pct_ = -1;
   std::optional<double> last_height_m_;
-  static constexpr double kAirborneHeight_m = 0.2;
   bool airborne_ = false;
   TimeNs airborne_since_ns_ = 0;
   bool hover_override_ = false;

@@ -30,10 +30,17 @@ struct Options {
   /// Per attempt of `land`: the drone lands on the first, and replies this ("" = the reply is
   /// lost); later attempts find it on the ground and get "error", as from a Tello.
   std::string land_reply = "ok";
+  /// The first `land` arrives twice (a duplicated datagram): the drone starts landing on the
+  /// first, refuses the duplicate at once with "error", and that is the reply the flight
+  /// software hears; the first's "ok", once down, comes after it and is drained as stale.
+  bool land_duplicated = false;
   Eigen::Vector3d start_W_m = Eigen::Vector3d(0.3, 0.0, 0.0);
   double start_yaw_rad = 0.0;
   bool blank_frames = false;  ///< frames show only the wall
   double blank_after_approach_s = -1.0;  ///< >= 0: frames go blank this long into the approach
+  /// > 0: after the first re-read (FindShelf again, after an approach) the frames show only
+  /// the wall this long: from close, the inside of a cell and no tag (run 242, commit bfd468c).
+  double blank_after_reread_s = -1.0;
   double video_latency_s = 0.0;          ///< a frame reaches the flight software this late
   double velocity_time_constant_s = 0.0;  ///< > 0: horizontal velocity lags the sticks (first order)
   double yaw_time_constant_s = 0.0;       ///< > 0: yaw rate lags the stick (first order)
@@ -117,8 +124,17 @@ class Harness {
       } else if (t_next == t_frame) {
         ++frame_k;
         if (fsw_.phase() == Phase::Approach && !approach_t_) approach_t_ = t_;
+        if (fsw_.phase() == Phase::FindShelf && approach_t_ && !reread_t_) {
+          reread_t_ = t_;
+          reread_W_m_ = p_WB_;
+        }
         bool blank = o_.blank_frames || (o_.blank_after_approach_s >= 0.0 && approach_t_ &&
                                          t_ - *approach_t_ > seconds_to_ns(o_.blank_after_approach_s));
+        if (o_.blank_after_reread_s > 0.0 && reread_t_ && t_ - *reread_t_ <= seconds_to_ns(o_.blank_after_reread_s)) {
+          blank = true;
+          reread_end_W_m_ = p_WB_;
+          reread_end_yaw_rad_ = yaw_;
+        }
         if (o_.slide_after_approach_s >= 0.0 && approach_t_ && t_ - *approach_t_ > seconds_to_ns(o_.slide_after_approach_s)) {
           const bool in_gap = t_ - *approach_t_ <= seconds_to_ns(o_.slide_after_approach_s + o_.slide_blank_s);
           blank = blank || in_gap;
@@ -156,6 +172,10 @@ class Harness {
     }
     return v;
   }
+  /// Where the first re-read started, and the pose at the last blank frame after it.
+  const Eigen::Vector3d& reread_W_m() const { return reread_W_m_; }
+  const Eigen::Vector3d& reread_end_W_m() const { return reread_end_W_m_; }
+  double reread_end_yaw_rad() const { return reread_end_yaw_rad_; }
   bool saw_phase(Phase p) const { return std::find(phases_.begin(), phases_.end(), p) != phases_.end(); }
   const std::vector<Eigen::Vector4d>& track() const { return track_; }  // t, x, y, z
   const Eigen::Vector3d& position() const { return p_WB_; }
@@ -216,8 +236,13 @@ class Harness {
         }
         if (!reply.empty()) replies_.push_back({t_ + 1500 * kMs, reply});
       } else if (c.text == "land") {
-        const std::string reply = landing_ ? "error" : o_.land_reply;
-        if (!reply.empty()) replies_.push_back({t_ + 1000 * kMs, reply});
+        // A Tello refuses `land` at once while landing or landed; it answers one that starts
+        // a landing once down.
+        if (landing_ || o_.land_duplicated) {
+          replies_.push_back({t_ + 30 * kMs, "error"});
+        } else if (!o_.land_reply.empty()) {
+          replies_.push_back({t_ + 1000 * kMs, o_.land_reply});
+        }
         landing_ = true;
       }
     }
@@ -234,7 +259,10 @@ class Harness {
     while (t_ < t_next) {
       const TimeNs dt_ns = std::min<TimeNs>(5 * kMs, t_next - t_);
       const double dt = ns_to_seconds(dt_ns);
-      if (landing_) p_WB_.z() = std::max(0.0, p_WB_.z() - 1.0 * dt);  // down at 1 m/s
+      if (landing_) {  // down at 1 m/s
+        p_WB_.z() = std::max(0.0, p_WB_.z() - 1.0 * dt);
+        vz_ = p_WB_.z() > 0.0 ? -1.0 : 0.0;
+      }
       if (airborne_ && !landing_) {
         const Eigen::Vector2d v_cmd(rc_.b / config_.rc.rc_per_mps_horizontal,
                                     -rc_.a / config_.rc.rc_per_mps_horizontal);
@@ -265,6 +293,9 @@ class Harness {
   testing::Drawer drawer_;
   TimeNs t_ = 0;
   std::optional<TimeNs> approach_t_;
+  std::optional<TimeNs> reread_t_;  ///< the first frame of the first re-read
+  Eigen::Vector3d reread_W_m_ = Eigen::Vector3d::Zero(), reread_end_W_m_ = Eigen::Vector3d::Zero();
+  double reread_end_yaw_rad_ = 0.0;
   bool slid_ = false;
   Eigen::Vector3d p_WB_;
   double yaw_ = 0.0;
@@ -386,6 +417,31 @@ TEST(FlightSoftware, LostLandReplyCountsWhenTheHeightSaysLanded) {
   EXPECT_DOUBLE_EQ(h.position().z(), 0.0);
 }
 
+// A duplicated `land` (run 89 of the default sdk campaign, commit bfd468c): the drone lands,
+// but the reply heard is the duplicate's `error`. Retrying at once spent the three retries in
+// 0.4 s, each refused by the landing drone, and the flight software ended "land not
+// acknowledged" in the air (tello_pilot's failsafe took over; the run counted an abort). The
+// refusal is waited out by the state height: landed, the crossing's outcome kept, and `land`
+// asked again no faster than every 0.5 s meanwhile.
+TEST(FlightSoftware, LandRefusedWhileLandingWaitsForTheStateHeight) {
+  Options o;
+  o.land_duplicated = true;
+  Harness h(o);
+  h.run(90.0);
+  FlightSoftware& fsw = h.fsw();
+  ASSERT_TRUE(fsw.finished()) << phase_name(fsw.phase()) << ": " << fsw.telemetry().event;
+  EXPECT_EQ(fsw.result().outcome, Outcome::Crossed) << fsw.result().reason;
+  EXPECT_TRUE(fsw.result().landed);
+  EXPECT_EQ(fsw.result().reason.find("not acknowledged"), std::string::npos) << fsw.result().reason;
+  EXPECT_DOUBLE_EQ(h.position().z(), 0.0);
+  std::vector<TimeNs> lands;
+  for (const auto& c : h.commands()) {
+    if (c.text == "land") lands.push_back(c.t_ns);
+  }
+  ASSERT_GE(lands.size(), 1u);
+  for (size_t i = 1; i < lands.size(); ++i) EXPECT_GE(lands[i] - lands[i - 1], 500 * kMs);
+}
+
 TEST(FlightSoftware, LowBatteryBeforeTakeoffStaysOnTheGround) {
   Options o;
   o.battery = [](TimeNs) { return 20; };
@@ -487,6 +543,30 @@ TEST(FlightSoftware, NeverCrossesOffCentreBacksOffAndGivesUp) {
   for (const auto& cmd : h.commands()) backed_off = backed_off || cmd.text == "rc 0 -20 0 0";
   EXPECT_TRUE(backed_off);
   EXPECT_LT(h.position().x(), 3.0 - 0.1) << "stayed in front of the shelf";
+}
+
+// A re-read from close that sees nothing (run 242 of the default sdk campaign, commit bfd468c:
+// the approach gave up 0.6 m out, the picture showed the inside of a cell, and FindShelf
+// turned on the spot for 30 s until "shelf not found"): it backs straight out toward the
+// viewpoint's range instead, heading unchanged, and finds the shelf again.
+TEST(FlightSoftware, ARereadFromCloseBacksOutBeforeLooking) {
+  FlightConfig c;
+  c.mission.crossing_margin_m = 0.1135;  // never centred: could not centre, re-read (above)
+  c.mission.identity_rereads = 1;
+  Options o;
+  o.blank_after_reread_s = 4.0;
+  Harness h(o, c);
+  h.run(90.0);
+  const Eigen::Vector3d start = h.reread_W_m(), end = h.reread_end_W_m();
+  ASSERT_GT(start.x(), 1.5) << "no re-read from close";
+  const double viewpoint_x_m = 3.0 - 1.86;  // the shelf's front at x = 3 m; range about 1.9 m
+  // Backed out: the re-read started within 1.5 m of the shelf, and 4 s at 0.2 m/s later it is
+  // at least 0.6 m farther, heading still toward the shelf (no search turn).
+  EXPECT_LT(end.x(), start.x() - 0.6) << "start " << start.transpose() << " end " << end.transpose();
+  EXPECT_GT(end.x(), viewpoint_x_m - 0.3);
+  EXPECT_NEAR(h.reread_end_yaw_rad(), 0.0, 0.1);
+  EXPECT_GE(h.fsw().telemetry().shelf_rereads, 1);
+  EXPECT_TRUE(h.fsw().finished());
 }
 
 /// Through the opening of cell (2, 3) of the front shelf: y between posts 2 and 3 (0 and
