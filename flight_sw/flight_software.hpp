@@ -18,7 +18,8 @@
 //   TakeInventory --inventory_frames full views read, enough whole--> Approach (target = empty cell nearest
 //   the image centre; forward only near the normal and, close in, once settled)
 //   --corner tags leave the view, centred within tolerance on a fresh still pose--> Cross
-//   --distance past the back face flown (timed)--> Land --ok--> Done
+//   --distance past the back face flown (state odometry; timed while the records are stale)-->
+//   Land --ok (or the state height says down)--> Done
 // Several shelves (config.layout.shelf_count > 1, a row at shelf_spacing_m): after each
 // inventory but the last, the target is the empty cell nearest the next shelf's optimal
 // viewpoint (docs/method.md section 1); the crossing's end hands over to FindShelf for the next shelf
@@ -46,7 +47,10 @@
 // backing off or at the crossing_attempts-th off-centre arrival, re-read the shelf from the
 // viewpoint. Every re-read (these and the identity check's) counts toward
 // mission.identity_rereads; the next doubt lands in front of the shelf. Takeoff refused or
-// unanswered: retried command_retries times, then the mission ends on the ground.
+// unanswered: retried command_retries times, then the mission ends on the ground. Land
+// unanswered: retried command_retries times; refused in the air (already landing, `Not
+// joystick`): asked again every 0.5 s until the state height says down, for up to land_reply_s.
+// A re-read that starts closer than the viewpoint and sees no tag backs straight out first.
 //
 // Lateral law sign (paper Fig. 19): the yaw loop keeps the target cell centred in the image,
 // so the camera looks at the cell centre. A vehicle displaced to the left of the cell normal
