@@ -1,6 +1,11 @@
 #include "verification/results_store.hpp"
 
 #include <algorithm>
+#include <fstream>
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
 
 #include <SQLiteCpp/SQLiteCpp.h>
 #include <nlohmann/json.hpp>
@@ -34,6 +39,34 @@ void set_meta(SQLite::Database& db, const char* key, const std::string& value) {
 
 }  // namespace
 
+// An advisory flock on a file beside the database: the kernel drops it when the descriptor is
+// closed or the process ends, however it ends, so a killed campaign never leaves a stale lock
+// behind (a pid file would). O_CLOEXEC keeps it out of the worker processes the campaign
+// execs, so only the writer itself holds it.
+struct ResultsStore::WriterLock {
+  int fd = -1;
+  explicit WriterLock(const std::filesystem::path& db_path) {
+    const std::filesystem::path lock_path = db_path.string() + ".lock";
+    fd = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd < 0) throw ResultsMismatch(lock_path.string() + ": cannot open the lock file");
+    if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+      std::string holder;
+      std::getline(std::ifstream(lock_path), holder);
+      ::close(fd);
+      throw ResultsBusy(db_path.string() + " is being written by another process" +
+                        (holder.empty() ? std::string() : " (pid " + holder + ")") +
+                        "; wait for it to end, or use another --out");
+    }
+    const std::string pid = std::to_string(::getpid()) + "\n";
+    if (::ftruncate(fd, 0) != 0 || ::pwrite(fd, pid.data(), pid.size(), 0) < 0) {
+      // The pid is only for the message above; the lock itself is held.
+    }
+  }
+  ~WriterLock() { ::close(fd); }
+  WriterLock(const WriterLock&) = delete;
+  WriterLock& operator=(const WriterLock&) = delete;
+};
+
 ResultsStore::ResultsStore(std::unique_ptr<SQLite::Database> db) : db_(std::move(db)) {}
 ResultsStore::ResultsStore(ResultsStore&&) noexcept = default;
 ResultsStore& ResultsStore::operator=(ResultsStore&&) noexcept = default;
@@ -49,10 +82,12 @@ void ResultsStore::read_meta() {
 }
 
 ResultsStore ResultsStore::open_or_create(const std::filesystem::path& db_path, const CampaignMeta& meta) {
+  auto lock = std::make_unique<WriterLock>(db_path);  // before anything is read or created
   const bool exists = std::filesystem::exists(db_path);
   auto db = std::make_unique<SQLite::Database>(db_path.string(), SQLite::OPEN_READWRITE | SQLite::OPEN_CREATE);
   configure(*db);
   ResultsStore store(std::move(db));
+  store.lock_ = std::move(lock);
   if (!exists) {
     SQLite::Transaction tx(*store.db_);
     store.db_->exec("CREATE TABLE campaign(key TEXT PRIMARY KEY, value TEXT NOT NULL)");

@@ -11,6 +11,7 @@
 // a run killed mid-way left nothing, and is simply run again on resume. Reopening a database
 // made for a different scenario or seed is refused, so two campaigns never mix.
 // Not thread-safe: one thread (the campaign's collector) owns a store.
+// One writer per database: open_or_create takes an exclusive flock on DB.lock (ResultsBusy).
 
 #include <cstdint>
 #include <filesystem>
@@ -62,10 +63,20 @@ class ResultsMismatch : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// Another process is writing the same results database (a second campaign, search or merge
+/// into the same folder). Nothing was written.
+class ResultsBusy : public ResultsMismatch {
+ public:
+  using ResultsMismatch::ResultsMismatch;
+};
+
 class ResultsStore {
  public:
   /// Opens `db_path`, creating it with `meta` if absent. An existing database must hold the
-  /// same scenario and seed; its runs_requested is raised to meta's if larger.
+  /// same scenario and seed; its runs_requested is raised to meta's if larger. The writer
+  /// holds an exclusive lock on `db_path` + ".lock" (flock, released when the process ends,
+  /// even by SIGKILL) for the store's lifetime: a second writer is refused with ResultsBusy,
+  /// naming the holder's pid, instead of racing the first to the same run indices.
   static ResultsStore open_or_create(const std::filesystem::path& db_path, const CampaignMeta& meta);
   /// Opens an existing database read-write (report, replay, merge).
   static ResultsStore open_existing(const std::filesystem::path& db_path);
@@ -84,8 +95,10 @@ class ResultsStore {
   std::vector<RunRecord> runs() const;
 
  private:
+  struct WriterLock;
   explicit ResultsStore(std::unique_ptr<SQLite::Database> db);
   void read_meta();
+  std::unique_ptr<WriterLock> lock_;  ///< held by open_or_create's stores; readers take none
   std::unique_ptr<SQLite::Database> db_;
   CampaignMeta meta_;
 };

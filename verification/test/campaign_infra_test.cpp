@@ -4,6 +4,10 @@
 #include <filesystem>
 #include <set>
 
+#include <csignal>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include "shelfcross/random.hpp"
@@ -147,16 +151,60 @@ TEST_F(ResultsStoreTest, KeepsRunsAcrossReopenAndRefusesOtherCampaigns) {
     store.insert(make_run(1));
     EXPECT_THROW(store.insert(make_run(1)), std::exception);  // a run is present once
   }
-  ResultsStore again = ResultsStore::open_or_create(dir_ / "results.sqlite", CampaignMeta{meta.scenario_yaml, 9, 20});
-  EXPECT_EQ(again.finished_indices(), (std::vector<std::int64_t>{1, 3}));
-  EXPECT_EQ(again.meta().runs_requested, 20);
-  const std::vector<RunRecord> runs = again.runs();
-  ASSERT_EQ(runs.size(), 2u);
-  EXPECT_EQ(runs[0], make_run(1));
-  EXPECT_THROW(ResultsStore::open_or_create(dir_ / "results.sqlite", CampaignMeta{"other", 9, 10}), ResultsMismatch);
-  EXPECT_THROW(ResultsStore::open_or_create(dir_ / "results.sqlite", CampaignMeta{meta.scenario_yaml, 8, 10}),
-               ResultsMismatch);
+  {
+    ResultsStore again = ResultsStore::open_or_create(dir_ / "results.sqlite", CampaignMeta{meta.scenario_yaml, 9, 20});
+    EXPECT_EQ(again.finished_indices(), (std::vector<std::int64_t>{1, 3}));
+    EXPECT_EQ(again.meta().runs_requested, 20);
+    const std::vector<RunRecord> runs = again.runs();
+    ASSERT_EQ(runs.size(), 2u);
+    EXPECT_EQ(runs[0], make_run(1));
+  }
+  // Refused for what they are (not for the lock: no writer is open now).
+  auto expect_mismatch_not_busy = [&](const CampaignMeta& other) {
+    try {
+      ResultsStore::open_or_create(dir_ / "results.sqlite", other);
+      ADD_FAILURE() << "accepted another campaign";
+    } catch (const ResultsBusy& e) {
+      ADD_FAILURE() << e.what();
+    } catch (const ResultsMismatch&) {
+    }
+  };
+  expect_mismatch_not_busy(CampaignMeta{"other", 9, 10});
+  expect_mismatch_not_busy(CampaignMeta{meta.scenario_yaml, 8, 10});
   EXPECT_THROW(ResultsStore::open_existing(dir_ / "missing.sqlite"), ResultsMismatch);
+}
+
+// Two writers of one campaign folder (a campaign started twice, session 8: the second ran run
+// 851 again and died on "UNIQUE constraint failed" after the first had stored it): the second
+// is refused at once, naming the first's pid, and nothing it could store is lost; readers
+// (report, replay) still open it. The lock dies with its process, even by SIGKILL.
+TEST_F(ResultsStoreTest, ASecondWriterIsRefusedAndAKilledWriterLeavesNoLock) {
+  const CampaignMeta meta{"scenario: {}\n", 9, 10};
+  const std::filesystem::path db = dir_ / "results.sqlite";
+  {
+    ResultsStore first = ResultsStore::open_or_create(db, meta);
+    first.insert(make_run(0));
+    try {
+      ResultsStore::open_or_create(db, meta);
+      ADD_FAILURE() << "a second writer was accepted";
+    } catch (const ResultsBusy& e) {
+      EXPECT_NE(std::string(e.what()).find("pid " + std::to_string(::getpid())), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(ResultsStore::open_existing(db).finished_indices(), (std::vector<std::int64_t>{0}));
+    first.insert(make_run(1));
+  }
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {  // holds the lock, then dies without closing anything
+    ResultsStore held = ResultsStore::open_or_create(db, meta);
+    ::raise(SIGKILL);
+    ::_exit(3);
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFSIGNALED(status));
+  ResultsStore after = ResultsStore::open_or_create(db, meta);
+  EXPECT_EQ(after.finished_indices(), (std::vector<std::int64_t>{0, 1}));
 }
 
 }  // namespace
