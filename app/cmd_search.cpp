@@ -148,6 +148,13 @@ const CommandRegistration kSearch{
         if (!e["doubts"].get<std::string>().empty()) {
           std::cout << "; not to be trusted: " << e["doubts"].get<std::string>();
         }
+        const nlohmann::json& m = e["every_round"];
+        std::cout << "\n  from every round (balance heuristic): " << m["p_hat"].get<double>();
+        if (m["failures"].get<std::int64_t>() > 0) {
+          std::cout << ", 95 % interval [" << m["lower"].get<double>() << ", " << m["upper"].get<double>() << "]";
+        }
+        std::cout << " (" << m["runs"] << " runs)";
+        if (!m["doubts"].get<std::string>().empty()) std::cout << "; not to be trusted: " << m["doubts"].get<std::string>();
         std::cout << "\nwrote " << o->out
                   << "/results.sqlite, report.md, search_summary.json, margins.csv\n";
         if (!r.complete) {

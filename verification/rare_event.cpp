@@ -45,6 +45,23 @@ double log_density(const ParameterProposals& q, const DrawnValues& x) {
   return sum;
 }
 
+double mixture_log_weight(const ParameterDistributions& nominal, const std::vector<CeRound>& rounds,
+                          const std::vector<std::int64_t>& runs_per_round, const DrawnValues& x) {
+  assert(rounds.size() == runs_per_round.size());
+  const double total = static_cast<double>(std::accumulate(runs_per_round.begin(), runs_per_round.end(), std::int64_t{0}));
+  // log sum_k exp(a_k), a_k = log(n_k / N) + log q_k(x), shifted by the largest a_k.
+  std::vector<double> a;
+  for (size_t k = 0; k < rounds.size(); ++k) {
+    if (runs_per_round[k] <= 0) continue;
+    a.push_back(std::log(static_cast<double>(runs_per_round[k]) / total) + log_density(rounds[k].proposal, x));
+  }
+  const double top = a.empty() ? -std::numeric_limits<double>::infinity() : *std::max_element(a.begin(), a.end());
+  if (!std::isfinite(top)) return -std::numeric_limits<double>::infinity();  // outside every proposal
+  double sum = 0.0;
+  for (double v : a) sum += std::exp(v - top);
+  return log_density(nominal, x) - (top + std::log(sum));
+}
+
 CeFit ce_refit(const ParameterDistributions& nominal, const ParameterProposals& current,
                const std::vector<CeSample>& samples, const CeSettings& settings) {
   assert(!samples.empty());

@@ -153,6 +153,23 @@ struct IsEstimate {
 /// plain campaign's rate). Heuristics, not a test: both thresholds are rules of thumb.
 std::string estimate_doubts(const IsEstimate& e);
 
+/// The weight of a run drawn in any round, for the estimate from every run of the search
+/// (multiple importance sampling with the balance heuristic, Veach & Guibas 1995; the
+/// "deterministic mixture" weights of adaptive multiple importance sampling, Cornuet et al.
+/// 2012): each run counts as a draw of the mixture of all the rounds' proposals, weighted by
+/// their run counts n_k (N their sum):
+///   log w(x) = log f(x) - log sum_k (n_k / N) q_k(x).
+/// Round 0 draws from f itself, so w <= N / n_0 everywhere: no run carries a weight of
+/// hundreds, and the runs of the early rounds, near the nominal, cover the soft edge of a
+/// failure region that the final proposal, fitted to its easiest failures, leaves out
+/// (gust_rare_ideal, docs/search.md). With p_hat = mean of 1[failed] w over all N runs the
+/// estimator is unbiased for fixed proposals; here each q_k was fitted to the runs before it,
+/// which makes it consistent but not exactly unbiased (Cornuet et al.; the toy of
+/// rare_event_test.cpp measures the coverage). `runs_per_round[k]` is round k's run count in
+/// the estimate (its stored runs).
+double mixture_log_weight(const ParameterDistributions& nominal, const std::vector<CeRound>& rounds,
+                          const std::vector<std::int64_t>& runs_per_round, const DrawnValues& x);
+
 /// The estimate from i.i.d. draws of one proposal: log_weight_i = log f(x_i) - log q(x_i),
 /// failed_i = g(x_i) < 0. See the file comment for the interval.
 IsEstimate importance_estimate(const std::vector<double>& log_weights, const std::vector<bool>& failed,

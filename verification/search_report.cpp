@@ -57,7 +57,15 @@ struct Row {
 struct ClassEstimate {
   IsEstimate is;
   int round = -1;  ///< the round whose runs it uses
+  IsEstimate every_round;  ///< from every stored run, weighted by mixture_log_weight
 };
+
+nlohmann::json estimate_json(const IsEstimate& e) {
+  return {{"runs", e.runs}, {"failures", e.failures}, {"p_hat", e.p_hat},
+          {"standard_error", number_or_null(e.standard_error)}, {"confidence", e.confidence},
+          {"lower", e.lower}, {"upper", e.upper}, {"clt_lower", e.clt_lower}, {"clt_upper", e.clt_upper},
+          {"failure_ess", e.failure_ess}, {"mean_weight", e.mean_weight}, {"doubts", estimate_doubts(e)}};
+}
 
 }  // namespace
 
@@ -103,7 +111,23 @@ nlohmann::json write_search_report(const std::filesystem::path& dir, const std::
       log_w.push_back(row.log_nominal - row.log_proposal);
       failed.push_back(row.margins.failed(c));
     }
-    estimates[c] = {importance_estimate(log_w, failed), estimate_round};
+    estimates[c] = {importance_estimate(log_w, failed), estimate_round, {}};
+  }
+  // And from every stored run: each round's proposal in the mixture by its stored run count.
+  std::vector<std::int64_t> stored_per_round(rounds.size(), 0);
+  for (const Row& row : rows) {
+    if (!std::isnan(row.log_nominal)) ++stored_per_round[static_cast<size_t>(row.round)];
+  }
+  std::vector<double> mixture_log_w;
+  for (const Row& row : rows) {
+    if (!std::isnan(row.log_nominal)) mixture_log_w.push_back(mixture_log_weight(f, rounds, stored_per_round, row.drawn));
+  }
+  for (FailureClass c : kFailureClasses) {
+    std::vector<bool> failed;
+    for (const Row& row : rows) {
+      if (!std::isnan(row.log_nominal)) failed.push_back(row.margins.failed(c));
+    }
+    estimates[c].every_round = importance_estimate(mixture_log_w, failed);
   }
 
   // Plain Monte Carlo from a campaign of the same scenario.
@@ -228,11 +252,9 @@ nlohmann::json write_search_report(const std::filesystem::path& dir, const std::
   }
   summary["estimates"] = json::object();
   for (const auto& [c, e] : estimates) {
-    json j{{"round", e.round},          {"runs", e.is.runs},       {"failures", e.is.failures},
-           {"p_hat", e.is.p_hat},       {"standard_error", number_or_null(e.is.standard_error)},
-           {"confidence", e.is.confidence}, {"lower", e.is.lower}, {"upper", e.is.upper},
-           {"clt_lower", e.is.clt_lower}, {"clt_upper", e.is.clt_upper}, {"failure_ess", e.is.failure_ess}, {"mean_weight", e.is.mean_weight},
-           {"doubts", estimate_doubts(e.is)}};
+    json j = estimate_json(e.is);
+    j["round"] = e.round;
+    j["every_round"] = estimate_json(e.every_round);
     if (plain.count(c)) {
       const auto& p = plain.at(c);
       j["plain_monte_carlo"] = {{"runs", p.runs}, {"failures", p.failures}, {"lower_95", p.lower},
@@ -285,21 +307,30 @@ nlohmann::json write_search_report(const std::filesystem::path& dir, const std::
         "them says why an interval is not to be trusted (weights uneven: mean weight outside [0.5, 2]; few "
         "effective failures: ESS below max(2, 0.3 x failures)).";
   if (campaign_dir) md << " Plain Monte Carlo: the campaign in `" << campaign_dir->string() << "`, failures over runs, two-sided 95 % Clopper-Pearson.";
-  md << "\n\n| class | runs | failures | p_hat | 95 % interval | CLT interval | ESS | mean weight |"
-     << (campaign_dir ? " plain Monte Carlo | its 95 % interval | its first failure |" : "") << "\n|---|---|---|---|---|---|---|---|"
+  md << " The row \"every round\" weighs every stored run of the search as a draw of the mixture of all "
+        "the rounds' proposals (multiple importance sampling, balance heuristic: w = f(x) / sum_k (n_k / N) q_k(x); "
+        "rare_event.hpp): bounded weights (round 0 is the nominal), and the early rounds cover the edge of a soft "
+        "failure region that the final proposal leaves out.";
+  md << "\n\n| class | from | runs | failures | p_hat | 95 % interval | CLT interval | ESS | mean weight |"
+     << (campaign_dir ? " plain Monte Carlo | its 95 % interval | its first failure |" : "") << "\n|---|---|---|---|---|---|---|---|---|"
      << (campaign_dir ? "---|---|---|" : "") << "\n";
   for (const auto& [c, e] : estimates) {
-    md << "| " << failure_class_name(c) << " | " << e.is.runs << " | " << e.is.failures << " | " << fmt(e.is.p_hat) << " | "
-       << (e.is.failures ? "[" + fmt(e.is.lower) + ", " + fmt(e.is.upper) + "]" : std::string("no failure sampled"))
-       << " | " << (e.is.failures ? "[" + fmt(e.is.clt_lower) + ", " + fmt(e.is.clt_upper) + "]" : std::string("-"))
-       << " | " << fmt(e.is.failure_ess, "%.1f") << " | " << fmt(e.is.mean_weight, "%.3g")
-       << (estimate_doubts(e.is).empty() ? "" : " (" + estimate_doubts(e.is) + ")") << " |";
-    if (campaign_dir) {
-      const auto& p = plain.at(c);
-      md << " " << p.failures << " / " << p.runs << " | [" << fmt(p.lower) << ", " << fmt(p.upper) << "] | "
-         << (p.first_failure >= 0 ? "run " + std::to_string(p.first_failure) : std::string("none")) << " |";
-    }
-    md << "\n";
+    auto row = [&](const IsEstimate& is, const std::string& from) {
+      md << "| " << failure_class_name(c) << " | " << from << " | " << is.runs << " | " << is.failures << " | " << fmt(is.p_hat) << " | "
+         << (is.failures ? "[" + fmt(is.lower) + ", " + fmt(is.upper) + "]" : std::string("no failure sampled"))
+         << " | " << (is.failures ? "[" + fmt(is.clt_lower) + ", " + fmt(is.clt_upper) + "]" : std::string("-"))
+         << " | " << fmt(is.failure_ess, "%.1f") << " | " << fmt(is.mean_weight, "%.3g");
+      if (const std::string doubts = estimate_doubts(is); !doubts.empty()) md << " (" << doubts << ")";
+      md << " |";
+      if (campaign_dir) {
+        const auto& p = plain.at(c);
+        md << " " << p.failures << " / " << p.runs << " | [" << fmt(p.lower) << ", " << fmt(p.upper) << "] | "
+           << (p.first_failure >= 0 ? "run " + std::to_string(p.first_failure) : std::string("none")) << " |";
+      }
+      md << "\n";
+    };
+    row(e.is, "round " + std::to_string(e.round));
+    row(e.every_round, "every round");
   }
   md << "\n## Failures found (" << failure_class_name(target) << ")\n\n";
   if (failures.empty()) {

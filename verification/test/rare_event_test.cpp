@@ -94,13 +94,15 @@ struct Toy {
 };
 
 struct SearchResult {
-  IsEstimate estimate;
+  IsEstimate estimate;  ///< from the estimation round (importance_estimate of its proposal)
+  IsEstimate mixture;   ///< from every round's runs (mixture_log_weight)
   std::int64_t first_failure = -1;  ///< run index of the first failure, -1 if none
   int rounds = 0;
 };
 
 /// A whole search as the driver does it: each round's runs drawn from the planned proposal with
 /// run k's seed (the dispersion streams of search.cpp), margins, the next round planned.
+template <class Toy>
 SearchResult search(const Toy& toy, std::uint64_t seed, std::int64_t budget, const CeSettings& settings) {
   std::vector<CeRound> rounds;
   std::vector<CeSample> samples;
@@ -125,8 +127,46 @@ SearchResult search(const Toy& toy, std::uint64_t seed, std::int64_t budget, con
     failed.push_back(samples[static_cast<size_t>(k)].margin < 0.0);
   }
   r.estimate = importance_estimate(log_w, failed);
+  std::vector<std::int64_t> runs_per_round;
+  for (const CeRound& round : rounds) runs_per_round.push_back(round.runs);
+  std::vector<double> mixture_log_w;
+  std::vector<bool> mixture_failed;
+  for (const CeSample& sample : samples) {
+    mixture_log_w.push_back(mixture_log_weight(toy.nominal, rounds, runs_per_round, sample.drawn));
+    mixture_failed.push_back(sample.margin < 0.0);
+  }
+  r.mixture = importance_estimate(mixture_log_w, mixture_failed);
   return r;
 }
+
+/// A soft failure region, as the gust scenario's (docs/search.md): x ~ N(0.1, 0.1) truncated to
+/// [0, 2] (the gust, m/s), u ~ U(0, 1) the run's own luck, never adapted (the seed's noise in a
+/// simulation). A run fails when u < pi(x) = min(1, ((x - 0.2) / 0.6)^2) for x > 0.2: rarely
+/// at 0.3, half the time at 0.62, always past 0.8. Margin g = u - pi(x). p = int f pi, by
+/// quadrature (about 3.3e-3).
+struct SoftToy {
+  ParameterDistributions nominal;
+  double p = 0.0;
+  SoftToy() {
+    Distribution x = normal(0.1, 0.1);
+    x.kind = Distribution::Kind::truncated_normal;
+    x.min = 0.0;
+    x.max = 2.0;
+    nominal["x"] = x;
+    Distribution u;
+    u.kind = Distribution::Kind::uniform;
+    u.min = 0.0;
+    u.max = 1.0;
+    nominal["u"] = u;
+    constexpr int kSteps = 200000;  // midpoint rule on [0, 2]
+    for (int i = 0; i < kSteps; ++i) {
+      const double xi = (i + 0.5) * 2.0 / kSteps;
+      p += std::exp(x.log_pdf(xi)) * failure_chance(xi) * 2.0 / kSteps;
+    }
+  }
+  static double failure_chance(double x) { return x <= 0.2 ? 0.0 : std::min(1.0, std::pow((x - 0.2) / 0.6, 2)); }
+  static double margin(const DrawnValues& v) { return v.at("u") - failure_chance(v.at("x")); }
+};
 
 // The marks the report puts on an estimate not to be trusted (rare_event.hpp).
 TEST(CrossEntropy, DoubtsOnUnevenWeightsAndFewEffectiveFailures) {
@@ -185,6 +225,69 @@ TEST(CrossEntropy, EstimateCoversTheKnownProbabilityIn19Of20Seeds) {
   EXPECT_GE(covered, 19);
   // The mean of 20 unbiased estimates, each within ~10 %: within 5 % of p.
   EXPECT_NEAR(sum_p_hat / 20.0 / toy.p, 1.0, 0.05);
+}
+
+// The sharp toy: the estimate from every round is within 10 % of p on average, but its
+// interval covers p in only 16 of 20 seeds (measured; the final round's in 19): the adapted
+// proposals were fitted to the very runs the estimate reuses (consistent, not unbiased:
+// rare_event.hpp), and with hundreds of failures its interval is narrow enough to show it.
+// The report gives both estimates.
+TEST(CrossEntropy, EstimateFromEveryRoundOnASharpRegion) {
+  const Toy toy;
+  CeSettings settings;
+  settings.round_runs = 200;
+  settings.estimation_runs = 1000;
+  int covered = 0;
+  double sum_ratio = 0.0;
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    const SearchResult r = search(toy, seed, 2000, settings);
+    covered += r.mixture.lower <= toy.p && toy.p <= r.mixture.upper;
+    if (std::getenv("SHELFCROSS_TEST_VERBOSE")) std::printf("seed %d mixture p_hat %.4g [%.4g, %.4g] ess %.1f of %lld\n", (int)seed, r.mixture.p_hat, r.mixture.lower, r.mixture.upper, r.mixture.failure_ess, (long long)r.mixture.failures);
+    EXPECT_LT(r.mixture.standard_error / r.mixture.p_hat, 0.3) << "seed " << seed;
+    sum_ratio += r.mixture.p_hat / toy.p;
+  }
+  EXPECT_GE(covered, 16);
+  EXPECT_NEAR(sum_ratio / 20.0, 1.0, 0.1);
+}
+
+// The soft toy with the gust search's settings (docs/search.md: 2 elites at least, rho 0.25,
+// alpha 0.9, stddev floor 2 x the nominal's, x adapted) in 200 runs (rounds of 20, 100 for the
+// estimate) and a nominal share of 0.3. The final round, fitted where failures are easy, misses
+// the soft edge where most of p lies: measured, its interval covers p in 10 of 20 seeds
+// (geometric mean of p_hat / p 0.46); every round together in 19 (0.98). With the gust demo's
+// 60 runs (rounds of 6, share 0.1) neither works (5 and 8 of 20; ESS near 1): the soft edge
+// needs runs, and a share of the nominal large enough to sample it.
+TEST(CrossEntropy, OnASoftFailureRegionEveryRoundTogetherEstimatesWhatTheFinalRoundMisses) {
+  const SoftToy toy;
+  ASSERT_GT(toy.p, 1e-3);
+  ASSERT_LT(toy.p, 1e-2);
+  CeSettings settings;
+  settings.round_runs = 20;
+  settings.elite_fraction = 0.25;
+  settings.min_elites = 2;
+  settings.smoothing = 0.9;
+  settings.min_stddev_fraction = 2.0;
+  settings.estimation_runs = 100;
+  settings.nominal_share = 0.3;
+  settings.adapted = {"x"};
+  int final_covered = 0, mixture_covered = 0;
+  double log_ratio_final = 0.0, log_ratio_mixture = 0.0;
+  int n = 0;
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    const SearchResult r = search(toy, seed, 200, settings);
+    final_covered += r.estimate.failures > 0 && r.estimate.lower <= toy.p && toy.p <= r.estimate.upper;
+    mixture_covered += r.mixture.failures > 0 && r.mixture.lower <= toy.p && toy.p <= r.mixture.upper;
+    if (r.estimate.failures > 0 && r.mixture.failures > 0) {
+      log_ratio_final += std::log(r.estimate.p_hat / toy.p);
+      log_ratio_mixture += std::log(r.mixture.p_hat / toy.p);
+      ++n;
+    }
+    if (std::getenv("SHELFCROSS_TEST_VERBOSE")) std::printf("p %.4g seed %d final %.4g [%.4g, %.4g] ess %.1f/%lld | mixture %.4g [%.4g, %.4g] ess %.1f/%lld\n", toy.p, (int)seed, r.estimate.p_hat, r.estimate.lower, r.estimate.upper, r.estimate.failure_ess, (long long)r.estimate.failures, r.mixture.p_hat, r.mixture.lower, r.mixture.upper, r.mixture.failure_ess, (long long)r.mixture.failures);
+  }
+  if (std::getenv("SHELFCROSS_TEST_VERBOSE")) std::printf("covered: final %d mixture %d of 20; geometric mean ratio final %.3g mixture %.3g\n", final_covered, mixture_covered, std::exp(log_ratio_final / n), std::exp(log_ratio_mixture / n));
+  EXPECT_GE(mixture_covered, 19);
+  EXPECT_LT(final_covered, mixture_covered);
+  EXPECT_NEAR(std::exp(log_ratio_mixture / n), 1.0, 0.1);
 }
 
 TEST(CrossEntropy, FindsFailuresInFarFewerRunsThanPlainMonteCarlo) {
