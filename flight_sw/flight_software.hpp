@@ -99,6 +99,7 @@
 #include "flight_sw/control.hpp"
 #include "flight_sw/inventory.hpp"
 #include "flight_sw/navigation.hpp"
+#include "flight_sw/odometry.hpp"
 #include "flight_sw/perception.hpp"
 #include "flight_sw/sdk_link.hpp"
 #include "flight_sw/target_tracker.hpp"
@@ -261,9 +262,7 @@ class FlightSoftware {
   bool reacquire(const Picture& pic);
   std::optional<double> cell_height_m(double v_px, double range_m) const;
   void sample_cell_height(const Picture& pic, const PoseEstimate& pose);
-  std::optional<double> measured_cell_height_m() const;
   bool state_fresh() const;
-  bool crossing_flown() const;
   void start_losing_target();
   void start_tracker(const cv::Mat& bgr, const cv::Rect2d& box);
   /// The target's identity on a picture where it is not confirmed (target_tracker.hpp):
@@ -360,33 +359,20 @@ class FlightSoftware {
   int rereads_ = 0;
   std::vector<TagBlob> frame_tags_;     ///< identity check buffers
   std::optional<double> behind_m_;      ///< nearest tag behind the target seen through it, from the front tags, m
-  // Forward speed per commanded speed (estimate_forward_gain), for timing the crossing.
-  std::optional<std::pair<TimeNs, double>> gain_start_;  ///< (t, x_K) of the approach's first pose
-  std::vector<std::pair<TimeNs, double>> commanded_m_;  ///< (t, forward displacement commanded)
-  std::optional<TimeNs> last_approach_ns_;
-  double forward_gain_ = 1.0;
   std::vector<MarkerSighting> frame_markers_;
-  // The target cell centre's height in the frame of the state height h (the Tello's height
-  // above its take-off point): h - z_K of the body, sampled on close poses of the approach while
-  // the state shows the vehicle vertically still (sample_cell_height).
-  std::vector<double> cell_height_samples_m_;
-  std::optional<TimeNs> vertical_motion_ns_;  ///< last state record showing vertical motion
+  // Forward speed per commanded speed (estimate_forward_gain), for timing the crossing.
+  ForwardGainEstimator forward_gain_;
+  // The target cell centre's height in the frame of the state height h (sample_cell_height).
+  CellHeightEstimator cell_height_;
   // Crossing
-  // The crossing's end (crossing_flown): the line flown by the state odometry, timed only
-  // while the state records are stale.
-  TimeNs cross_duration_ns_ = 0;          ///< timed: at the measured speed gain, plus the autopilot's lag
-  double cross_line_m_ = 0.0;             ///< the line's horizontal length, m
-  Eigen::Vector2d cross_start_O_m_ = Eigen::Vector2d::Zero();  ///< where it began, odometry frame O
-  Eigen::Vector2d cross_axis_O_ = Eigen::Vector2d::UnitX();    ///< the line's direction in O, unit
+  CrossingEnd crossing_end_;  ///< crossing_flown (odometry.hpp)
   std::optional<double> crossing_height_m_;   ///< the height the crossing holds, h's frame
   // Shelves
   int shelf_ = 0;
   std::vector<Inventory> finished_;
   std::optional<PoseEstimate> pose_G_;  ///< last pose in the grid frame (at the viewpoint)
-  // Odometry frame O: fixed, x and y the integral of the state's velocities turned by its yaw
-  // (from where the first record came), z the state's height above the floor.
-  std::optional<TimeNs> odometry_t_ns_;
-  Eigen::Vector3d p_O_m_ = Eigen::Vector3d::Zero();
+  // Odometry frame O (odometry.hpp): the state's velocities integrated, its height.
+  StateOdometry odometry_;
   // Transfer
   std::vector<Eigen::Vector3d> waypoints_O_m_;
   size_t waypoint_ = 0;
