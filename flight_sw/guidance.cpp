@@ -20,6 +20,15 @@ Eigen::Vector3d capped(Eigen::Vector3d v, double max_norm) {
   return v;
 }
 
+namespace {
+// A velocity of a frame F (horizontal x, y; z up) flown by a vehicle at heading yaw_F in F:
+// horizontally R_z(-yaw) v_F, vertically as it is, turning at yaw_rate_radps.
+VelocityCommand velocity_in_body(const Eigen::Vector3d& v_F_mps, double yaw_F_rad, double yaw_rate_radps) {
+  const Eigen::Vector2d v_B = to_body_xy(v_F_mps.head<2>(), yaw_F_rad);
+  return {v_B.x(), v_B.y(), v_F_mps.z(), yaw_rate_radps};
+}
+}  // namespace
+
 // ---- FindShelf and GoToViewpoint ----
 
 VelocityCommand fragment_velocity(const FlightConfig& config, const std::vector<TagBlob>& tags,
@@ -40,14 +49,8 @@ VelocityCommand fragment_velocity(const FlightConfig& config, const std::vector<
 }
 
 VelocityCommand viewpoint_velocity(const ControlGains& g, const Eigen::Vector3d& e1_G_m, double yaw_G_rad) {
-  const Eigen::Vector3d v_G = capped(g.viewpoint_kp * e1_G_m, g.viewpoint_speed_max_mps);
-  const Eigen::Vector2d v_B = to_body_xy(v_G.head<2>(), yaw_G_rad);
-  VelocityCommand v;
-  v.vx_B_mps = v_B.x();
-  v.vy_B_mps = v_B.y();
-  v.vz_mps = v_G.z();
-  v.yaw_rate_radps = std::clamp(-g.viewpoint_yaw_kp * yaw_G_rad, -g.yaw_rate_max_radps, g.yaw_rate_max_radps);
-  return v;
+  return velocity_in_body(capped(g.viewpoint_kp * e1_G_m, g.viewpoint_speed_max_mps), yaw_G_rad,
+                          std::clamp(-g.viewpoint_yaw_kp * yaw_G_rad, -g.yaw_rate_max_radps, g.yaw_rate_max_radps));
 }
 
 // ---- Approach ----
@@ -153,15 +156,10 @@ std::vector<Eigen::Vector3d> transfer_waypoints_G(const FlightConfig& config, co
 VelocityCommand transfer_velocity(const FlightConfig& config, const Eigen::Vector3d& e_O_m, double yaw_O_rad,
                                   double hold_yaw_O_rad) {
   const StrategyParams& st = config.strategy;
-  const Eigen::Vector3d v_O = capped(st.transfer_kp * e_O_m, st.transfer_speed_mps);
-  const Eigen::Vector2d v_B = to_body_xy(v_O.head<2>(), yaw_O_rad);
-  VelocityCommand v;
-  v.vx_B_mps = v_B.x();
-  v.vy_B_mps = v_B.y();
-  v.vz_mps = v_O.z();
-  v.yaw_rate_radps = std::clamp(st.transfer_yaw_kp * std::remainder(hold_yaw_O_rad - yaw_O_rad, 2.0 * std::numbers::pi),
-                                -config.control.yaw_rate_max_radps, config.control.yaw_rate_max_radps);
-  return v;
+  return velocity_in_body(
+      capped(st.transfer_kp * e_O_m, st.transfer_speed_mps), yaw_O_rad,
+      std::clamp(st.transfer_yaw_kp * std::remainder(hold_yaw_O_rad - yaw_O_rad, 2.0 * std::numbers::pi),
+                 -config.control.yaw_rate_max_radps, config.control.yaw_rate_max_radps));
 }
 
 }  // namespace shelfcross::flight_sw
