@@ -219,7 +219,7 @@ struct MissionParams {
   /// in front of the shelf).
   /// Continuity: a pose within pose_jump_window_s of the last identified one keeps the
   /// identity; up to this time, only with the box found within 0.3 of its width of where it
-  /// was last identified (flight_software.cpp, measure_target).
+  /// was last identified (target_tracker.cpp, TargetTracker::measure).
   double identity_continuity_s = 1.0;
   double identity_confirm_s = 10.0;
   /// The crossing's end with a shelf seen behind: the vehicle's front plus this (its drift after

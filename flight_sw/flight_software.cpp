@@ -1,30 +1,19 @@
 #include "flight_sw/flight_software.hpp"
 
+#include "flight_sw/guidance.hpp"
+
 #include <algorithm>
 #include <cstdio>
 #include <cmath>
-#include <numbers>
 
 namespace shelfcross::flight_sw {
 
 namespace {
-// |vz| below half the SDK's 0.1 m/s step (vgz reads 0): vertically still.
-constexpr double kVerticallyStill_mps = 0.05;
 // A state record older than this is not the vehicle's height now (they come at 10 Hz).
 constexpr double kStateFresh_s = 0.3;
-// The cell centre's height: the median of the last kCellHeightSamples samples, at least
-// kMinCellHeightSamples of them (sample_cell_height).
-constexpr size_t kCellHeightSamples = 15;
-constexpr size_t kMinCellHeightSamples = 3;
-// The autopilot's horizontal velocity lag assumed (a first-order response; the Tello's time
-// constant is unidentified, docs/tello_sdk.md: 0.3 to 0.7 s).
-constexpr double kVelocityLag_s = 0.5;
 // After a refused `land`: how long to watch the state height before asking again (the
 // tello_pilot's own landing asks every 0.5 s too).
 constexpr double kLandRefusedWait_s = 0.5;
-// A crossing timed (state records stale) or ended by odometry never lasts longer than this
-// times its timed duration: bounds the overshoot of an odometry that under-reads.
-constexpr double kCrossMaxOverTime = 1.5;
 // Why an approach that never centred gives up, once the re-reads are spent.
 constexpr const char* kCouldNotCentre = "could not centre on the target cell";
 }  // namespace
@@ -70,23 +59,11 @@ std::string cell_text(CellIndex c) {
   return "L" + std::to_string(c.level) + " C" + std::to_string(c.column);
 }
 
-cv::Point2d centre_of(const cv::Rect2d& r) { return {r.x + 0.5 * r.width, r.y + 0.5 * r.height}; }
-
 // A length for logs: metres with two decimals.
 std::string format_m(double v) {
   char b[32];
   std::snprintf(b, sizeof b, "%.2f", v);
   return b;
-}
-
-/// The tracked box: the bounding box of the corner tags' centres grown by half a tag side
-/// on every side. (cv::boundingRect of the centres as float points: the smallest integer
-/// rectangle holding them, right and bottom edges exclusive.)
-cv::Rect2d corner_box(const std::array<cv::Point2d, 4>& q, double side) {
-  std::array<cv::Point2f, 4> f;
-  for (size_t k = 0; k < 4; ++k) f[k] = cv::Point2f(q[k]);
-  const cv::Rect centres = cv::boundingRect(f);
-  return {centres.x - 0.5 * side, centres.y - 0.5 * side, centres.width + side, centres.height + side};
 }
 
 }  // namespace
@@ -103,7 +80,8 @@ FlightSoftware::FlightSoftware(FlightConfig config)
       pi_psi_({config_.control.kp_psi, config_.control.ki_psi,
                config_.control.psi_integral_limit_rad_s, config_.control.yaw_rate_max_radps}),
       viewpoint_G_m_(optimal_viewpoint_G(config_.shelf, config_.camera, config_.mount,
-                                         config_.mission.viewpoint_margin)) {}
+                                         config_.mission.viewpoint_margin)),
+      tracker_(config_) {}
 
 // ---- Entry points ----
 
@@ -145,6 +123,11 @@ std::vector<SdkCommand> FlightSoftware::step(const Input& input) {
   telemetry_.velocity = velocity_;
   telemetry_.stale_replies = link_.stale_replies();
   telemetry_.video_stalled = video_stalled_;
+  const TargetTracker::Counts& counts = tracker_.counts();
+  telemetry_.rejected_poses = counts.rejected_poses;
+  telemetry_.wrong_level_poses = counts.wrong_level_poses;
+  telemetry_.behind_tags_dropped = counts.behind_tags_dropped;
+  telemetry_.identity_checks = counts.identity_checks;
   return out_;
 }
 
@@ -153,25 +136,16 @@ void FlightSoftware::on_reply(const SdkReply& reply) {
 }
 
 void FlightSoftware::on_state(const StateRecord& s) {
-  // Odometry: p_O += R_z(yaw) v_H dt (rectangle rule on the newer record), z = height.
-  if (odometry_t_ns_ && s.t_ns > *odometry_t_ns_) {
-    const double dt = std::min(ns_to_seconds(s.t_ns - *odometry_t_ns_), 1.0);
-    const double c = std::cos(s.yaw_rad), sn = std::sin(s.yaw_rad);
-    p_O_m_.x() += (c * s.vx_H_mps - sn * s.vy_H_mps) * dt;
-    p_O_m_.y() += (sn * s.vx_H_mps + c * s.vy_H_mps) * dt;
-  }
-  odometry_t_ns_ = std::max(odometry_t_ns_.value_or(s.t_ns), s.t_ns);
-  p_O_m_.z() = s.height_m;
+  odometry_.on_state(s);
   state_ = s;
   telemetry_.battery_pct = s.battery_pct;
   telemetry_.height_m = s.height_m;
-  if (std::abs(s.vz_H_mps) > kVerticallyStill_mps) vertical_motion_ns_ = s.t_ns;
+  cell_height_.on_state(s);
   if (phase_ == Phase::Transfer) transfer();
   // The crossing holds the cell centre's height by the state height (no picture shows the cell
   // in there): a drift or a sink the open-loop command would carry into a beam is turned back.
   if (phase_ == Phase::Cross && crossing_height_m_) {
-    const ControlGains& g = config_.control;
-    velocity_.vz_mps = height_hold_vz_mps(*crossing_height_m_, s.height_m, g.crossing_kp_z, g.crossing_z_speed_max_mps);
+    velocity_.vz_mps = crossing_vz_mps(config_.control, *crossing_height_m_, s.height_m);
   }
 }
 
@@ -329,13 +303,13 @@ void FlightSoftware::supervise() {
       // No fresh state record: no height to hold by; zero vertical stick (the autopilot holds
       // its own height reference) rather than a correction computed on an old height.
       if (!state_fresh()) velocity_.vz_mps = 0.0;
-      if (crossing_flown()) {
+      if (crossing_flown(crossing_end_, now_ns_ - phase_start_ns_, state_fresh(), odometry_.p_O_m())) {
         if (!last_shelf()) {
           hover();
-          return next_shelf("crossed cell " + cell_text(*target_) + " of shelf " + std::to_string(shelf_) +
+          return next_shelf("crossed cell " + cell_text(*tracker_.target()) + " of shelf " + std::to_string(shelf_) +
                             ": finding the next shelf");
         }
-        return land(Outcome::Crossed, "crossed cell " + cell_text(*target_) +
+        return land(Outcome::Crossed, "crossed cell " + cell_text(*tracker_.target()) +
                                           (shelf_ > 0 ? " of the last shelf" : ""));
       }
       break;
@@ -484,7 +458,6 @@ void FlightSoftware::find_shelf(const Picture& pic) {
   analyse_shelf(bgr, tag_detector_, config_, view_);
   update_view_telemetry();
   const ControlGains& g = config_.control;
-  const CameraIntrinsics& k = config_.camera;
   if (view_.full && !pic.decides) {  // to be confirmed on a nearly whole picture
     set_velocity({});
     return;
@@ -496,20 +469,9 @@ void FlightSoftware::find_shelf(const Picture& pic) {
   }
   VelocityCommand v;
   if (!view_.tags.empty()) {
-    // A fragment: back away and centre it until the whole grid fits the view.
-    cv::Point2d c(0, 0);
-    for (const TagBlob& t : view_.tags) c += t.centre_px;
-    c *= 1.0 / static_cast<double>(view_.tags.size());
-    // Backing away helps only while the shelf is too close to fit the view: once its largest
-    // tag is no bigger than a front tag seen from 1.2 times the optimal viewpoint's range
-    // (side f s / (1.2 D)), what keeps the grid from being whole is not the range (tags of a
-    // shelf behind, a turned view) and backing on would only meet the wall behind.
-    const double far_side_px = k.fx_px * config_.shelf.tag_size_m / (1.2 * -viewpoint_G_m_.x());
-    v.vx_B_mps = std::sqrt(view_.largest_tag_area_px) > far_side_px ? -g.back_off_speed_mps : 0.0;
-    v.yaw_rate_radps = std::clamp(g.viewpoint_yaw_kp * std::atan((k.cx_px - c.x) / k.fx_px),
-                                  -g.yaw_rate_max_radps, g.yaw_rate_max_radps);
-    v.vz_mps = std::clamp(g.viewpoint_kp * (k.cy_px - c.y) / k.fy_px, -g.z_speed_max_mps,
-                          g.z_speed_max_mps);
+    // A fragment: back away (only while the shelf is too close to fit the view) and centre it
+    // until the whole grid fits the view (guidance.hpp).
+    v = fragment_velocity(config_, view_.tags, view_.largest_tag_area_px, -viewpoint_G_m_.x());
   } else if (reread_back_until_ns_ && now_ns_ < *reread_back_until_ns_) {
     v.vx_B_mps = -g.back_off_speed_mps;  // a re-read from close: back out first (reread_shelf)
   } else {
@@ -553,16 +515,7 @@ void FlightSoftware::go_to_viewpoint(const Picture& pic, bool view_fresh) {
   // e1: from the current position to the optimal viewpoint, in G; flown in the body frame.
   const Eigen::Vector3d e1 = viewpoint_G_m_ - pose->p_FB_m();
   telemetry_.e1_G_m = e1;
-  Eigen::Vector3d v_G = g.viewpoint_kp * e1;
-  if (v_G.norm() > g.viewpoint_speed_max_mps) v_G *= g.viewpoint_speed_max_mps / v_G.norm();
-  const double c = std::cos(pose->yaw_rad), s = std::sin(pose->yaw_rad);
-  VelocityCommand v;
-  v.vx_B_mps = c * v_G.x() + s * v_G.y();  // R_z(-yaw) v_G
-  v.vy_B_mps = -s * v_G.x() + c * v_G.y();
-  v.vz_mps = v_G.z();
-  v.yaw_rate_radps = std::clamp(-g.viewpoint_yaw_kp * pose->yaw_rad, -g.yaw_rate_max_radps,
-                                g.yaw_rate_max_radps);
-  set_velocity(v);
+  set_velocity(viewpoint_velocity(g, e1, pose->yaw_rad));
   const bool there = e1.norm() < m.viewpoint_position_tolerance_m &&
                      std::abs(pose->yaw_rad) < m.viewpoint_yaw_tolerance_rad;
   if (!there) settled_frames_ = 0;
@@ -603,7 +556,7 @@ void FlightSoftware::take_inventory(const Picture& pic) {
     land(Outcome::NoEmptyCell, "inventory taken; no crossable empty cell");
     return;
   }
-  enter(Phase::Approach, "inventory taken; approaching cell " + cell_text(*target_));
+  enter(Phase::Approach, "inventory taken; approaching cell " + cell_text(*tracker_.target()));
   lateral_active_ns_ = now_ns_;  // not yet seen still
   hold_since_ns_.reset();
 }
@@ -640,255 +593,32 @@ bool FlightSoftware::select_target(const cv::Mat& bgr) {
     }
   }
   if (!best) return false;
-  target_ = best;
   // The target's height, from the full view it was chosen on (the grid pose's range).
-  target_height_m_.reset();
+  std::optional<double> height_m;
   if (pose_G_) {
     const auto q = cell_quad(view_, *best);
-    target_height_m_ = cell_height_m(0.25 * (q[0].y + q[1].y + q[2].y + q[3].y), -pose_G_->X_FC.translation().x());
+    height_m = cell_height_m(config_, state_, 0.25 * (q[0].y + q[1].y + q[2].y + q[3].y),
+                             -pose_G_->X_FC.translation().x());
   }
-  telemetry_.target = best;
-  const auto q = cell_quad(view_, *best);
-  const auto idx = cell_corner_indices(view_.grid, best->level - 1, best->column - 1);
-  double side = 0.0;
-  for (size_t k = 0; k < 4; ++k) {
-    corner_px_[k] = q[k];
-    side += std::sqrt(view_.tags[static_cast<size_t>((*idx)[k])].area_px) * 0.25;
-  }
-  box_px_ = corner_box(q, side);
-  tag_side_px_ = side;
-  start_tracker(bgr, box_px_);
   // Chosen on a full view, where every cell's grid position is counted from the edges.
-  identity_ = CellIdentity::Confirmed;
-  identity_vouched_ns_ = now_ns_;
-  vouched_box_px_ = box_px_;
-  behind_m_.reset();
-  cell_height_samples_m_.clear();
-  gain_start_.reset();
-  commanded_m_.clear();
-  last_approach_ns_.reset();
-  unidentified_since_ns_.reset();
-  telemetry_.target_identity = identity_;
+  tracker_.choose(*best, view_, bgr, now_ns_, height_m);
+  telemetry_.target = best;
+  telemetry_.tracked_box_px = tracker_.box_px();
+  cell_height_.clear();
+  forward_gain_.restart();
+  telemetry_.target_identity = tracker_.identity();
   return true;
 }
 
-void FlightSoftware::start_tracker(const cv::Mat& bgr, const cv::Rect2d& box) {
-  if (fast()) {
-    box_tracker_.init(box, now_ns_);
-  } else {
-    tracker_ = cv::legacy::TrackerMedianFlow::create();
-    tracker_->init(bgr, box);
-  }
-  telemetry_.tracked_box_px = box;
-}
-
-// Looks for the target's four corner tags around `predicted`: tags in a window around it,
-// eq. 1 inside the window, each corner the nearest tag to where the box puts it.
-bool FlightSoftware::measure_target(const Picture& pic, const cv::Rect2d& predicted) {
-  const cv::Mat& bgr = pic.bgr;
-  const PerceptionParams& p = config_.perception;
-  const double grow_x = p.roi_expand * predicted.width, grow_y = p.roi_expand * predicted.height;
-  const cv::Rect roi(cv::Point(static_cast<int>(std::floor(predicted.x - grow_x)),
-                               static_cast<int>(std::floor(predicted.y - grow_y))),
-                     cv::Point(static_cast<int>(std::ceil(predicted.br().x + grow_x)),
-                               static_cast<int>(std::ceil(predicted.br().y + grow_y))));
-  roi_tags_.clear();
-  // Fast pipeline: seeds every 0.4 tag sides (at least every 2 px, at most every 8), which
-  // still puts a sample on every corner tag (exact for tags wider than the stride).
-  const int stride = std::clamp(static_cast<int>(0.4 * tag_side_px_), 2, 8);
-  tag_detector_.detect(bgr, roi, roi_tags_, stride);
-  // Where the box puts each corner: the old corners moved and scaled with the box.
-  const cv::Point2d old_c = centre_of(box_px_), new_c = centre_of(predicted);
-  const double sx = predicted.width / box_px_.width, sy = predicted.height / box_px_.height;
-  // Eq. 1 against the target's own corner tags (their side last measured, grown with the box):
-  // the window alone is no reference, since once the target's tags have left it (lost, or
-  // leaving the view) the largest tag in it may be one of a shelf behind, which eq. 1 against
-  // itself would keep. A front tag has about (side sqrt(sx sy))^2 pixels; a tag of a shelf d
-  // behind, seen from range r, (r / (r + d))^2 of that.
-  // (Only while the prediction is sane: the box tracker's growth, extrapolated, can blow up.)
-  const double growth = std::sqrt(sx * sy);
-  if (tag_side_px_ > 0.0 && growth > 0.5 && growth < 2.0) {
-    const double front_area = tag_side_px_ * tag_side_px_ * sx * sy;
-    // The room behind the shelf, seen through the target cell: a tag of a shelf behind inside
-    // the box (shrunk by two tag sides: not a corner tag) lies f s / sqrt(area) from the camera
-    // along its axis, the front tags' plane -x_C - tag_offset (the last pose); the nearest such
-    // tag over the approach bounds where the crossing may end. (A tag cut by a bar looks
-    // smaller, hence farther: only the nearest over many pictures counts. A front corner tag
-    // cut by the picture's border looks small too: blobs touching the border, or within two tag
-    // sides of the box's edge, where the predicted box may put a corner, are left out. Not while
-    // the corner tags leave the view: cut, they no longer give the front's scale.)
-    if (pic.decides && pose_K_ && !near_edge_ && growth > 0.8 && growth < 1.25) {
-      const double front_side_px = tag_side_px_ * growth;
-      const double front_range_m = -pose_K_->X_FC.translation().x() - config_.shelf.tag_offset_m;
-      const cv::Rect2d inner(predicted.x + 2.0 * front_side_px, predicted.y + 2.0 * front_side_px,
-                             predicted.width - 4.0 * front_side_px, predicted.height - 4.0 * front_side_px);
-      const double f_s = config_.camera.fx_px * config_.shelf.tag_size_m;
-      for (const TagBlob& t : roi_tags_) {
-        const cv::Rect& b = t.bbox_px;
-        const bool at_border = b.x <= 0 || b.y <= 0 || b.br().x >= bgr.cols || b.br().y >= bgr.rows;
-        if (t.area_px >= p.area_ratio_threshold * front_area || at_border || !inner.contains(t.centre_px)) continue;
-        const double behind_m = f_s / std::sqrt(t.area_px) - front_range_m;
-        // The shelf's own back face (its tags face forward too) is depth_m behind: those, with
-        // the area's ranging error (about 10 %), measure up to depth + 0.15 m.
-        if (behind_m > config_.shelf.depth_m + 0.15 && (!behind_m_ || behind_m < *behind_m_)) behind_m_ = behind_m;
-      }
-    }
-    telemetry_.behind_tags_dropped += static_cast<int>(std::erase_if(
-        roi_tags_, [&](const TagBlob& t) { return t.area_px < p.area_ratio_threshold * front_area; }));
-  }
-  keep_front_shelf(roi_tags_, p.area_ratio_threshold);
-  const double gate = p.corner_gate * std::min(predicted.width, predicted.height);
-  std::array<int, 4> pick{-1, -1, -1, -1};
-  for (size_t k = 0; k < 4; ++k) {
-    const cv::Point2d d = corner_px_[k] - old_c;
-    const cv::Point2d expect = new_c + cv::Point2d(d.x * sx, d.y * sy);
-    double best = gate;
-    for (size_t i = 0; i < roi_tags_.size(); ++i) {
-      const double dist = cv::norm(roi_tags_[i].centre_px - expect);
-      if (dist < best) {
-        best = dist;
-        pick[k] = static_cast<int>(i);
-      }
-    }
-    if (pick[k] < 0) return false;
-    for (size_t j = 0; j < k; ++j) {
-      if (pick[j] == pick[k]) return false;
-    }
-  }
-  const auto obj = cell_corner_tags_K(config_.shelf, *target_);
-  pose_obj_.assign(obj.begin(), obj.end());
-  pose_img_.clear();
-  double side = 0.0;
-  for (size_t k = 0; k < 4; ++k) {
-    const TagBlob& t = roi_tags_[static_cast<size_t>(pick[k])];
-    pose_img_.push_back(t.centre_px);
-    side += 0.25 * std::sqrt(t.area_px);
-  }
-  const std::vector<cv::Point2d>& img = pose_img_;
-  const auto pose = estimate_pose(pose_obj_, img, config_.camera, config_.mount);
-  if (!pose) return false;
-  // Plausibility: between frames the vehicle moves centimetres, so a pose that jumps further
-  // than pose_jump_m (+ 1 m/s of the time since the last one) or turns more than pose_jump_rad
-  // (+ 1 rad/s) comes from a wrong corner tag (a neighbour's, as a true corner leaves the view
-  // close to the shelf): not a measurement. Once the last pose is older than
-  // pose_jump_window_s there is nothing to compare with.
-  const MissionParams& mp = config_.mission;
-  if (pose_K_) {
-    const double dt = ns_to_seconds(now_ns_ - pose_t_ns_);
-    const double jump_m = (pose->p_FB_m() - pose_K_->p_FB_m()).norm();
-    const double turn = std::abs(std::remainder(pose->yaw_rad - pose_K_->yaw_rad, 2.0 * std::numbers::pi));
-    if (dt <= mp.pose_jump_window_s && (jump_m > mp.pose_jump_m + 1.0 * dt ||
-                                        turn > mp.pose_jump_rad + 1.0 * dt)) {
-      ++telemetry_.rejected_poses;
-      return false;
-    }
-  }
-  // Identity: the target cell's centre stays at one height above the take-off point. After
-  // the target was lost, the tracked box can settle on the cell above or below (and the
-  // jump test above no longer applies once the last pose is old); a level's corner tags make
-  // as good a pose as the target's. The height check tells them apart: the height the cell's
-  // image row puts it at (cell_height_m) must stay within 0.4 of the smallest row pitch of
-  // the height found when the target was chosen; another level is a whole pitch away.
-  // (mission.level_check off: for verification studies only, to show what the check prevents.)
-  if (mp.level_check && target_height_m_) {
-    const cv::Point2d c = 0.25 * (img[0] + img[1] + img[2] + img[3]);
-    const auto height_m = cell_height_m(c.y, -pose->X_FC.translation().x());
-    const auto& rows = config_.shelf.row_pitch_m;
-    if (height_m && std::abs(*height_m - *target_height_m_) > 0.4 * *std::min_element(rows.begin(), rows.end())) {
-      ++telemetry_.rejected_poses;
-      ++telemetry_.wrong_level_poses;
-      return false;
-    }
-  }
-  // Identity by continuity: this pose follows the last identified one (or the full view the
-  // target was chosen on). Within pose_jump_window_s the jump test above compared the two.
-  // Beyond it, up to identity_continuity_s (pictures too damaged to use, a tag missed for a
-  // few frames), the box must be found where it was last identified, within 0.3 of its width:
-  // a box slid one column moves by (w_i + w_j) / 2 over a box of w_i + tag, at least 0.7 of
-  // its width on the test shelf, while the yaw loop holds the target's box at the image centre
-  // and the vehicle drifts sideways by V_y dt (8 cm in 1 s, 0.2 of a 0.4 m box at any range).
-  // A longer gap, or a box found elsewhere, leaves the target unidentified until a picture
-  // confirms it (check_identity). (The level is checked on every pose against the state height.)
-  const cv::Rect2d box_now = corner_box({img[0], img[1], img[2], img[3]}, side);
-  const double gap_s = ns_to_seconds(now_ns_ - identity_vouched_ns_);
-  const bool continuous =
-      gap_s <= mp.pose_jump_window_s ||
-      (gap_s <= mp.identity_continuity_s && vouched_box_px_ &&
-       cv::norm(centre_of(box_now) - centre_of(*vouched_box_px_)) < 0.3 * vouched_box_px_->width &&
-       std::abs(box_now.width / vouched_box_px_->width - 1.0) < 0.2);
-  if (identity_ == CellIdentity::Confirmed && continuous) {
-    identity_vouched_ns_ = now_ns_;
-    vouched_box_px_ = box_now;
-  } else if (identity_ == CellIdentity::Confirmed) {
-    identity_ = CellIdentity::Unknown;
-    telemetry_.event = "target continuity lost: identity to be confirmed";
-  }
-  if (identity_ != CellIdentity::Confirmed && !unidentified_since_ns_) unidentified_since_ns_ = now_ns_;
-  telemetry_.target_identity = identity_;
-  for (size_t k = 0; k < 4; ++k) corner_px_[k] = img[k];
-  pose_K_ = pose;
-  pose_t_ns_ = now_ns_;
-  if (pic.decides) {  // the crossing is judged on poses from nearly whole pictures only
-    decision_pose_K_ = pose;
-    decision_pose_t_ns_ = now_ns_;
-  }
-  box_px_ = corner_box(corner_px_, side);
-  tag_side_px_ = side;
-  // About to leave the view: a corner tag within a tag side (plus margin) of the border.
-  const double m = config_.mission.edge_margin_px + side;
-  near_edge_ = false;
-  for (const cv::Point2d& c : img) {
-    near_edge_ = near_edge_ || c.x < m || c.y < m || c.x > bgr.cols - 1 - m || c.y > bgr.rows - 1 - m;
-  }
-  return true;
-}
-
-// Height above the take-off point of a point on the shelf's front at image row v_px, seen from
-// range_m in front of it: the state's height h plus range * tan(elevation), the elevation being
-// the row's angle above the optical axis, atan((cy - v) / fy), less the axis' tilt down (the
-// body's pitch from the state record plus the mount's). The body's roll is neglected (the cell
-// is near the image's vertical centre line). Empty without a state record.
-std::optional<double> FlightSoftware::cell_height_m(double v_px, double range_m) const {
-  if (!state_) return std::nullopt;
-  const CameraIntrinsics& k = config_.camera;
-  const double elevation = std::atan((k.cy_px - v_px) / k.fy_px) - (state_->pitch_rad + config_.mount.pitch_rad);
-  return state_->height_m + range_m * std::tan(elevation);
-}
-
-// The target cell centre's height in the frame of the state height h: h less the body's z_K
-// from the pose (z_K = 0 at the cell centre). The picture is a video latency (0.1-0.35 s) older
-// than the state record, so a sample is taken only while the state has shown the vehicle
-// vertically still for vertical_lag_s (then h has not changed since the picture), on nearly
-// whole pictures, and inside commit_range_m (close in, the 4-tag pose's height is good to about
-// 2 cm; far out its tilt ambiguity moves it by decimetres). The last kCellHeightSamples count.
+// A sample of the target cell centre's height in the state height's frame (odometry.hpp,
+// CellHeightEstimator): on nearly whole pictures, with a fresh state, inside commit_range_m,
+// and once the state has shown the vehicle vertically still for vertical_lag_s.
 void FlightSoftware::sample_cell_height(const Picture& pic, const PoseEstimate& pose) {
   if (!pic.decides || !state_fresh() || -pose.p_FB_m().x() > config_.control.commit_range_m) return;
-  if (vertical_motion_ns_ && ns_to_seconds(now_ns_ - *vertical_motion_ns_) < config_.mission.vertical_lag_s) return;
-  cell_height_samples_m_.push_back(state_->height_m - pose.p_FB_m().z());
-  if (cell_height_samples_m_.size() > kCellHeightSamples) cell_height_samples_m_.erase(cell_height_samples_m_.begin());
+  if (!cell_height_.vertically_still_for(now_ns_, config_.mission.vertical_lag_s)) return;
+  cell_height_.sample(state_->height_m, pose.p_FB_m().z());
 }
 
-// The median of the samples (a wrong corner match or a damaged band moves one, not the median);
-// empty with fewer than kMinCellHeightSamples: a picture or two is no measurement.
-std::optional<double> FlightSoftware::measured_cell_height_m() const {
-  if (cell_height_samples_m_.size() < kMinCellHeightSamples) return std::nullopt;
-  std::vector<double> v = cell_height_samples_m_;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
-
-// The crossing is over when the state odometry has flown the line (p_O advances on each state
-// record by R_z(yaw) v_H dt, on_state); while the records are stale, when its timed duration
-// has passed; and at kCrossMaxOverTime times that in any case.
-bool FlightSoftware::crossing_flown() const {
-  const TimeNs t_ns = now_ns_ - phase_start_ns_;
-  if (t_ns >= static_cast<TimeNs>(kCrossMaxOverTime * static_cast<double>(cross_duration_ns_))) return true;
-  if (!state_fresh()) return t_ns >= cross_duration_ns_;
-  return (p_O_m_.head<2>() - cross_start_O_m_).dot(cross_axis_O_) >= cross_line_m_;
-}
-
-// A state record within kStateFresh_s: the Tello sends them at 10 Hz.
 // The target's loss begins (once): the grid is not known to be in view until a nearly whole
 // picture shows it.
 void FlightSoftware::start_losing_target() {
@@ -897,65 +627,34 @@ void FlightSoftware::start_losing_target() {
   grid_in_view_while_lost_ = false;
 }
 
+// A state record within kStateFresh_s: the Tello sends them at 10 Hz.
 bool FlightSoftware::state_fresh() const {
   return state_ && ns_to_seconds(now_ns_ - state_->t_ns) <= kStateFresh_s;
 }
 
+// The target lost: the shelf's view analysed anew, the target looked for near its last box
+// (target_tracker.hpp, TargetTracker::reacquire).
 bool FlightSoftware::reacquire(const Picture& pic) {
-  const cv::Mat& bgr = pic.bgr;
-  // The target is a cell of the (possibly partial) grid near the last box: the nearest one
-  // whose corner tags give a plausible pose of the right level (measure_target's tests), so
-  // that a neighbour above or below is passed over.
-  analyse_shelf(bgr, tag_detector_, config_, view_);
+  analyse_shelf(pic.bgr, tag_detector_, config_, view_);
   update_view_telemetry();
-  if (!view_.grid.valid) return false;
-  const cv::Point2d last = centre_of(box_px_);
-  const double gate = 0.5 * std::min(box_px_.width, box_px_.height);
-  std::vector<std::pair<double, std::array<int, 4>>> candidates;
-  for (int r = 0; r + 1 < view_.grid.rows; ++r) {
-    for (int c = 0; c + 1 < view_.grid.columns; ++c) {
-      const auto idx = cell_corner_indices(view_.grid, r, c);
-      if (!idx) continue;
-      cv::Point2d m(0, 0);
-      for (int i : *idx) m += 0.25 * view_.tags[static_cast<size_t>(i)].centre_px;
-      const double d = cv::norm(m - last);
-      if (d < gate) candidates.push_back({d, *idx});
-    }
-  }
-  std::stable_sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  for (const auto& [d, idx] : candidates) {
-    for (size_t k = 0; k < 4; ++k) corner_px_[k] = view_.tags[static_cast<size_t>(idx[k])].centre_px;
-    if (measure_target(pic, box_px_)) {
-      start_tracker(bgr, box_px_);
-      return true;
-    }
-  }
-  return false;
+  if (!tracker_.reacquire(pic, view_, tag_detector_, state_)) return false;
+  after_measurement();
+  telemetry_.tracked_box_px = tracker_.box_px();
+  return true;
 }
 
+// What a successful measurement of the target changed, for the telemetry.
+void FlightSoftware::after_measurement() {
+  if (tracker_.continuity_lost()) telemetry_.event = "target continuity lost: identity to be confirmed";
+  telemetry_.target_identity = tracker_.identity();
+}
+
+// The target's identity judged on this picture (target_tracker.hpp): a contradiction, or no
+// confirmation within identity_confirm_s, re-reads the shelf (false: the approach is over).
 bool FlightSoftware::check_identity(const Picture& pic, const PoseEstimate& pose) {
-  const cv::Mat& bgr = pic.bgr;
-  // Every tag and every marker of the picture (eq. 1 is applied against the pose inside the
-  // check), at the cost of a whole-frame search, paid only while the target is unidentified.
-  frame_tags_.clear();
-  tag_detector_.detect(bgr, cv::Rect(0, 0, bgr.cols, bgr.rows), frame_tags_);
-  frame_markers_.clear();
-  if (fast()) {
-    const double range_m = std::max(0.1, -pose.X_FC.translation().x());
-    marker_detector_.detect_in(bgr, cv::Rect(0, 0, bgr.cols, bgr.rows),
-                               config_.shelf.marker_size_m * config_.camera.fx_px / range_m,
-                               config_.perception.marker_area_ratio_threshold, frame_markers_);
-  } else {
-    marker_detector_.detect(bgr, frame_markers_);
-  }
-  ++telemetry_.identity_checks;
-  const IdentityCheck check = check_cell_identity(*target_, pose, frame_tags_, frame_markers_, inventory_, config_);
+  const IdentityCheck check = tracker_.check_identity(pic, pose, tag_detector_, marker_detector_, inventory_);
   if (check.verdict == CellIdentity::Confirmed) {
-    identity_ = CellIdentity::Confirmed;
-    identity_vouched_ns_ = now_ns_;
-    vouched_box_px_ = box_px_;
-    unidentified_since_ns_.reset();
-    telemetry_.target_identity = identity_;
+    telemetry_.target_identity = tracker_.identity();
     telemetry_.event = "target identity confirmed: " + check.why;
     return true;
   }
@@ -964,40 +663,19 @@ bool FlightSoftware::check_identity(const Picture& pic, const PoseEstimate& pose
     reread_shelf("target identity contradicted (" + check.why + ")");
     return false;
   }
-  if (unidentified_since_ns_ && ns_to_seconds(now_ns_ - *unidentified_since_ns_) > config_.mission.identity_confirm_s) {
+  const std::optional<TimeNs>& since = tracker_.unidentified_since_ns();
+  if (since && ns_to_seconds(now_ns_ - *since) > config_.mission.identity_confirm_s) {
     reread_shelf("target not identified within identity_confirm_s");
     return false;
   }
   return true;
 }
 
-// The vehicle's forward speed per commanded speed, from the visual poses of the approach: the
-// distance flown along x_K since the first pose of the approach over the forward displacement
-// commanded in the same time, D(t) = integral of the commanded vx_B, taken lag_s earlier (the
-// pose shows the vehicle a video latency ago, and the vehicle follows the command after the
-// autopilot's velocity lag: 0.2 + 0.5 s assumed). Once D has grown by 0.8 m, a lag wrong by
-// 0.35 s moves the estimate by at most 0.25 m/s x 0.35 s / 0.8 m = 11 %; it is refined as D
-// grows. Clamped to 0.5..2; 1 until then.
+// The forward speed gain (odometry.hpp, ForwardGainEstimator), on nearly whole pictures.
 void FlightSoftware::estimate_forward_gain(const Picture& pic, const PoseEstimate& pose) {
-  constexpr double kLag_s = 0.2 + kVelocityLag_s, kMinCommanded_m = 0.8;
   if (!pic.decides) return;
-  if (!gain_start_) {
-    gain_start_ = std::make_pair(now_ns_, pose.p_FB_m().x());
-    return;
-  }
-  const auto commanded_at = [&](TimeNs t_ns) {  // D at t_ns, held before the first sample
-    double d = 0.0;
-    for (const auto& [t, dd] : commanded_m_) {
-      if (t > t_ns) break;
-      d = dd;
-    }
-    return d;
-  };
-  const TimeNs lag_ns = seconds_to_ns(kLag_s);
-  const double commanded = commanded_at(now_ns_ - lag_ns) - commanded_at(gain_start_->first - lag_ns);
-  if (commanded < kMinCommanded_m) return;
-  forward_gain_ = std::clamp((pose.p_FB_m().x() - gain_start_->second) / commanded, 0.5, 2.0);
-  telemetry_.forward_gain = forward_gain_;
+  forward_gain_.on_pose(now_ns_, pose.p_FB_m().x());
+  telemetry_.forward_gain = forward_gain_.gain();
 }
 
 void FlightSoftware::reread_shelf(const std::string& why, const std::optional<std::string>& give_up_reason) {
@@ -1012,21 +690,16 @@ void FlightSoftware::reread_shelf(const std::string& why, const std::optional<st
   // turning, "shelf not found"). So, seeing nothing, it first backs straight out the way the
   // approach came, to the viewpoint's range (the last pose's range: distance / back-off speed).
   reread_back_until_ns_.reset();
-  if (pose_K_) {
-    const double back_m = std::max(0.0, -viewpoint_G_m_.x() + pose_K_->p_FB_m().x());
+  if (const std::optional<PoseEstimate>& pose_K = tracker_.pose_K()) {
+    const double back_m = std::max(0.0, -viewpoint_G_m_.x() + pose_K->p_FB_m().x());
     reread_back_until_ns_ = now_ns_ + seconds_to_ns(back_m / config_.control.back_off_speed_mps);
   }
-  target_.reset();
+  tracker_.forget();
   crossing_refusals_ = 0;  // off-centre arrivals count per approach
   telemetry_.target.reset();
-  pose_K_.reset();
-  decision_pose_K_.reset();
-  cell_height_samples_m_.clear();
-  identity_ = CellIdentity::Unknown;
-  telemetry_.target_identity = identity_;
-  unidentified_since_ns_.reset();
+  cell_height_.clear();
+  telemetry_.target_identity = tracker_.identity();
   hold_since_ns_.reset();
-  near_edge_ = false;
   hover();
   // FindShelf backs away from a fragment until the whole grid is in view, GoToViewpoint flies
   // to the optimal viewpoint, and TakeInventory (its frames already read) chooses the target
@@ -1035,94 +708,54 @@ void FlightSoftware::reread_shelf(const std::string& why, const std::optional<st
 }
 
 void FlightSoftware::approach(const Picture& pic) {
-  const cv::Mat& bgr = pic.bgr;
   const ControlGains& g = config_.control;
-  // The forward displacement commanded so far: the last command held since the last frame.
-  if (last_approach_ns_) {
-    const double d = commanded_m_.empty() ? 0.0 : commanded_m_.back().second;
-    commanded_m_.emplace_back(now_ns_, d + velocity_.vx_B_mps * ns_to_seconds(now_ns_ - *last_approach_ns_));
-  }
-  last_approach_ns_ = now_ns_;
-  const CameraIntrinsics& k = config_.camera;
-  cv::Rect2d predicted = box_px_;
-  if (fast()) {
-    const std::optional<cv::Rect2d> p = box_tracker_.predict(now_ns_);
-    telemetry_.tracker_ok = p.has_value();
-    if (p) predicted = *p;
-  } else {
-    telemetry_.tracker_ok = tracker_ && tracker_->update(bgr, predicted);
-    if (!telemetry_.tracker_ok) predicted = box_px_;
-  }
-  const bool found = measure_target(pic, predicted);
-  telemetry_.tracked_box_px = box_px_;
+  forward_gain_.on_command_held(now_ns_, velocity_.vx_B_mps);
+  const TargetTracker::Prediction predicted = tracker_.predict(pic);
+  telemetry_.tracker_ok = predicted.tracker_ok;
+  const bool found = tracker_.measure(pic, predicted.box_px, tag_detector_, state_);
+  if (found) after_measurement();
+  telemetry_.tracked_box_px = tracker_.box_px();
   const double dt = control_dt_s();
   if (found) {
     lost_since_ns_.reset();
     back_off_since_ns_.reset();
-    if (fast()) {
-      box_tracker_.correct(box_px_, now_ns_);
-    } else {
-      // Re-seed the tracker when it failed or drifted off the tags.
-      const cv::Rect2d overlap = predicted & box_px_;
-      const double iou = overlap.area() / (predicted.area() + box_px_.area() - overlap.area());
-      if (!telemetry_.tracker_ok || iou < 0.7) start_tracker(bgr, box_px_);
-    }
-    const PoseEstimate& pose = *pose_K_;
+    tracker_.correct(pic, predicted);
+    const PoseEstimate& pose = *tracker_.pose_K();
     telemetry_.pose = pose;
     telemetry_.pose_in_cell_frame = true;
     // Unidentified (continuity lost): judge this picture; a contradiction ends the approach.
     // Whole pictures only: a guessed band can put a tag beyond the grid's edge or hide one.
-    if (identity_ != CellIdentity::Confirmed && pic.whole() && !check_identity(pic, pose)) return;
-    const cv::Point2d c = centre_of(box_px_);
-    const double range_m = std::max(0.05, -pose.X_FC.translation().x());
-    const double e_z = (k.cy_px - c.y) * range_m / k.fy_px;   // eq. 11
-    const double e_psi = std::atan((k.cx_px - c.x) / k.fx_px);  // eq. 13, 14
-    // Heading relative to the cell for the lateral law: the heading at which the cell is
-    // centred (the vehicle's heading plus the cell's remaining bearing in the image), i.e. the
-    // heading the yaw loop converges to. Using it rather than the vehicle's momentary heading
-    // keeps the yaw loop's lag (a second or more with the video latency) out of the lateral
-    // loop; with that lag the law pushed sideways the wrong way while the yaw caught up.
-    const double psi = pose.yaw_rad + e_psi;
+    if (tracker_.identity() != CellIdentity::Confirmed && pic.whole() && !check_identity(pic, pose)) return;
+    // The laws of eq. 10-15 and Fig. 19 (guidance.hpp); the PI states and the timers here.
+    const ApproachErrors e = approach_errors(config_.camera, tracker_.box_centre_px(), pose);
     VelocityCommand v;
-    v.vz_mps = pi_z_.update(e_z, dt);                                              // eq. 12
-    v.yaw_rate_radps = pi_psi_.update(e_psi, dt);                                  // eq. 15
-    v.vy_B_mps = bang_off_bang(psi, g.psi_lateral_threshold_rad, g.lateral_speed_mps);  // Fig. 19
+    v.vz_mps = pi_z_.update(e.e_z_m, dt);              // eq. 12
+    v.yaw_rate_radps = pi_psi_.update(e.e_psi_rad, dt);  // eq. 15
+    v.vy_B_mps = approach_lateral_mps(g, e);           // Fig. 19
     if (v.vy_B_mps != 0.0) lateral_active_ns_ = now_ns_;
-    // Forward at the constant xdot_0 (eq. 10) along the cell normal: held at 0 while the
-    // line of sight is outside the approach cone, and, inside commit_range_m, until settled
-    // (laterally still, centred vertically and in heading) so that the crossing starts from a
-    // state the last pose describes, whatever the latency. Settling is given up after
-    // settle_hold_s; the crossing gate then decides.
-    const MissionParams& m = config_.mission;
-    const bool settled = ns_to_seconds(now_ns_ - lateral_active_ns_) >= m.settle_s &&
-                         std::abs(e_z) <= m.settle_z_m && std::abs(e_psi) <= m.settle_psi_rad;
-    const bool in_cone = std::abs(psi) <= g.approach_cone_rad;
-    const bool settling = -pose.p_FB_m().x() <= g.commit_range_m && !settled;
-    if (!settling) hold_since_ns_.reset();
-    if (settling && !hold_since_ns_) hold_since_ns_ = now_ns_;
+    // Held short inside commit_range_m until settled; settling is given up after
+    // settle_hold_s (the crossing gate then decides).
+    const ApproachHold h = approach_hold(config_, e, ns_to_seconds(now_ns_ - lateral_active_ns_), -pose.p_FB_m().x());
+    if (!h.settling) hold_since_ns_.reset();
+    if (h.settling && !hold_since_ns_) hold_since_ns_ = now_ns_;
     const bool settle_given_up =
-        hold_since_ns_ && ns_to_seconds(now_ns_ - *hold_since_ns_) > m.settle_hold_s;
-    const bool hold = !in_cone || (settling && !settle_given_up);
-    v.vx_B_mps = hold ? 0.0 : g.forward_speed_mps;                                 // eq. 10
-    // An unidentified target is never approached: back off along the normal (the other loops
-    // keeping the box centred) so that the view widens until an edge or a known marker shows
-    // which cell it is, no farther than the optimal viewpoint's range.
-    if (identity_ != CellIdentity::Confirmed) {
-      v.vx_B_mps = -pose.p_FB_m().x() < -viewpoint_G_m_.x() ? -g.back_off_speed_mps : 0.0;
-    }
+        hold_since_ns_ && ns_to_seconds(now_ns_ - *hold_since_ns_) > config_.mission.settle_hold_s;
+    const bool hold = !h.in_cone || (h.settling && !settle_given_up);
+    v.vx_B_mps = approach_forward_mps(g, hold, tracker_.identity() == CellIdentity::Confirmed, -pose.p_FB_m().x(),
+                                      -viewpoint_G_m_.x());  // eq. 10
     // About to lose the tags: the crossing will be judged on the last nearly whole picture,
     // so only such pictures move the vehicle now (it hovers on damaged ones), and the last
     // one before the tags leave is at most a frame old.
-    if (near_edge_ && !pic.decides) v = {};
+    if (tracker_.near_edge() && !pic.decides) v = {};
     set_velocity(v);
     estimate_forward_gain(pic, pose);
     sample_cell_height(pic, pose);
-    telemetry_.e_z_m = e_z;
-    telemetry_.e_psi_rad = e_psi;
-    telemetry_.psi_cell_rad = psi;
+    telemetry_.e_z_m = e.e_z_m;
+    telemetry_.e_psi_rad = e.e_psi_rad;
+    telemetry_.psi_cell_rad = e.psi_cell_rad;
     telemetry_.yaw_cell_rad = pose.yaw_rad;
     telemetry_.lateral_mps = v.vy_B_mps;
-    telemetry_.settled = settled;
+    telemetry_.settled = h.settled;
     telemetry_.holding_short = hold;
     return;
   }
@@ -1135,64 +768,44 @@ void FlightSoftware::approach(const Picture& pic) {
   }
   // The corner tags are gone. Close and at the border: they left the view; cross if centred,
   // judged on the last pose from a nearly whole picture.
-  if (decision_pose_K_ && near_edge_ && -decision_pose_K_->p_FB_m().x() <= config_.mission.cross_range_max_m) {
-    const PoseEstimate& pose = *decision_pose_K_;
+  const std::optional<PoseEstimate>& decision_pose_K = tracker_.decision_pose_K();
+  if (decision_pose_K && tracker_.near_edge() && -decision_pose_K->p_FB_m().x() <= config_.mission.cross_range_max_m) {
+    const PoseEstimate& pose = *decision_pose_K;
     CrossingGateInput gate;
-    gate.pose_age_s = ns_to_seconds(now_ns_ - decision_pose_t_ns_);
-    gate.still_for_s = ns_to_seconds(decision_pose_t_ns_ - lateral_active_ns_);
-    gate.identity = identity_;
-    const std::optional<double> cell_centre_h_m = measured_cell_height_m();
+    gate.pose_age_s = ns_to_seconds(now_ns_ - tracker_.decision_pose_t_ns());
+    gate.still_for_s = ns_to_seconds(tracker_.decision_pose_t_ns() - lateral_active_ns_);
+    gate.identity = tracker_.identity();
+    const std::optional<double> cell_centre_h_m = cell_height_.measured_m();
     if (cell_centre_h_m && state_fresh()) {
       gate.height_above_cell_m = state_->height_m - *cell_centre_h_m;
       gate.vz_mps = state_->vz_H_mps;
     }
-    const std::optional<std::string> refusal = crossing_refusal(config_, *target_, pose, gate);
+    const std::optional<std::string> refusal = crossing_refusal(config_, *tracker_.target(), pose, gate);
     const std::string why = refusal.value_or("");
     if (!refusal) {
-      // Past the back face by beyond_distance_m, or less where a shelf stands behind: the
-      // vehicle's front, plus what it drifts after the stop (stop_distance_m), must stay short
-      // of the nearest tag seen behind through the cell.
-      const MissionParams& mp = config_.mission;
-      double beyond_m = mp.beyond_distance_m;
-      if (behind_m_) {
-        beyond_m = std::min(beyond_m, *behind_m_ - config_.shelf.depth_m - mp.vehicle_size_m.x() - mp.stop_distance_m);
-      }
-      if (beyond_m < mp.min_beyond_distance_m) {
-        land(Outcome::Aborted, "no room behind the shelf to stop after crossing (tags " + format_m(*behind_m_) + " m behind)");
+      // Past the back face by beyond_distance_m, or less where a shelf stands behind
+      // (guidance.hpp, crossing_beyond_m).
+      const std::optional<double>& behind_m = tracker_.behind_m();
+      const double beyond_m = crossing_beyond_m(config_, behind_m);
+      if (beyond_m < config_.mission.min_beyond_distance_m) {
+        land(Outcome::Aborted, "no room behind the shelf to stop after crossing (tags " + format_m(*behind_m) + " m behind)");
         return;
       }
-      const double distance = -pose.p_FB_m().x() + config_.shelf.depth_m + 0.5 * mp.vehicle_size_m.x() + beyond_m;
-      // Along the crossing line at crossing_speed_mps, heading held (yaw rate 0); the line in
-      // K turned into the body frame by the heading: v_B = R_z(-yaw) v_K.
-      const Eigen::Vector3d d = crossing_direction_K(config_.shelf, pose);
-      // Ended by distance flown, not by time (crossing_flown): the line's horizontal length,
-      // distance / d_x along the normal times |d_xy|, along the line's direction in the
-      // odometry frame O (the body direction turned by the state heading). Timed only as a
-      // fallback: at the speed the vehicle really flies (the commanded one times the gain
-      // measured in the approach; the rc-to-speed gain of a Tello varies by tens of percent)
-      // plus the autopilot's lag (from rest, a first-order response flies
-      // v (T - tau (1 - e^(-T/tau))) >= v (T - tau) in T). Timed alone, a gain over-estimated by
-      // a fifth and the lag left a vehicle starting from rest 0.6 m short, landing onto the
-      // back face's beam (default campaign, ideal link, run 852 of seed 1).
-      const double cy = std::cos(pose.yaw_rad), sy = std::sin(pose.yaw_rad);
-      const Eigen::Vector2d dir_B(cy * d.x() + sy * d.y(), -sy * d.x() + cy * d.y());  // |dir_B| = |d_xy|
-      cross_line_m_ = distance / d.x() * dir_B.norm();
-      cross_start_O_m_ = p_O_m_.head<2>();
+      // Along the line from the pose through the cell centre at mid-depth, heading held, ended
+      // by the distance the state odometry has flown (guidance.hpp, plan_crossing).
       const double yaw_O = state_ ? state_->yaw_rad : 0.0;
-      cross_axis_O_ = Eigen::Rotation2Dd(yaw_O) * dir_B.normalized();
-      cross_duration_ns_ =
-          seconds_to_ns(distance / (d.x() * g.crossing_speed_mps * forward_gain_) + kVelocityLag_s);
-      enter(Phase::Cross, "corner tags left the view: crossing " + cell_text(*target_) + " (" + format_m(beyond_m) +
-                              " m past the back face; speed gain " + format_m(forward_gain_) + "; " +
+      const CrossingPlan plan =
+          plan_crossing(config_, pose, beyond_m, forward_gain_.gain(), odometry_.p_O_m().head<2>(), yaw_O);
+      crossing_end_ = plan.end;
+      enter(Phase::Cross, "corner tags left the view: crossing " + cell_text(*tracker_.target()) + " (" + format_m(beyond_m) +
+                              " m past the back face; speed gain " + format_m(forward_gain_.gain()) + "; " +
                               format_m(*gate.height_above_cell_m) + " m above the cell centre by the state height" +
-                              (behind_m_ ? "; tags " + format_m(*behind_m_) + " m behind)" : ")"));
+                              (behind_m ? "; tags " + format_m(*behind_m) + " m behind)" : ")"));
       // Horizontally along the line; vertically the cell centre's height held by the state
       // height (on_state), not the line's slope: that slope came from a pose a video latency
       // old, and open loop it flew a vehicle still settling vertically into the beam below.
       crossing_height_m_ = cell_centre_h_m;
-      set_velocity({g.crossing_speed_mps * dir_B.x(), g.crossing_speed_mps * dir_B.y(),
-                    height_hold_vz_mps(*cell_centre_h_m, state_->height_m, g.crossing_kp_z, g.crossing_z_speed_max_mps),
-                    0.0});
+      set_velocity(crossing_velocity(g, plan, crossing_vz_mps(g, *cell_centre_h_m, state_->height_m)));
       return;
     }
     if (!back_off_since_ns_) {
@@ -1203,13 +816,13 @@ void FlightSoftware::approach(const Picture& pic) {
       back_off_since_ns_ = now_ns_;
       telemetry_.event = "not centred (" + why + "): backing off";
     }
-    set_velocity({-g.back_off_speed_mps, 0.0, 0.0, 0.0});
+    set_velocity(back_off_velocity(g));
     pi_z_.reset();
     pi_psi_.reset();
     return;
   }
   if (back_off_since_ns_) {  // keep backing off until the tags are back
-    set_velocity({-g.back_off_speed_mps, 0.0, 0.0, 0.0});
+    set_velocity(back_off_velocity(g));
     return;
   }
   // Lost: hover, and look for the target among the tags of the whole frame.
@@ -1253,15 +866,10 @@ void FlightSoftware::next_shelf(const std::string& event) {
   ++shelf_;
   inventory_ = Inventory(shelf_, config_.shelf.levels(), config_.shelf.columns(),
                          config_.perception.marker_min_agreeing_frames);
-  target_.reset();
-  target_height_m_.reset();
-  cell_height_samples_m_.clear();
+  tracker_.forget();
+  cell_height_.clear();
   crossing_height_m_.reset();
-  tracker_.release();
-  pose_K_.reset();
-  decision_pose_K_.reset();
   pose_G_.reset();
-  near_edge_ = false;
   crossing_refusals_ = 0;
   hold_since_ns_.reset();
   last_full_view_ns_.reset();
@@ -1271,45 +879,21 @@ void FlightSoftware::next_shelf(const std::string& event) {
   enter(Phase::FindShelf, event);
 }
 
-// Waypoints in the grid frame G of the shelf just read (x_G into the shelf, grid centre at the
-// origin), from the vehicle's visual pose p at the viewpoint; the last one is the next shelf's
-// optimal viewpoint (moved shelf_spacing_m along x_G), or past the last shelf as far as a
-// crossing ends. They are turned into the odometry frame about the vehicle's position, G's
-// x axis lying at heading (state yaw - visual yaw) in O; heights are offsets from the state's.
+// Waypoints planned in the grid frame G (guidance.hpp, transfer_waypoints_G) and turned into
+// the odometry frame about the vehicle's position, G's x axis lying at heading (state yaw -
+// visual yaw) in O; heights are offsets from the state's.
 void FlightSoftware::start_transfer() {
   if (!pose_G_ || !state_) return land(Outcome::Aborted, "no pose or state for the transfer");
-  const KnownShelf& sh = config_.shelf;
   const StrategyParams& st = config_.strategy;
-  const Eigen::Vector3d half = 0.5 * config_.mission.vehicle_size_m;
   const Eigen::Vector3d p = pose_G_->p_FB_m();
-  const double half_tag = 0.5 * sh.tag_size_m;
-  const cv::Point3d top_left = grid_tag_G(sh, 0, sh.levels()), bottom_right = grid_tag_G(sh, sh.columns(), 0);
-  // The last leg (down to the viewpoint height, or back to the centre line) is flown clear of
-  // the shelf just passed: at least the clearance behind its back face, even when the next
-  // shelf's viewpoint is closer (GoToViewpoint then brings the vehicle back to it visually).
-  const double clearance = st.mode == Strategy::over_tops ? st.top_clearance_m : st.end_clearance_m;
-  const double x_end = std::max(last_shelf() ? sh.depth_m + half.x() + config_.mission.beyond_distance_m
-                                             : config_.layout.shelf_spacing_m + viewpoint_G_m_.x(),
-                                sh.depth_m + half.x() + clearance);
-  const Eigen::Vector3d end(x_end, viewpoint_G_m_.y(), viewpoint_G_m_.z());
-  std::vector<Eigen::Vector3d> w_G;
-  if (st.mode == Strategy::over_tops) {
-    // Bottom of the vehicle top_clearance_m above the top tags' upper edge.
-    const double z = std::max(top_left.z, bottom_right.z) + half_tag + half.z() + st.top_clearance_m;
-    w_G = {{p.x(), p.y(), z}, {x_end, p.y(), z}, end};
-  } else {
-    // Past the nearer end: the vehicle's widest half (any heading) beyond the grid's side
-    // edge (tags included) by end_clearance_m.
-    const double y_edge = std::max(std::abs(top_left.y), std::abs(bottom_right.y)) + half_tag;
-    const double y = (p.y() >= 0.0 ? 1.0 : -1.0) * (y_edge + half.head<2>().norm() + st.end_clearance_m);
-    w_G = {{p.x(), y, p.z()}, {x_end, y, p.z()}, end};
-  }
+  const std::vector<Eigen::Vector3d> w_G = transfer_waypoints_G(config_, p, viewpoint_G_m_, last_shelf());
   const double yaw_G_in_O = state_->yaw_rad - pose_G_->yaw_rad;
   const Eigen::Rotation2Dd R(yaw_G_in_O);
   waypoints_O_m_.clear();
   for (const Eigen::Vector3d& w : w_G) {
     const Eigen::Vector2d d = R * (w - p).head<2>();
-    waypoints_O_m_.push_back({p_O_m_.x() + d.x(), p_O_m_.y() + d.y(), p_O_m_.z() + (w.z() - p.z())});
+    const Eigen::Vector3d& p_O = odometry_.p_O_m();
+    waypoints_O_m_.push_back({p_O.x() + d.x(), p_O.y() + d.y(), p_O.z() + (w.z() - p.z())});
   }
   hold_yaw_O_rad_ = yaw_G_in_O;
   waypoint_ = 0;
@@ -1319,11 +903,11 @@ void FlightSoftware::start_transfer() {
                              (last_shelf() ? " of the last shelf" : " to the next shelf"));
 }
 
-// On each state record: a P law toward the current waypoint, capped at transfer_speed_mps,
-// turned into the body frame by the state's heading; the heading held on the shelf normal.
+// On each state record: the next waypoint once within waypoint_tolerance_m, then the P law
+// toward it, heading held on the shelf normal (guidance.hpp, transfer_velocity).
 void FlightSoftware::transfer() {
   const StrategyParams& st = config_.strategy;
-  Eigen::Vector3d e = waypoints_O_m_[waypoint_] - p_O_m_;
+  Eigen::Vector3d e = waypoints_O_m_[waypoint_] - odometry_.p_O_m();
   if (e.norm() < st.waypoint_tolerance_m) {
     ++waypoint_;
     leg_start_ns_ = now_ns_;
@@ -1336,18 +920,9 @@ void FlightSoftware::transfer() {
       return next_shelf("transfer done: finding shelf " + std::to_string(shelf_ + 1));
     }
     telemetry_.event = "transfer waypoint " + std::to_string(waypoint_);
-    e = waypoints_O_m_[waypoint_] - p_O_m_;
+    e = waypoints_O_m_[waypoint_] - odometry_.p_O_m();
   }
-  Eigen::Vector3d v_O = st.transfer_kp * e;
-  if (v_O.norm() > st.transfer_speed_mps) v_O *= st.transfer_speed_mps / v_O.norm();
-  const double yaw = state_->yaw_rad, c = std::cos(yaw), sn = std::sin(yaw);
-  VelocityCommand v;
-  v.vx_B_mps = c * v_O.x() + sn * v_O.y();  // R_z(-yaw) v_O
-  v.vy_B_mps = -sn * v_O.x() + c * v_O.y();
-  v.vz_mps = v_O.z();
-  v.yaw_rate_radps = std::clamp(st.transfer_yaw_kp * std::remainder(hold_yaw_O_rad_ - yaw, 2.0 * std::numbers::pi),
-                                -config_.control.yaw_rate_max_radps, config_.control.yaw_rate_max_radps);
-  set_velocity(v);
+  set_velocity(transfer_velocity(config_, e, state_->yaw_rad, hold_yaw_O_rad_));
   emit_rc(false);
 }
 

@@ -1,7 +1,7 @@
 #pragma once
 // The flight software's one entry point, used unchanged by the co-simulation and by
 // tello_pilot: stamped camera frames, state records and SDK replies in, SDK commands out.
-//
+// This is the mission; guidance.hpp, target_tracker.hpp, odometry.hpp (README "Files") the rest.
 //   FlightSoftware fsw(load_flight_config("shelf.yaml"));
 //   send(fsw.start(t0));                 // "command"; then "streamon", "takeoff" after "ok"s
 //   for (each input in stamp order) send(fsw.step(input));
@@ -92,13 +92,12 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
-#include <opencv2/tracking.hpp>  // declares the trackers tracking_legacy.hpp derives from
-#include <opencv2/tracking/tracking_legacy.hpp>
 
 #include "flight_sw/config.hpp"
 #include "flight_sw/control.hpp"
 #include "flight_sw/inventory.hpp"
 #include "flight_sw/navigation.hpp"
+#include "flight_sw/odometry.hpp"
 #include "flight_sw/perception.hpp"
 #include "flight_sw/sdk_link.hpp"
 #include "flight_sw/target_tracker.hpp"
@@ -116,16 +115,6 @@ struct ClockTick {
 };
 
 using Input = std::variant<CameraFrame, StateRecord, SdkReply, ClockTick>;
-
-/// One picture as the phases see it: the image and what it is worth, decided once when it
-/// arrives (flight_sw/README.md, "Damaged pictures") and handed to every step that uses it.
-struct Picture {
-  const cv::Mat& bgr;
-  TimeNs t_ns = 0;         ///< its stamp (receive time)
-  int damage_events = 0;   ///< lost bands since its key frame; 0: whole
-  bool decides = true;     ///< damage_events <= perception.decide_max_damage_events
-  bool whole() const { return damage_events == 0; }
-};
 
 enum class Phase {
   Idle,
@@ -257,15 +246,11 @@ class FlightSoftware {
   void approach(const Picture& pic);
   // Approach helpers
   bool select_target(const cv::Mat& bgr);
-  bool measure_target(const Picture& pic, const cv::Rect2d& predicted);
   bool reacquire(const Picture& pic);
-  std::optional<double> cell_height_m(double v_px, double range_m) const;
+  void after_measurement();
   void sample_cell_height(const Picture& pic, const PoseEstimate& pose);
-  std::optional<double> measured_cell_height_m() const;
   bool state_fresh() const;
-  bool crossing_flown() const;
   void start_losing_target();
-  void start_tracker(const cv::Mat& bgr, const cv::Rect2d& box);
   /// The target's identity on a picture where it is not confirmed (target_tracker.hpp):
   /// confirmed, kept unknown, or the shelf re-read (returns false: the approach is over).
   bool check_identity(const Picture& pic, const PoseEstimate& pose_K);
@@ -324,69 +309,33 @@ class FlightSoftware {
   // Perception state (buffers reused frame to frame)
   ShelfView view_;
   std::vector<MarkerSighting> markers_;
-  std::vector<TagBlob> roi_tags_;
   // Viewpoint
   Eigen::Vector3d viewpoint_G_m_;
   int settled_frames_ = 0;
   std::optional<TimeNs> last_full_view_ns_;
-  // Target
-  std::optional<CellIndex> target_;
-  cv::Ptr<cv::legacy::Tracker> tracker_;  ///< reference pipeline: Median Flow
-  BoxTracker box_tracker_;                ///< fast pipeline: constant image velocity
-  double tag_side_px_ = 0.0;              ///< mean side of the target's corner tags, last seen
-  std::vector<cv::Point3d> pose_obj_;     ///< PnP buffers, reused
-  std::vector<cv::Point2d> pose_img_;
-  cv::Rect2d box_px_;                   ///< tracked box: corner tag centres +- half a tag
-  std::array<cv::Point2d, 4> corner_px_;  ///< last measured corner tag centres
-  std::optional<PoseEstimate> pose_K_;  ///< last pose in the cell frame
-  TimeNs pose_t_ns_ = 0;                ///< when the frame of pose_K_ was received
-  std::optional<PoseEstimate> decision_pose_K_;  ///< last pose from a nearly whole picture
+  // Target (target_tracker.hpp): the cell, its corner tags tracked, its pose, its identity.
+  TargetTracker tracker_;
   std::optional<TimeNs> reread_back_until_ns_;  ///< a re-read from close backs out until then
-  std::optional<double> target_height_m_;  ///< target cell centre above the take-off point (state h)
-  TimeNs decision_pose_t_ns_ = 0;
   TimeNs lateral_active_ns_ = 0;        ///< last time the lateral law commanded a speed
   std::optional<TimeNs> hold_since_ns_;  ///< holding short of the shelf to settle
-  bool near_edge_ = false;              ///< a corner tag was about to leave the view
   std::optional<TimeNs> lost_since_ns_;
   bool grid_in_view_while_lost_ = false;  ///< the last nearly whole picture since then showed the shelf's grid
   std::optional<TimeNs> back_off_since_ns_;
   int crossing_refusals_ = 0;           ///< off-centre arrivals at the cell so far
-  // Identity (target_tracker.hpp): confirmed on the full view the target was chosen on and kept
-  // while every accepted pose follows the last identified one (mission.identity_continuity_s).
-  CellIdentity identity_ = CellIdentity::Unknown;
-  TimeNs identity_vouched_ns_ = 0;      ///< the last picture that kept or confirmed it
-  std::optional<cv::Rect2d> vouched_box_px_;  ///< the target's box on that picture
-  std::optional<TimeNs> unidentified_since_ns_;
   int rereads_ = 0;
-  std::vector<TagBlob> frame_tags_;     ///< identity check buffers
-  std::optional<double> behind_m_;      ///< nearest tag behind the target seen through it, from the front tags, m
   // Forward speed per commanded speed (estimate_forward_gain), for timing the crossing.
-  std::optional<std::pair<TimeNs, double>> gain_start_;  ///< (t, x_K) of the approach's first pose
-  std::vector<std::pair<TimeNs, double>> commanded_m_;  ///< (t, forward displacement commanded)
-  std::optional<TimeNs> last_approach_ns_;
-  double forward_gain_ = 1.0;
-  std::vector<MarkerSighting> frame_markers_;
-  // The target cell centre's height in the frame of the state height h (the Tello's height
-  // above its take-off point): h - z_K of the body, sampled on close poses of the approach while
-  // the state shows the vehicle vertically still (sample_cell_height).
-  std::vector<double> cell_height_samples_m_;
-  std::optional<TimeNs> vertical_motion_ns_;  ///< last state record showing vertical motion
+  ForwardGainEstimator forward_gain_;
+  // The target cell centre's height in the frame of the state height h (sample_cell_height).
+  CellHeightEstimator cell_height_;
   // Crossing
-  // The crossing's end (crossing_flown): the line flown by the state odometry, timed only
-  // while the state records are stale.
-  TimeNs cross_duration_ns_ = 0;          ///< timed: at the measured speed gain, plus the autopilot's lag
-  double cross_line_m_ = 0.0;             ///< the line's horizontal length, m
-  Eigen::Vector2d cross_start_O_m_ = Eigen::Vector2d::Zero();  ///< where it began, odometry frame O
-  Eigen::Vector2d cross_axis_O_ = Eigen::Vector2d::UnitX();    ///< the line's direction in O, unit
+  CrossingEnd crossing_end_;  ///< crossing_flown (odometry.hpp)
   std::optional<double> crossing_height_m_;   ///< the height the crossing holds, h's frame
   // Shelves
   int shelf_ = 0;
   std::vector<Inventory> finished_;
   std::optional<PoseEstimate> pose_G_;  ///< last pose in the grid frame (at the viewpoint)
-  // Odometry frame O: fixed, x and y the integral of the state's velocities turned by its yaw
-  // (from where the first record came), z the state's height above the floor.
-  std::optional<TimeNs> odometry_t_ns_;
-  Eigen::Vector3d p_O_m_ = Eigen::Vector3d::Zero();
+  // Odometry frame O (odometry.hpp): the state's velocities integrated, its height.
+  StateOdometry odometry_;
   // Transfer
   std::vector<Eigen::Vector3d> waypoints_O_m_;
   size_t waypoint_ = 0;

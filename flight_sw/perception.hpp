@@ -197,6 +197,16 @@ struct CellIndex {
   bool operator==(const CellIndex&) const = default;
 };
 
+/// One picture as the phases see it: the image and what it is worth, decided once when it
+/// arrives (flight_sw/README.md, "Damaged pictures") and handed to every step that uses it.
+struct Picture {
+  const cv::Mat& bgr;
+  TimeNs t_ns = 0;         ///< its stamp (receive time)
+  int damage_events = 0;   ///< lost bands since its key frame; 0: whole
+  bool decides = true;     ///< damage_events <= perception.decide_max_damage_events
+  bool whole() const { return damage_events == 0; }
+};
+
 /// What one frame shows of the front shelf.
 struct ShelfView {
   std::vector<TagBlob> tags;  ///< front-shelf tags (after eq. 1)

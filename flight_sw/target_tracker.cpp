@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include <opencv2/calib3d.hpp>
 
@@ -256,6 +257,323 @@ std::optional<std::string> crossing_refusal(const FlightConfig& config, CellInde
   const double z_now = *input.height_above_cell_m, z_carried = z_now + input.vz_mps * m.vertical_lag_s;
   if (std::abs(z_now) > tol_z || std::abs(z_carried) > tol_z) return "off the cell's height by the state height";
   return std::nullopt;
+}
+
+// ---- The tracked target ----
+
+namespace {
+
+cv::Point2d centre_of(const cv::Rect2d& r) { return {r.x + 0.5 * r.width, r.y + 0.5 * r.height}; }
+
+/// The tracked box: the bounding box of the corner tags' centres grown by half a tag side
+/// on every side. (cv::boundingRect of the centres as float points: the smallest integer
+/// rectangle holding them, right and bottom edges exclusive.)
+cv::Rect2d corner_box(const std::array<cv::Point2d, 4>& q, double side) {
+  std::array<cv::Point2f, 4> f;
+  for (size_t k = 0; k < 4; ++k) f[k] = cv::Point2f(q[k]);
+  const cv::Rect centres = cv::boundingRect(f);
+  return {centres.x - 0.5 * side, centres.y - 0.5 * side, centres.width + side, centres.height + side};
+}
+
+}  // namespace
+
+std::optional<double> cell_height_m(const FlightConfig& config, const std::optional<StateRecord>& state,
+                                    double v_px, double range_m) {
+  if (!state) return std::nullopt;
+  const CameraIntrinsics& k = config.camera;
+  const double elevation = std::atan((k.cy_px - v_px) / k.fy_px) - (state->pitch_rad + config.mount.pitch_rad);
+  return state->height_m + range_m * std::tan(elevation);
+}
+
+
+cv::Point2d TargetTracker::box_centre_px() const { return centre_of(box_px_); }
+
+void TargetTracker::choose(CellIndex cell, const ShelfView& view, const cv::Mat& bgr, TimeNs t_ns,
+                           const std::optional<double>& height_m) {
+  target_ = cell;
+  target_height_m_ = height_m;
+  const auto q = cell_quad(view, cell);
+  const auto idx = cell_corner_indices(view.grid, cell.level - 1, cell.column - 1);
+  double side = 0.0;
+  for (size_t k = 0; k < 4; ++k) {
+    corner_px_[k] = q[k];
+    side += std::sqrt(view.tags[static_cast<size_t>((*idx)[k])].area_px) * 0.25;
+  }
+  box_px_ = corner_box(q, side);
+  tag_side_px_ = side;
+  start_tracker(bgr, box_px_, t_ns);
+  // Chosen on a full view, where every cell's grid position is counted from the edges.
+  identity_ = CellIdentity::Confirmed;
+  identity_vouched_ns_ = t_ns;
+  vouched_box_px_ = box_px_;
+  behind_m_.reset();
+  unidentified_since_ns_.reset();
+}
+
+void TargetTracker::forget() {
+  target_.reset();
+  target_height_m_.reset();
+  tracker_.release();
+  pose_K_.reset();
+  decision_pose_K_.reset();
+  identity_ = CellIdentity::Unknown;
+  unidentified_since_ns_.reset();
+  near_edge_ = false;
+}
+
+void TargetTracker::start_tracker(const cv::Mat& bgr, const cv::Rect2d& box, TimeNs t_ns) {
+  if (fast()) {
+    box_tracker_.init(box, t_ns);
+  } else {
+    tracker_ = cv::legacy::TrackerMedianFlow::create();
+    tracker_->init(bgr, box);
+  }
+}
+
+TargetTracker::Prediction TargetTracker::predict(const Picture& pic) {
+  Prediction p{box_px_, false};
+  if (fast()) {
+    const std::optional<cv::Rect2d> b = box_tracker_.predict(pic.t_ns);
+    p.tracker_ok = b.has_value();
+    if (b) p.box_px = *b;
+  } else {
+    p.tracker_ok = tracker_ && tracker_->update(pic.bgr, p.box_px);
+    if (!p.tracker_ok) p.box_px = box_px_;
+  }
+  return p;
+}
+
+void TargetTracker::correct(const Picture& pic, const Prediction& prediction) {
+  if (fast()) {
+    box_tracker_.correct(box_px_, pic.t_ns);
+  } else {
+    // Re-seed the tracker when it failed or drifted off the tags.
+    const cv::Rect2d& predicted = prediction.box_px;
+    const cv::Rect2d overlap = predicted & box_px_;
+    const double iou = overlap.area() / (predicted.area() + box_px_.area() - overlap.area());
+    if (!prediction.tracker_ok || iou < 0.7) start_tracker(pic.bgr, box_px_, pic.t_ns);
+  }
+}
+
+// Looks for the target's four corner tags around `predicted`: tags in a window around it,
+// eq. 1 inside the window, each corner the nearest tag to where the box puts it.
+bool TargetTracker::measure(const Picture& pic, const cv::Rect2d& predicted, TagDetector& detector,
+                            const std::optional<StateRecord>& state) {
+  const cv::Mat& bgr = pic.bgr;
+  const TimeNs now_ns = pic.t_ns;
+  continuity_lost_ = false;
+  const PerceptionParams& p = config_.perception;
+  const double grow_x = p.roi_expand * predicted.width, grow_y = p.roi_expand * predicted.height;
+  const cv::Rect roi(cv::Point(static_cast<int>(std::floor(predicted.x - grow_x)),
+                               static_cast<int>(std::floor(predicted.y - grow_y))),
+                     cv::Point(static_cast<int>(std::ceil(predicted.br().x + grow_x)),
+                               static_cast<int>(std::ceil(predicted.br().y + grow_y))));
+  roi_tags_.clear();
+  // Fast pipeline: seeds every 0.4 tag sides (at least every 2 px, at most every 8), which
+  // still puts a sample on every corner tag (exact for tags wider than the stride).
+  const int stride = std::clamp(static_cast<int>(0.4 * tag_side_px_), 2, 8);
+  detector.detect(bgr, roi, roi_tags_, stride);
+  // Where the box puts each corner: the old corners moved and scaled with the box.
+  const cv::Point2d old_c = centre_of(box_px_), new_c = centre_of(predicted);
+  const double sx = predicted.width / box_px_.width, sy = predicted.height / box_px_.height;
+  // Eq. 1 against the target's own corner tags (their side last measured, grown with the box):
+  // the window alone is no reference, since once the target's tags have left it (lost, or
+  // leaving the view) the largest tag in it may be one of a shelf behind, which eq. 1 against
+  // itself would keep. A front tag has about (side sqrt(sx sy))^2 pixels; a tag of a shelf d
+  // behind, seen from range r, (r / (r + d))^2 of that.
+  // (Only while the prediction is sane: the box tracker's growth, extrapolated, can blow up.)
+  const double growth = std::sqrt(sx * sy);
+  if (tag_side_px_ > 0.0 && growth > 0.5 && growth < 2.0) {
+    const double front_area = tag_side_px_ * tag_side_px_ * sx * sy;
+    // The room behind the shelf, seen through the target cell: a tag of a shelf behind inside
+    // the box (shrunk by two tag sides: not a corner tag) lies f s / sqrt(area) from the camera
+    // along its axis, the front tags' plane -x_C - tag_offset (the last pose); the nearest such
+    // tag over the approach bounds where the crossing may end. (A tag cut by a bar looks
+    // smaller, hence farther: only the nearest over many pictures counts. A front corner tag
+    // cut by the picture's border looks small too: blobs touching the border, or within two tag
+    // sides of the box's edge, where the predicted box may put a corner, are left out. Not while
+    // the corner tags leave the view: cut, they no longer give the front's scale.)
+    if (pic.decides && pose_K_ && !near_edge_ && growth > 0.8 && growth < 1.25) {
+      const double front_side_px = tag_side_px_ * growth;
+      const double front_range_m = -pose_K_->X_FC.translation().x() - config_.shelf.tag_offset_m;
+      const cv::Rect2d inner(predicted.x + 2.0 * front_side_px, predicted.y + 2.0 * front_side_px,
+                             predicted.width - 4.0 * front_side_px, predicted.height - 4.0 * front_side_px);
+      const double f_s = config_.camera.fx_px * config_.shelf.tag_size_m;
+      for (const TagBlob& t : roi_tags_) {
+        const cv::Rect& b = t.bbox_px;
+        const bool at_border = b.x <= 0 || b.y <= 0 || b.br().x >= bgr.cols || b.br().y >= bgr.rows;
+        if (t.area_px >= p.area_ratio_threshold * front_area || at_border || !inner.contains(t.centre_px)) continue;
+        const double behind_m = f_s / std::sqrt(t.area_px) - front_range_m;
+        // The shelf's own back face (its tags face forward too) is depth_m behind: those, with
+        // the area's ranging error (about 10 %), measure up to depth + 0.15 m.
+        if (behind_m > config_.shelf.depth_m + 0.15 && (!behind_m_ || behind_m < *behind_m_)) behind_m_ = behind_m;
+      }
+    }
+    counts_.behind_tags_dropped += static_cast<int>(std::erase_if(
+        roi_tags_, [&](const TagBlob& t) { return t.area_px < p.area_ratio_threshold * front_area; }));
+  }
+  keep_front_shelf(roi_tags_, p.area_ratio_threshold);
+  const double gate = p.corner_gate * std::min(predicted.width, predicted.height);
+  std::array<int, 4> pick{-1, -1, -1, -1};
+  for (size_t k = 0; k < 4; ++k) {
+    const cv::Point2d d = corner_px_[k] - old_c;
+    const cv::Point2d expect = new_c + cv::Point2d(d.x * sx, d.y * sy);
+    double best = gate;
+    for (size_t i = 0; i < roi_tags_.size(); ++i) {
+      const double dist = cv::norm(roi_tags_[i].centre_px - expect);
+      if (dist < best) {
+        best = dist;
+        pick[k] = static_cast<int>(i);
+      }
+    }
+    if (pick[k] < 0) return false;
+    for (size_t j = 0; j < k; ++j) {
+      if (pick[j] == pick[k]) return false;
+    }
+  }
+  const auto obj = cell_corner_tags_K(config_.shelf, *target_);
+  pose_obj_.assign(obj.begin(), obj.end());
+  pose_img_.clear();
+  double side = 0.0;
+  for (size_t k = 0; k < 4; ++k) {
+    const TagBlob& t = roi_tags_[static_cast<size_t>(pick[k])];
+    pose_img_.push_back(t.centre_px);
+    side += 0.25 * std::sqrt(t.area_px);
+  }
+  const std::vector<cv::Point2d>& img = pose_img_;
+  const auto pose = estimate_pose(pose_obj_, img, config_.camera, config_.mount);
+  if (!pose) return false;
+  // Plausibility: between frames the vehicle moves centimetres, so a pose that jumps further
+  // than pose_jump_m (+ 1 m/s of the time since the last one) or turns more than pose_jump_rad
+  // (+ 1 rad/s) comes from a wrong corner tag (a neighbour's, as a true corner leaves the view
+  // close to the shelf): not a measurement. Once the last pose is older than
+  // pose_jump_window_s there is nothing to compare with.
+  const MissionParams& mp = config_.mission;
+  if (pose_K_) {
+    const double dt = ns_to_seconds(now_ns - pose_t_ns_);
+    const double jump_m = (pose->p_FB_m() - pose_K_->p_FB_m()).norm();
+    const double turn = std::abs(std::remainder(pose->yaw_rad - pose_K_->yaw_rad, 2.0 * std::numbers::pi));
+    if (dt <= mp.pose_jump_window_s && (jump_m > mp.pose_jump_m + 1.0 * dt ||
+                                        turn > mp.pose_jump_rad + 1.0 * dt)) {
+      ++counts_.rejected_poses;
+      return false;
+    }
+  }
+  // Identity: the target cell's centre stays at one height above the take-off point. After
+  // the target was lost, the tracked box can settle on the cell above or below (and the
+  // jump test above no longer applies once the last pose is old); a level's corner tags make
+  // as good a pose as the target's. The height check tells them apart: the height the cell's
+  // image row puts it at (cell_height_m) must stay within 0.4 of the smallest row pitch of
+  // the height found when the target was chosen; another level is a whole pitch away.
+  // (mission.level_check off: for verification studies only, to show what the check prevents.)
+  if (mp.level_check && target_height_m_) {
+    const cv::Point2d c = 0.25 * (img[0] + img[1] + img[2] + img[3]);
+    const auto height_m = cell_height_m(config_, state, c.y, -pose->X_FC.translation().x());
+    const auto& rows = config_.shelf.row_pitch_m;
+    if (height_m && std::abs(*height_m - *target_height_m_) > 0.4 * *std::min_element(rows.begin(), rows.end())) {
+      ++counts_.rejected_poses;
+      ++counts_.wrong_level_poses;
+      return false;
+    }
+  }
+  // Identity by continuity: this pose follows the last identified one (or the full view the
+  // target was chosen on). Within pose_jump_window_s the jump test above compared the two.
+  // Beyond it, up to identity_continuity_s (pictures too damaged to use, a tag missed for a
+  // few frames), the box must be found where it was last identified, within 0.3 of its width:
+  // a box slid one column moves by (w_i + w_j) / 2 over a box of w_i + tag, at least 0.7 of
+  // its width on the test shelf, while the yaw loop holds the target's box at the image centre
+  // and the vehicle drifts sideways by V_y dt (8 cm in 1 s, 0.2 of a 0.4 m box at any range).
+  // A longer gap, or a box found elsewhere, leaves the target unidentified until a picture
+  // confirms it (check_identity). (The level is checked on every pose against the state height.)
+  const cv::Rect2d box_now = corner_box({img[0], img[1], img[2], img[3]}, side);
+  const double gap_s = ns_to_seconds(now_ns - identity_vouched_ns_);
+  const bool continuous =
+      gap_s <= mp.pose_jump_window_s ||
+      (gap_s <= mp.identity_continuity_s && vouched_box_px_ &&
+       cv::norm(centre_of(box_now) - centre_of(*vouched_box_px_)) < 0.3 * vouched_box_px_->width &&
+       std::abs(box_now.width / vouched_box_px_->width - 1.0) < 0.2);
+  if (identity_ == CellIdentity::Confirmed && continuous) {
+    identity_vouched_ns_ = now_ns;
+    vouched_box_px_ = box_now;
+  } else if (identity_ == CellIdentity::Confirmed) {
+    identity_ = CellIdentity::Unknown;
+    continuity_lost_ = true;  // the mission logs it
+  }
+  if (identity_ != CellIdentity::Confirmed && !unidentified_since_ns_) unidentified_since_ns_ = now_ns;
+  for (size_t k = 0; k < 4; ++k) corner_px_[k] = img[k];
+  pose_K_ = pose;
+  pose_t_ns_ = now_ns;
+  if (pic.decides) {  // the crossing is judged on poses from nearly whole pictures only
+    decision_pose_K_ = pose;
+    decision_pose_t_ns_ = now_ns;
+  }
+  box_px_ = corner_box(corner_px_, side);
+  tag_side_px_ = side;
+  // About to leave the view: a corner tag within a tag side (plus margin) of the border.
+  const double m = config_.mission.edge_margin_px + side;
+  near_edge_ = false;
+  for (const cv::Point2d& c : img) {
+    near_edge_ = near_edge_ || c.x < m || c.y < m || c.x > bgr.cols - 1 - m || c.y > bgr.rows - 1 - m;
+  }
+  return true;
+}
+
+bool TargetTracker::reacquire(const Picture& pic, const ShelfView& view, TagDetector& detector,
+                              const std::optional<StateRecord>& state) {
+  const cv::Mat& bgr = pic.bgr;
+  // The target is a cell of the (possibly partial) grid near the last box: the nearest one
+  // whose corner tags give a plausible pose of the right level (measure's tests), so that a
+  // neighbour above or below is passed over.
+  if (!view.grid.valid) return false;
+  const cv::Point2d last = centre_of(box_px_);
+  const double gate = 0.5 * std::min(box_px_.width, box_px_.height);
+  std::vector<std::pair<double, std::array<int, 4>>> candidates;
+  for (int r = 0; r + 1 < view.grid.rows; ++r) {
+    for (int c = 0; c + 1 < view.grid.columns; ++c) {
+      const auto idx = cell_corner_indices(view.grid, r, c);
+      if (!idx) continue;
+      cv::Point2d m(0, 0);
+      for (int i : *idx) m += 0.25 * view.tags[static_cast<size_t>(i)].centre_px;
+      const double d = cv::norm(m - last);
+      if (d < gate) candidates.push_back({d, *idx});
+    }
+  }
+  std::stable_sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const auto& [d, idx] : candidates) {
+    for (size_t k = 0; k < 4; ++k) corner_px_[k] = view.tags[static_cast<size_t>(idx[k])].centre_px;
+    if (measure(pic, box_px_, detector, state)) {
+      start_tracker(bgr, box_px_, pic.t_ns);
+      return true;
+    }
+  }
+  return false;
+}
+
+IdentityCheck TargetTracker::check_identity(const Picture& pic, const PoseEstimate& pose, TagDetector& tag_detector,
+                                            MarkerDetector& marker_detector, const Inventory& inventory) {
+  const cv::Mat& bgr = pic.bgr;
+  // Every tag and every marker of the picture (eq. 1 is applied against the pose inside the
+  // check), at the cost of a whole-frame search, paid only while the target is unidentified.
+  frame_tags_.clear();
+  tag_detector.detect(bgr, cv::Rect(0, 0, bgr.cols, bgr.rows), frame_tags_);
+  frame_markers_.clear();
+  if (fast()) {
+    const double range_m = std::max(0.1, -pose.X_FC.translation().x());
+    marker_detector.detect_in(bgr, cv::Rect(0, 0, bgr.cols, bgr.rows),
+                               config_.shelf.marker_size_m * config_.camera.fx_px / range_m,
+                               config_.perception.marker_area_ratio_threshold, frame_markers_);
+  } else {
+    marker_detector.detect(bgr, frame_markers_);
+  }
+  ++counts_.identity_checks;
+  const IdentityCheck check = check_cell_identity(*target_, pose, frame_tags_, frame_markers_, inventory, config_);
+  if (check.verdict == CellIdentity::Confirmed) {
+    identity_ = CellIdentity::Confirmed;
+    identity_vouched_ns_ = pic.t_ns;
+    vouched_box_px_ = box_px_;
+    unidentified_since_ns_.reset();
+  }
+  return check;
 }
 
 }  // namespace shelfcross::flight_sw

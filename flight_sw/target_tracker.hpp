@@ -21,7 +21,7 @@
 //   3. The inventory: a marker (ArUco ID) seen whose box the inventory holds in a known cell
 //      must lie in that cell as the pose projects it. One agreeing marker confirms; one
 //      disagreeing contradicts.
-// The row is also checked against the state height on every pose (flight_software.cpp).
+// The row is also checked against the state height on every pose (TargetTracker::measure).
 //
 // Frames: the hypothesis' cell frame K (navigation.hpp): x into the shelf, y left, z up, origin
 // the cell centre on the front bars' plane. The pose X_KC is the camera in K (OpenCV camera
@@ -32,14 +32,20 @@
 // at that point (f tag_size / z_C)^2, not against the largest tag in a window (a window can hold
 // only tags of a shelf behind, the largest of which then passes eq. 1 against itself).
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/tracking.hpp>  // declares the trackers tracking_legacy.hpp derives from
+#include <opencv2/tracking/tracking_legacy.hpp>
 
 #include "flight_sw/config.hpp"
 #include "flight_sw/inventory.hpp"
 #include "flight_sw/navigation.hpp"
 #include "flight_sw/perception.hpp"
+#include "shelfcross/sdk_messages.hpp"
 
 namespace shelfcross::flight_sw {
 
@@ -112,5 +118,114 @@ std::optional<std::string> crossing_refusal(const FlightConfig& config, CellInde
 /// body position through the cell's centre at mid-depth, so that a residual offset y0 at range r
 /// leaves only y0 (depth/2) / (r + depth/2) at either face.
 Eigen::Vector3d crossing_direction_K(const KnownShelf& shelf, const PoseEstimate& pose_K);
+
+/// Height above the take-off point of a point on the shelf's front at image row v_px, seen from
+/// range_m in front of it: the state's height h plus range * tan(elevation), the elevation being
+/// the row's angle above the optical axis, atan((cy - v) / fy), less the axis' tilt down (the
+/// body's pitch from the state record plus the mount's). The body's roll is neglected (the cell
+/// is near the image's vertical centre line). Empty without a state record.
+std::optional<double> cell_height_m(const FlightConfig& config, const std::optional<StateRecord>& state,
+                                    double v_px, double range_m);
+
+/// The tracked target: the cell chosen on a full view, its four corner tags followed from
+/// picture to picture (fast pipeline: BoxTracker; reference: Median Flow), its pose in the cell
+/// frame K checked for plausibility (jump, level) and its identity (above: kept by continuity,
+/// judged by check_cell_identity when lost). The mission decides what to do with it (approach,
+/// cross, back off, re-read); this holds what the target is and where it was last seen.
+/// Every picture comes as a Picture (its stamp is the time of the step).
+class TargetTracker {
+ public:
+  explicit TargetTracker(const FlightConfig& config) : config_(config) {}
+
+  /// Counters for the telemetry (never reset).
+  struct Counts {
+    int rejected_poses = 0;       ///< implausible jumps of the target's pose, ignored
+    int wrong_level_poses = 0;    ///< of which on another level's tags (state height disagrees)
+    int behind_tags_dropped = 0;  ///< tags in the target's window too small for the front shelf
+    int identity_checks = 0;      ///< pictures judged while the target was unidentified
+  };
+
+  /// The target chosen on the full `view` of the picture `bgr` at `t_ns` (where every cell's
+  /// grid position is counted from the edges: identified), `height_m` its centre's height above
+  /// the take-off point on that view (cell_height_m; empty: the level is not checked).
+  void choose(CellIndex cell, const ShelfView& view, const cv::Mat& bgr, TimeNs t_ns,
+              const std::optional<double>& height_m);
+  /// Forgets the target (a re-read of the shelf, the next shelf).
+  void forget();
+
+  /// Where the tracker puts the box in this picture, and whether it could (else: the last box).
+  struct Prediction {
+    cv::Rect2d box_px;
+    bool tracker_ok = false;
+  };
+  Prediction predict(const Picture& pic);
+  /// Looks for the target's four corner tags around `predicted`: tags in a window around it,
+  /// eq. 1 inside the window, each corner the nearest tag to where the box puts it; the pose
+  /// from them, if plausible (jump, level by `state`), becomes the target's. False: not found.
+  bool measure(const Picture& pic, const cv::Rect2d& predicted, TagDetector& detector,
+               const std::optional<StateRecord>& state);
+  /// After a measurement: the tracker follows the measured box (the reference pipeline's is
+  /// re-seeded when it failed or drifted off the tags).
+  void correct(const Picture& pic, const Prediction& prediction);
+  /// The target lost: the nearest cell of the (possibly partial) grid of `view` near the last
+  /// box whose corner tags give a plausible pose of the right level (measure's tests), so that
+  /// a neighbour above or below is passed over.
+  bool reacquire(const Picture& pic, const ShelfView& view, TagDetector& detector,
+                 const std::optional<StateRecord>& state);
+  /// Judges the target's identity on `pic` (every tag and marker of it) against the pose
+  /// `pose_K`; a confirmation identifies the target again. The verdict is the caller's to act on.
+  IdentityCheck check_identity(const Picture& pic, const PoseEstimate& pose_K, TagDetector& tag_detector,
+                               MarkerDetector& marker_detector, const Inventory& inventory);
+
+  const std::optional<CellIndex>& target() const { return target_; }
+  const cv::Rect2d& box_px() const { return box_px_; }
+  cv::Point2d box_centre_px() const;
+  /// The last pose in K, and the last from a nearly whole picture (the crossing's) with its time.
+  const std::optional<PoseEstimate>& pose_K() const { return pose_K_; }
+  const std::optional<PoseEstimate>& decision_pose_K() const { return decision_pose_K_; }
+  TimeNs decision_pose_t_ns() const { return decision_pose_t_ns_; }
+  /// A corner tag was about to leave the view on the last measurement.
+  bool near_edge() const { return near_edge_; }
+  CellIdentity identity() const { return identity_; }
+  /// Since when the target is unidentified (empty while identified).
+  const std::optional<TimeNs>& unidentified_since_ns() const { return unidentified_since_ns_; }
+  /// The last successful measure found the target's continuity broken (identity to confirm).
+  bool continuity_lost() const { return continuity_lost_; }
+  /// Nearest tag behind the target seen through it, from the front tags, m.
+  const std::optional<double>& behind_m() const { return behind_m_; }
+  const Counts& counts() const { return counts_; }
+
+ private:
+  bool fast() const { return config_.perception.pipeline == PerceptionPipeline::fast; }
+  void start_tracker(const cv::Mat& bgr, const cv::Rect2d& box, TimeNs t_ns);
+
+  FlightConfig config_;
+  std::optional<CellIndex> target_;
+  std::optional<double> target_height_m_;  ///< target cell centre above the take-off point (state h)
+  cv::Ptr<cv::legacy::Tracker> tracker_;  ///< reference pipeline: Median Flow
+  BoxTracker box_tracker_;                ///< fast pipeline: constant image velocity
+  double tag_side_px_ = 0.0;              ///< mean side of the target's corner tags, last seen
+  std::vector<cv::Point3d> pose_obj_;     ///< PnP buffers, reused
+  std::vector<cv::Point2d> pose_img_;
+  std::vector<TagBlob> roi_tags_;         ///< the window's tags, reused
+  cv::Rect2d box_px_;                     ///< tracked box: corner tag centres +- half a tag
+  std::array<cv::Point2d, 4> corner_px_;  ///< last measured corner tag centres
+  std::optional<PoseEstimate> pose_K_;    ///< last pose in the cell frame
+  TimeNs pose_t_ns_ = 0;                  ///< when the frame of pose_K_ was received
+  std::optional<PoseEstimate> decision_pose_K_;  ///< last pose from a nearly whole picture
+  TimeNs decision_pose_t_ns_ = 0;
+  bool near_edge_ = false;                ///< a corner tag was about to leave the view
+  // Identity: confirmed on the full view the target was chosen on and kept while every
+  // accepted pose follows the last identified one (mission.identity_continuity_s).
+  CellIdentity identity_ = CellIdentity::Unknown;
+  TimeNs identity_vouched_ns_ = 0;        ///< the last picture that kept or confirmed it
+  std::optional<cv::Rect2d> vouched_box_px_;  ///< the target's box on that picture
+  std::optional<TimeNs> unidentified_since_ns_;
+  bool continuity_lost_ = false;
+  std::vector<TagBlob> frame_tags_;       ///< identity check buffers
+  std::vector<MarkerSighting> frame_markers_;
+  std::optional<double> behind_m_;        ///< nearest tag behind the target seen through it, from the front tags, m
+  Counts counts_;
+};
 
 }  // namespace shelfcross::flight_sw
