@@ -404,10 +404,9 @@ TEST(FlightSoftware, LostTakeoffReplyCountsWhenTheHeightSaysAirborne) {
 // `error` (session 6: one run in 100 of the default sdk campaign ended "land not
 // acknowledged" this way, counted an abort though the drone had crossed and landed). The state
 // height says it is down: landed, the mission's outcome kept.
-TEST(FlightSoftware, LostLandReplyCountsWhenTheHeightSaysLanded) {
-  Options o;
-  o.land_reply = "";
-  Harness h(o);
+/// A whole mission whose `land` reply goes wrong as `o` says: it crossed, and it ends landed
+/// (on the ground, the outcome kept, nothing "not acknowledged").
+void expect_crossed_and_landed(Harness& h) {
   h.run(90.0);
   FlightSoftware& fsw = h.fsw();
   ASSERT_TRUE(fsw.finished()) << phase_name(fsw.phase()) << ": " << fsw.telemetry().event;
@@ -415,6 +414,13 @@ TEST(FlightSoftware, LostLandReplyCountsWhenTheHeightSaysLanded) {
   EXPECT_TRUE(fsw.result().landed);
   EXPECT_EQ(fsw.result().reason.find("not acknowledged"), std::string::npos) << fsw.result().reason;
   EXPECT_DOUBLE_EQ(h.position().z(), 0.0);
+}
+
+TEST(FlightSoftware, LostLandReplyCountsWhenTheHeightSaysLanded) {
+  Options o;
+  o.land_reply = "";
+  Harness h(o);
+  expect_crossed_and_landed(h);
 }
 
 // A duplicated `land` (run 89 of the default sdk campaign, commit bfd468c): the drone lands,
@@ -427,13 +433,7 @@ TEST(FlightSoftware, LandRefusedWhileLandingWaitsForTheStateHeight) {
   Options o;
   o.land_duplicated = true;
   Harness h(o);
-  h.run(90.0);
-  FlightSoftware& fsw = h.fsw();
-  ASSERT_TRUE(fsw.finished()) << phase_name(fsw.phase()) << ": " << fsw.telemetry().event;
-  EXPECT_EQ(fsw.result().outcome, Outcome::Crossed) << fsw.result().reason;
-  EXPECT_TRUE(fsw.result().landed);
-  EXPECT_EQ(fsw.result().reason.find("not acknowledged"), std::string::npos) << fsw.result().reason;
-  EXPECT_DOUBLE_EQ(h.position().z(), 0.0);
+  expect_crossed_and_landed(h);
   std::vector<TimeNs> lands;
   for (const auto& c : h.commands()) {
     if (c.text == "land") lands.push_back(c.t_ns);

@@ -22,6 +22,14 @@ Distribution normal(double mean, double stddev) {
   return d;
 }
 
+Distribution uniform(double min, double max) {
+  Distribution d;
+  d.kind = Distribution::Kind::uniform;
+  d.min = min;
+  d.max = max;
+  return d;
+}
+
 /// Phi(-b), the standard normal's upper tail.
 double upper_tail(double b) { return 0.5 * std::erfc(b / std::numbers::sqrt2); }
 
@@ -77,11 +85,7 @@ struct Toy {
   Toy() {
     nominal["x1"] = normal(0.0, 1.0);
     nominal["x2"] = normal(0.0, 1.0);
-    Distribution u;
-    u.kind = Distribution::Kind::uniform;
-    u.min = 0.0;
-    u.max = 1.0;
-    nominal["u"] = u;
+    nominal["u"] = uniform(0.0, 1.0);
     Distribution c;
     c.kind = Distribution::Kind::choice;
     c.values = {0.0, 0.5};
@@ -153,11 +157,7 @@ struct SoftToy {
     x.min = 0.0;
     x.max = 2.0;
     nominal["x"] = x;
-    Distribution u;
-    u.kind = Distribution::Kind::uniform;
-    u.min = 0.0;
-    u.max = 1.0;
-    nominal["u"] = u;
+    nominal["u"] = uniform(0.0, 1.0);
     constexpr int kSteps = 200000;  // midpoint rule on [0, 2]
     for (int i = 0; i < kSteps; ++i) {
       const double xi = (i + 0.5) * 2.0 / kSteps;
@@ -205,12 +205,14 @@ TEST(CrossEntropy, EstimateCoversTheKnownProbabilityIn19Of20Seeds) {
   CeSettings settings;
   settings.round_runs = 200;
   settings.estimation_runs = 1000;
-  int covered = 0;
-  double sum_p_hat = 0.0;
+  int covered = 0, mixture_covered = 0;
+  double sum_p_hat = 0.0, sum_mixture_p_hat = 0.0;
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
     const SearchResult r = search(toy, seed, 2000, settings);
     EXPECT_GT(r.estimate.failures, 100) << "seed " << seed;  // the final proposal meets failures often
     covered += r.estimate.lower <= toy.p && toy.p <= r.estimate.upper;
+    mixture_covered += r.mixture.lower <= toy.p && toy.p <= r.mixture.upper;
+    sum_mixture_p_hat += r.mixture.p_hat;
     if (std::getenv("SHELFCROSS_TEST_VERBOSE")) std::printf("seed %d rounds %d fails %lld p_hat %.4g [%.4g, %.4g] re %.3f ess %.1f\n", (int)seed, r.rounds, (long long)r.estimate.failures, r.estimate.p_hat, r.estimate.lower, r.estimate.upper, r.estimate.standard_error / r.estimate.p_hat, r.estimate.failure_ess);
     sum_p_hat += r.estimate.p_hat;
     // The diagnostic (rare_event.hpp) does not flag these good estimates: mean weight in [0.5, 2]
@@ -225,29 +227,13 @@ TEST(CrossEntropy, EstimateCoversTheKnownProbabilityIn19Of20Seeds) {
   EXPECT_GE(covered, 19);
   // The mean of 20 unbiased estimates, each within ~10 %: within 5 % of p.
   EXPECT_NEAR(sum_p_hat / 20.0 / toy.p, 1.0, 0.05);
-}
-
-// The sharp toy: the estimate from every round is within 10 % of p on average, but its
-// interval covers p in only 16 of 20 seeds (measured; the final round's in 19): the adapted
-// proposals were fitted to the very runs the estimate reuses (consistent, not unbiased:
-// rare_event.hpp), and with hundreds of failures its interval is narrow enough to show it.
-// The report gives both estimates.
-TEST(CrossEntropy, EstimateFromEveryRoundOnASharpRegion) {
-  const Toy toy;
-  CeSettings settings;
-  settings.round_runs = 200;
-  settings.estimation_runs = 1000;
-  int covered = 0;
-  double sum_ratio = 0.0;
-  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
-    const SearchResult r = search(toy, seed, 2000, settings);
-    covered += r.mixture.lower <= toy.p && toy.p <= r.mixture.upper;
-    if (std::getenv("SHELFCROSS_TEST_VERBOSE")) std::printf("seed %d mixture p_hat %.4g [%.4g, %.4g] ess %.1f of %lld\n", (int)seed, r.mixture.p_hat, r.mixture.lower, r.mixture.upper, r.mixture.failure_ess, (long long)r.mixture.failures);
-    EXPECT_LT(r.mixture.standard_error / r.mixture.p_hat, 0.3) << "seed " << seed;
-    sum_ratio += r.mixture.p_hat / toy.p;
-  }
-  EXPECT_GE(covered, 16);
-  EXPECT_NEAR(sum_ratio / 20.0, 1.0, 0.1);
+  // The estimate from every round (mixture_log_weight) on this sharp region: within 10 % of p
+  // on average, but its interval covers p in only 16 of 20 seeds (measured): the adapted
+  // proposals were fitted to the very runs it reuses (consistent, not unbiased:
+  // rare_event.hpp), and with hundreds of failures its interval is narrow enough to show it.
+  // The report gives both estimates; the soft region below is where the mixture is needed.
+  EXPECT_GE(mixture_covered, 16);
+  EXPECT_NEAR(sum_mixture_p_hat / 20.0 / toy.p, 1.0, 0.1);
 }
 
 // The soft toy with the gust search's settings (docs/search.md: 2 elites at least, rho 0.25,
