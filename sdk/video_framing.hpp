@@ -35,8 +35,8 @@ bool begins_access_unit(std::string_view datagram);
 
 /// The Tello's datagrams for one access unit: leading parameter sets (SPS, PPS, AUD) one per
 /// datagram, then the rest cut into `datagram_size` pieces with a shorter last piece (when
-/// the rest is an exact multiple, its last byte goes alone), so a receiver finds the frame's
-/// end at the first short datagram. `datagram_size` >= 2 (asserted).
+/// the rest is an exact multiple, an empty datagram follows it), so a receiver finds the
+/// frame's end at the first short datagram. `datagram_size` >= 2 (asserted).
 std::vector<std::string> tello_datagrams(std::string_view access_unit,
                                          std::size_t datagram_size = kVideoDatagramBytes);
 
