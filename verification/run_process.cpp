@@ -62,12 +62,26 @@ std::int64_t resident_mb(pid_t pid) {
   return resident_pages * static_cast<std::int64_t>(sysconf(_SC_PAGESIZE)) / (1024 * 1024);
 }
 
+/// A gap this long between two turns of read_line's loop (which turns at least every 250 ms)
+/// means the campaign itself was not running: stopped (Ctrl-Z, SIGSTOP) or the machine
+/// suspended. Its workers were stopped with it (they are in its process group), so the gap is
+/// not counted against a run's wall-clock limit; a run is `hung` for what it did while the
+/// campaign ran. (Session 8: a campaign stopped for 47 min recorded its run in flight `hung`
+/// on resuming.) A parent merely slow to be scheduled on a loaded machine only delays the
+/// verdict.
+constexpr auto kNotRunningGap = std::chrono::seconds(5);
+
 /// The next line from `fd` into `line` (`buffer` keeps what follows it). Waits until
-/// `deadline` (forever when nullopt); while waiting, checks that process `watched` (when
-/// not 0) stays under `memory_limit_mb` (when > 0).
+/// `deadline` (forever when nullopt), moved later by any time the caller was not running
+/// (kNotRunningGap); while waiting, checks that process `watched` (when not 0) stays under
+/// `memory_limit_mb` (when > 0).
 Wait read_line(int fd, std::string& buffer, std::string& line, std::optional<Clock::time_point> deadline,
                pid_t watched = 0, std::int64_t memory_limit_mb = 0) {
+  auto last_turn = Clock::now();
   for (;;) {
+    const auto now = Clock::now();
+    if (deadline && now - last_turn > kNotRunningGap) *deadline += now - last_turn;
+    last_turn = now;
     if (const auto end = buffer.find('\n'); end != std::string::npos) {
       line = buffer.substr(0, end);
       buffer.erase(0, end + 1);
@@ -75,7 +89,7 @@ Wait read_line(int fd, std::string& buffer, std::string& line, std::optional<Clo
     }
     int timeout_ms = -1;
     if (deadline) {
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(*deadline - Clock::now()).count();
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(*deadline - now).count();
       if (left <= 0) return Wait::timed_out;
       timeout_ms = static_cast<int>(std::min<long long>(left, 250));  // the memory check's period
     }

@@ -17,7 +17,8 @@
 // the same as with in-process workers. Limits, checked by the parent while it waits:
 //   wall clock   max(wall_floor_s, wall_factor x the run's cosim.timeout_s) from the moment
 //                the run is handed over (start-up, at most max(300 s, that limit), not
-//                counted): exceeded -> SIGKILL, `hung`
+//                counted; nor is any time the campaign itself was stopped or the machine
+//                suspended): exceeded -> SIGKILL, `hung`
 //   memory       the child's resident set (/proc/PID/statm) above memory_limit_mb:
 //                SIGKILL, `crashed` (RLIMIT_AS is not used: AddressSanitizer and Mesa's
 //                llvmpipe reserve far more address space than they use)

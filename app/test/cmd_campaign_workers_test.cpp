@@ -2,7 +2,9 @@
 // (cosim.inject_crash_s: a real SIGSEGV) or hang (cosim.inject_hang_s) are recorded as such
 // with their reason and seed, the campaign completes with exit 0 and its report lists them with
 // their replay commands; runs that complete give exactly the records of in-process workers.
+#include <csignal>
 #include <regex>
+#include <thread>
 
 #include "campaign_helpers.hpp"
 #include "shelfcross/random.hpp"
@@ -99,6 +101,54 @@ TEST(CampaignWorkers, RunsThatHangAreKilledAtTheirLimitAndRecorded) {
         << r.metrics.dump();
   }
   EXPECT_EQ(count_of(read_text(out / "report.md"), "`shelfcross replay "), 2);
+}
+
+/// The processes whose parent is `parent` (from /proc/PID/stat: "pid (comm) state ppid ...").
+std::vector<pid_t> children_of(pid_t parent) {
+  std::vector<pid_t> out;
+  for (const auto& entry : fs::directory_iterator("/proc")) {
+    const std::string name = entry.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    const std::string stat = read_text(entry.path() / "stat");
+    const auto close = stat.rfind(')');
+    if (close == std::string::npos) continue;
+    std::istringstream rest(stat.substr(close + 1));
+    std::string state;
+    pid_t ppid = 0;
+    rest >> state >> ppid;
+    if (ppid == parent) out.push_back(static_cast<pid_t>(std::stoi(name)));
+  }
+  return out;
+}
+
+// A campaign stopped with a run in flight (Ctrl-Z, SIGSTOP, a suspended machine) and continued
+// after longer than the run's wall-clock limit: the stop is not counted against the run, which
+// completes (session 8: a campaign stopped for 47 min stored its run in flight `hung`).
+TEST(CampaignWorkers, AStoppedCampaignDoesNotCountTheStopAgainstItsRun) {
+  const fs::path root = fresh_dir("workers_stopped");
+  const std::string scenario = short_scenario(root).string();
+  const fs::path out = root / "out";
+  // The limit: 12 s of wall-clock time per run (a 4 s run takes a few); the stop lasts 16 s.
+  const pid_t campaign = spawn({SHELFCROSS_PROGRAM, "campaign", "--scenario", scenario, "--runs", "1", "--seed", "3",
+                                "--jobs", "1", "--run-wall-factor", "0", "--run-wall-floor", "12", "--out",
+                                out.string()},
+                               (root / "log.txt").string());
+  std::vector<pid_t> workers;
+  for (int i = 0; i < 600 && workers.empty(); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    workers = children_of(campaign);
+  }
+  ASSERT_EQ(workers.size(), 1u) << read_text(root / "log.txt");
+  std::this_thread::sleep_for(std::chrono::seconds(1));  // into the run (or the worker's start-up)
+  ::kill(campaign, SIGSTOP);
+  ::kill(workers[0], SIGSTOP);
+  std::this_thread::sleep_for(std::chrono::seconds(16));
+  ::kill(workers[0], SIGCONT);
+  ::kill(campaign, SIGCONT);
+  EXPECT_EQ(wait_exit(campaign), 0) << read_text(root / "log.txt");
+  const std::vector<StoredRun> runs = stored_runs_of(out / "results.sqlite");
+  ASSERT_EQ(runs.size(), 1u);
+  EXPECT_NE(runs[0].outcome, "hung") << runs[0].metrics.dump();
 }
 
 TEST(CampaignWorkers, WorkerProcessesStoreTheRecordsOfInProcessWorkers) {
