@@ -57,10 +57,9 @@ struct ResultsStore::WriterLock {
                         (holder.empty() ? std::string() : " (pid " + holder + ")") +
                         "; wait for it to end, or use another --out");
     }
+    // The holder's pid, for the message above; a failure to write it leaves the lock held.
     const std::string pid = std::to_string(::getpid()) + "\n";
-    if (::ftruncate(fd, 0) != 0 || ::pwrite(fd, pid.data(), pid.size(), 0) < 0) {
-      // The pid is only for the message above; the lock itself is held.
-    }
+    if (::ftruncate(fd, 0) == 0) (void)!::pwrite(fd, pid.data(), pid.size(), 0);
   }
   ~WriterLock() { ::close(fd); }
   WriterLock(const WriterLock&) = delete;

@@ -97,6 +97,33 @@ inline std::string campaign_hash(const fs::path& dir) {
   return nlohmann::json::parse(in)["campaign_hash"].get<std::string>();
 }
 
+/// A whole file as text ("" if it cannot be read).
+inline std::string read_text(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+/// The processes whose parent is `parent`, from /proc/PID/stat ("pid (comm) state ppid ...";
+/// comm may hold spaces, so it is read after the last ')').
+inline std::vector<pid_t> children_of(pid_t parent) {
+  std::vector<pid_t> out;
+  for (const auto& entry : fs::directory_iterator("/proc")) {
+    const std::string name = entry.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    const std::string stat = read_text(entry.path() / "stat");
+    const auto close = stat.rfind(')');
+    if (close == std::string::npos) continue;
+    std::istringstream rest(stat.substr(close + 1));
+    std::string state;
+    pid_t ppid = 0;
+    rest >> state >> ppid;
+    if (ppid == parent) out.push_back(static_cast<pid_t>(std::stoi(name)));
+  }
+  return out;
+}
+
 /// A fresh, empty folder under the temp directory, unique to this process.
 inline fs::path fresh_dir(const std::string& name) {
   const fs::path root = fs::temp_directory_path() / ("shelfcross_" + name + "_" + std::to_string(getpid()));

@@ -46,13 +46,6 @@ std::vector<StoredRun> stored_runs_of(const fs::path& db) {
   return out;
 }
 
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 int count_of(const std::string& text, const std::string& what) {
   int n = 0;
   for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
@@ -101,24 +94,6 @@ TEST(CampaignWorkers, RunsThatHangAreKilledAtTheirLimitAndRecorded) {
         << r.metrics.dump();
   }
   EXPECT_EQ(count_of(read_text(out / "report.md"), "`shelfcross replay "), 2);
-}
-
-/// The processes whose parent is `parent` (from /proc/PID/stat: "pid (comm) state ppid ...").
-std::vector<pid_t> children_of(pid_t parent) {
-  std::vector<pid_t> out;
-  for (const auto& entry : fs::directory_iterator("/proc")) {
-    const std::string name = entry.path().filename().string();
-    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
-    const std::string stat = read_text(entry.path() / "stat");
-    const auto close = stat.rfind(')');
-    if (close == std::string::npos) continue;
-    std::istringstream rest(stat.substr(close + 1));
-    std::string state;
-    pid_t ppid = 0;
-    rest >> state >> ppid;
-    if (ppid == parent) out.push_back(static_cast<pid_t>(std::stoi(name)));
-  }
-  return out;
 }
 
 // A campaign stopped with a run in flight (Ctrl-Z, SIGSTOP, a suspended machine) and continued

@@ -49,33 +49,15 @@ std::vector<std::string> concat(std::vector<std::string> a, const std::vector<st
   return a;
 }
 
-std::string read_file(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 /// The process id of MPI rank `rank` among the children of mpirun `launcher` (0 if none yet).
 pid_t rank_pid(pid_t launcher, int rank) {
   const std::string wanted = "OMPI_COMM_WORLD_RANK=" + std::to_string(rank);
-  for (const auto& entry : fs::directory_iterator("/proc")) {
-    const std::string name = entry.path().filename().string();
-    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
-    // /proc/PID/stat: "pid (comm) state ppid ..."; comm may hold spaces, so read after ')'.
-    const std::string stat = read_file(entry.path() / "stat");
-    const auto close = stat.rfind(')');
-    if (close == std::string::npos) continue;
-    std::istringstream rest(stat.substr(close + 1));
-    std::string state;
-    pid_t ppid = 0;
-    rest >> state >> ppid;
-    if (ppid != launcher) continue;
-    std::string environ_text = read_file(entry.path() / "environ");
+  for (const pid_t child : children_of(launcher)) {
+    const std::string environ_text = read_text("/proc/" + std::to_string(child) + "/environ");
     for (size_t at = 0; at < environ_text.size();) {
       const size_t end = environ_text.find('\0', at);
       if (environ_text.compare(at, (end == std::string::npos ? environ_text.size() : end) - at, wanted) == 0) {
-        return static_cast<pid_t>(std::stoi(name));
+        return child;
       }
       if (end == std::string::npos) break;
       at = end + 1;
@@ -96,8 +78,8 @@ TEST(MpiCampaign, ThreeRanksEqualOneProcess) {
   EXPECT_EQ(wait_exit(spawn(concat({SHELFCROSS_PROGRAM}, campaign_args(scenario, 4, root / "one")))), 0);
   const fs::path log = root / "mpi.log";
   EXPECT_EQ(wait_exit(spawn(concat(mpirun(3, {}), campaign_args(scenario, 4, root / "mpi")), log.string())), 0)
-      << read_file(log);
-  EXPECT_NE(read_file(log).find("campaign on 2 worker ranks x 1 threads"), std::string::npos) << read_file(log);
+      << read_text(log);
+  EXPECT_NE(read_text(log).find("campaign on 2 worker ranks x 1 threads"), std::string::npos) << read_text(log);
   EXPECT_EQ(stored_hashes(root / "mpi" / "results.sqlite"), stored_hashes(root / "one" / "results.sqlite"));
   EXPECT_EQ(campaign_hash(root / "mpi"), campaign_hash(root / "one"));
   EXPECT_EQ(campaign_hash(root / "one").size(), 32u);
@@ -134,7 +116,7 @@ TEST(MpiCampaign, KilledWorkerRankThenResumeCompletesEveryRunOnce) {
   EXPECT_GE(before, 1);
   EXPECT_LT(before, 6);
   const fs::path log = root / "resume.log";
-  EXPECT_EQ(wait_exit(spawn(command, log.string())), 0) << read_file(log);
+  EXPECT_EQ(wait_exit(spawn(command, log.string())), 0) << read_text(log);
   EXPECT_EQ(indices(root / "mpi" / "results.sqlite"), (std::vector<int>{0, 1, 2, 3, 4, 5}));
   EXPECT_EQ(wait_exit(spawn(concat({SHELFCROSS_PROGRAM}, campaign_args(scenario, 6, root / "one")))), 0);
   EXPECT_EQ(stored_hashes(root / "mpi" / "results.sqlite"), stored_hashes(root / "one" / "results.sqlite"));
@@ -149,8 +131,8 @@ TEST(MpiCampaign, KilledWorkerRankUnderRecoveryCompletesInOneGo) {
                                       {"--rank-timeout", "3"}),
                                log.string());
   kill_rank_one_after_first_run(launcher, root / "mpi" / "results.sqlite");
-  EXPECT_EQ(wait_exit(launcher), 0) << read_file(log);
-  EXPECT_NE(read_file(log).find("1 worker rank(s) lost"), std::string::npos) << read_file(log);
+  EXPECT_EQ(wait_exit(launcher), 0) << read_text(log);
+  EXPECT_NE(read_text(log).find("1 worker rank(s) lost"), std::string::npos) << read_text(log);
   EXPECT_EQ(indices(root / "mpi" / "results.sqlite"), (std::vector<int>{0, 1, 2, 3, 4, 5}));
   EXPECT_EQ(wait_exit(spawn(concat({SHELFCROSS_PROGRAM}, campaign_args(scenario, 6, root / "one")))), 0);
   EXPECT_EQ(campaign_hash(root / "mpi"), campaign_hash(root / "one"));
