@@ -1,14 +1,17 @@
 // shelfcross search --scenario FILE --budget N --seed S --jobs J --out DIR: cross-entropy
 // search for failures over the scenario's dispersions and the importance-sampling estimate of
 // each failure class's probability (verification/search.hpp, docs/search.md); resumable (the
-// same command again runs only what is missing). No MPI, no shards.
+// same command again runs only what is missing). Runs happen in worker processes, as a
+// campaign's do (verification/run_process.hpp). No MPI, no shards.
 #include <atomic>
 #include <csignal>
 #include <iostream>
 #include <optional>
 
 #include "command_registry.hpp"
+#include "verification/run_process.hpp"
 #include "verification/search.hpp"
+#include "worker_options.hpp"
 #include "verification/search_report.hpp"
 
 namespace shelfcross::app {
@@ -33,6 +36,7 @@ struct SearchOptions {
   double nominal_share = 0.1;
   std::string campaign;
   std::vector<std::string> parameters;
+  verification::WorkerLimits limits;
 };
 
 const CommandRegistration kSearch{
@@ -46,7 +50,7 @@ const CommandRegistration kSearch{
       sub.add_option("--budget", o->budget, "runs in all")->capture_default_str()->check(CLI::Range(1, 10000000));
       sub.add_option("--seed", o->seed, "search seed; run k's seed is a fixed hash of (seed, k), as in a campaign")
           ->capture_default_str();
-      sub.add_option("--jobs", o->jobs, "worker threads")->capture_default_str()->check(CLI::Range(1, 1024));
+      sub.add_option("--jobs", o->jobs, "worker processes")->capture_default_str()->check(CLI::Range(1, 1024));
       sub.add_option("--out", o->out, "output folder: results.sqlite, report.md, search_summary.json, margins.csv, PNGs")
           ->capture_default_str();
       sub.add_option("--class", o->failure_class, "failure class searched for: contact, crossing or mission")
@@ -82,6 +86,7 @@ const CommandRegistration kSearch{
           ->delimiter(',');
       sub.add_option("--campaign", o->campaign,
                      "a campaign folder of the same scenario: its plain Monte Carlo estimates go beside the search's");
+      add_worker_limit_options(sub, o->limits);
       return [o]() -> int {
         const auto target = verification::parse_failure_class(o->failure_class);
         if (!target) throw UsageError("--class '" + o->failure_class + "': expected contact, crossing or mission");
@@ -120,6 +125,12 @@ const CommandRegistration kSearch{
         const verification::SearchRunResult r = verification::run_search(
             nominal, settings, o->out,
             {.jobs = o->jobs,
+             .make_workers =
+                 [limits = o->limits](std::shared_ptr<const verification::Scenario> scenario,
+                                      verification::DrawFunction draw) {
+                   return verification::process_worker_factory(std::move(scenario), limits, "/proc/self/exe",
+                                                               std::move(draw));
+                 },
              .stop = &g_stop,
              .on_round =
                  [](const verification::CeRound& round) {

@@ -1,5 +1,5 @@
 #pragma once
-// The options `campaign` and `compare` share for their worker processes' limits
+// The options `campaign`, `compare` and `search` share for their worker processes' limits
 // (verification/run_process.hpp).
 
 #include <CLI/CLI.hpp>

@@ -20,14 +20,22 @@ render::RenderOptions render_options_for(const Scenario& s) {
   return o;
 }
 
-CampaignWorker::CampaignWorker(std::shared_ptr<const Scenario> nominal)
+CampaignWorker::CampaignWorker(std::shared_ptr<const Scenario> nominal, DrawFunction draw)
     : nominal_(std::move(nominal)),
+      draw_(std::move(draw)),
       renderer_(std::make_unique<render::Renderer>(nominal_->warehouse, nominal_->camera,
                                                    render_options_for(*nominal_))) {}
 
 RunRecord CampaignWorker::run(std::int64_t index, std::uint64_t seed) {
+  return run_setup(index, draw_ ? disperse(*nominal_, seed, draw_(seed)) : disperse(*nominal_, seed));
+}
+
+RunRecord CampaignWorker::run_drawn(std::int64_t index, std::uint64_t seed, const DrawnValues& drawn) {
+  return run_setup(index, disperse(*nominal_, seed, drawn));
+}
+
+RunRecord CampaignWorker::run_setup(std::int64_t index, const RunSetup& setup) {
   const auto t0 = std::chrono::steady_clock::now();  // informative wall time only
-  const RunSetup setup = disperse(*nominal_, seed);
   renderer_->set_warehouse(setup.scenario->warehouse);
   const RunResult result = run_cosimulation(setup, *renderer_);
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -3,6 +3,7 @@
 // co-simulation, the records it stores, and the campaign's summary statistics.
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -14,21 +15,32 @@
 #include "render/renderer.hpp"
 #include "verification/campaign_pool.hpp"
 #include "verification/cosim.hpp"
+#include "verification/dispersion.hpp"
 #include "verification/results_store.hpp"
 #include "verification/scenario.hpp"
 #include "verification/statistics.hpp"
 
 namespace shelfcross::verification {
 
+/// A run's dispersion draws from its seed. Unset in a campaign: the scenario's own
+/// (draw_dispersions(nominal.dispersions, seed)); a rare-event search draws from its round's
+/// proposal instead (search.hpp). Must be a pure function of the seed (runs replay).
+using DrawFunction = std::function<DrawnValues(std::uint64_t run_seed)>;
+
 /// One worker thread: its own renderer (EGL context), re-targeted at each run's dispersed
 /// warehouse; everything else is built per run.
 class CampaignWorker : public RunWorker {
  public:
-  explicit CampaignWorker(std::shared_ptr<const Scenario> nominal);
+  explicit CampaignWorker(std::shared_ptr<const Scenario> nominal, DrawFunction draw = {});
+  /// The run with draw(seed), or the scenario's own draws when no draw function was given.
   RunRecord run(std::int64_t index, std::uint64_t seed) override;
+  /// The run with the given draws (a worker process is sent them by its parent).
+  RunRecord run_drawn(std::int64_t index, std::uint64_t seed, const DrawnValues& drawn);
 
  private:
+  RunRecord run_setup(std::int64_t index, const RunSetup& setup);
   std::shared_ptr<const Scenario> nominal_;
+  DrawFunction draw_;
   std::unique_ptr<render::Renderer> renderer_;
 };
 

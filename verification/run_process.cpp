@@ -123,8 +123,10 @@ double run_wall_limit_s(const Scenario& scenario, const WorkerLimits& limits) {
   return std::max(limits.wall_floor_s, limits.wall_factor * scenario.cosim.timeout_s);
 }
 
-ProcessRunWorker::ProcessRunWorker(std::shared_ptr<const Scenario> nominal, WorkerLimits limits, std::string executable)
+ProcessRunWorker::ProcessRunWorker(std::shared_ptr<const Scenario> nominal, WorkerLimits limits, std::string executable,
+                                   DrawFunction draw)
     : nominal_(std::move(nominal)),
+      draw_(std::move(draw)),
       scenario_yaml_(write_scenario(*nominal_)),
       limits_(limits),
       executable_(std::move(executable)) {
@@ -255,22 +257,28 @@ RunRecord ProcessRunWorker::lost_run_record(std::int64_t index, std::uint64_t se
   r.outcome = outcome;
   r.metrics_json =
       stored_metrics_json({std::nullopt, detail, signal_number > 0 ? std::optional<int>(signal_number) : std::nullopt});
-  // The run's draws, for the report and replay: they depend on (scenario, seed) only.
+  // The run's draws, for the report and replay: they depend on (scenario, seed, draw) only.
   try {
-    r.dispersion_json = json(disperse(*nominal_, seed).drawn).dump();
+    r.dispersion_json = json(draws_of(seed)).dump();
   } catch (const std::exception&) {
     // The draws themselves fail: the record keeps "{}", its detail says what happened.
   }
   return r;
 }
 
+DrawnValues ProcessRunWorker::draws_of(std::uint64_t seed) const {
+  return draw_ ? draw_(seed) : draw_dispersions(nominal_->dispersions, seed);
+}
+
 RunRecord ProcessRunWorker::run(std::int64_t index, std::uint64_t seed) {
   if (pid_ <= 0) start_child();  // the previous one died: a fresh worker
   const auto t0 = Clock::now();
   const double limit_s = run_wall_limit_s(*nominal_, limits_);
+  json request{{"index", index}, {"seed", seed}};
+  if (draw_) request["draws"] = draw_(seed);
   std::string line;
   Wait wait = Wait::closed;
-  if (send_line(fd_, json{{"index", index}, {"seed", seed}}.dump())) {
+  if (send_line(fd_, request.dump())) {
     wait = read_line(fd_, buffer_, line,
                      after_s(t0, limit_s), pid_,
                      limits_.memory_limit_mb);
@@ -315,8 +323,10 @@ RunRecord ProcessRunWorker::run(std::int64_t index, std::uint64_t seed) {
 }
 
 WorkerFactory process_worker_factory(std::shared_ptr<const Scenario> nominal, WorkerLimits limits,
-                                     std::string executable) {
-  return [nominal, limits, executable](int) { return std::make_unique<ProcessRunWorker>(nominal, limits, executable); };
+                                     std::string executable, DrawFunction draw) {
+  return [nominal, limits, executable, draw](int) {
+    return std::make_unique<ProcessRunWorker>(nominal, limits, executable, draw);
+  };
 }
 
 int serve_worker_runs(int fd) {
@@ -336,16 +346,18 @@ int serve_worker_runs(int fd) {
   while (read_line(fd, buffer, line, std::nullopt) == Wait::line) {
     std::int64_t index = 0;
     std::uint64_t seed = 0;
+    std::optional<DrawnValues> draws;
     try {
       const json request = json::parse(line);
       index = request.at("index").get<std::int64_t>();
       seed = request.at("seed").get<std::uint64_t>();
+      if (request.contains("draws")) draws = request["draws"].get<DrawnValues>();
     } catch (const json::exception&) {
       return 1;  // the parent records the run as crashed: it cannot be a run of this campaign
     }
     RunRecord record;
     try {
-      record = worker->run(index, seed);
+      record = draws ? worker->run_drawn(index, seed, *draws) : worker->run(index, seed);
     } catch (const std::exception& e) {
       record = worker_error_record(index, seed, e.what());
     }

@@ -10,11 +10,14 @@
 //     {"scenario_yaml": ...}              --->   parses it, builds its CampaignWorker (one
 //                                         <---   {"ready": true} | {"error": "..."}   renderer,
 //     {"index": k, "seed": s}             --->   one EGL context for the worker's life)
+//       (+ "draws": {...} in a search)
 //                                         <---   the run's RunRecord as JSON
 //
 // One JSON document per line (JSON text never holds a raw newline). The child's record is the
 // one CampaignWorker::run makes in a thread, so results, run hashes and the campaign hash are
-// the same as with in-process workers. Limits, checked by the parent while it waits:
+// the same as with in-process workers. A search's runs draw their dispersions from the round's
+// proposal (campaign.hpp, DrawFunction): the parent draws them and sends them with the run;
+// JSON numbers round-trip doubles exactly, so the child runs the very draws. Limits, checked by the parent while it waits:
 //   wall clock   max(wall_floor_s, wall_factor x the run's cosim.timeout_s) from the moment
 //                the run is handed over (start-up, at most max(300 s, that limit), not
 //                counted; nor is any time the campaign itself was stopped or the machine
@@ -34,6 +37,7 @@
 #include <memory>
 #include <string>
 
+#include "verification/campaign.hpp"
 #include "verification/campaign_pool.hpp"
 #include "verification/scenario.hpp"
 
@@ -49,11 +53,13 @@ struct WorkerLimits {
 double run_wall_limit_s(const Scenario& scenario, const WorkerLimits& limits);
 
 /// A RunWorker whose runs happen in a child process (`executable worker --fd 3`), started in
-/// the constructor and again after one died. Throws std::runtime_error when the child cannot
-/// start or reports an error before it is ready.
+/// the constructor and again after one died; each run with draw(seed) when `draw` is set, else
+/// with the scenario's own draws. Throws std::runtime_error when the child cannot start or
+/// reports an error before it is ready.
 class ProcessRunWorker : public RunWorker {
  public:
-  ProcessRunWorker(std::shared_ptr<const Scenario> nominal, WorkerLimits limits, std::string executable);
+  ProcessRunWorker(std::shared_ptr<const Scenario> nominal, WorkerLimits limits, std::string executable,
+                   DrawFunction draw = {});
   ~ProcessRunWorker() override;
   ProcessRunWorker(const ProcessRunWorker&) = delete;
   ProcessRunWorker& operator=(const ProcessRunWorker&) = delete;
@@ -69,7 +75,11 @@ class ProcessRunWorker : public RunWorker {
   RunRecord lost_run_record(std::int64_t index, std::uint64_t seed, const std::string& outcome,
                             const std::string& detail, int signal_number) const;
 
+  /// The run's draws, for the child and for a lost run's record.
+  DrawnValues draws_of(std::uint64_t seed) const;
+
   std::shared_ptr<const Scenario> nominal_;
+  DrawFunction draw_;
   std::string scenario_yaml_;
   WorkerLimits limits_;
   std::string executable_;
@@ -78,9 +88,10 @@ class ProcessRunWorker : public RunWorker {
   std::string buffer_;  ///< bytes read from the child beyond the last line
 };
 
-/// Workers in child processes of `executable` (for the program itself: "/proc/self/exe").
+/// Workers in child processes of `executable` (for the program itself: "/proc/self/exe"),
+/// drawing with `draw` when set (see ProcessRunWorker).
 WorkerFactory process_worker_factory(std::shared_ptr<const Scenario> nominal, WorkerLimits limits,
-                                     std::string executable = "/proc/self/exe");
+                                     std::string executable = "/proc/self/exe", DrawFunction draw = {});
 
 /// The child's side: serves runs on `fd` until the parent closes it. Returns the exit code.
 int serve_worker_runs(int fd);

@@ -1,15 +1,12 @@
 #include "verification/search.hpp"
 
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <map>
 
 #include <SQLiteCpp/SQLiteCpp.h>
 
-#include "render/renderer.hpp"
 #include "verification/campaign.hpp"
-#include "verification/cosim.hpp"
 #include "verification/results_store.hpp"
 
 namespace shelfcross::verification {
@@ -26,31 +23,6 @@ const char* kind_name(Distribution::Kind k) {
   }
   return "?";
 }
-
-/// One simulation thread of a round: its own renderer, re-targeted at each run's warehouse;
-/// the run's draws from the round's proposal.
-class SearchWorker : public RunWorker {
- public:
-  SearchWorker(std::shared_ptr<const Scenario> nominal, std::shared_ptr<const ParameterProposals> proposal)
-      : nominal_(std::move(nominal)),
-        proposal_(std::move(proposal)),
-        renderer_(std::make_unique<render::Renderer>(nominal_->warehouse, nominal_->camera,
-                                                     render_options_for(*nominal_))) {}
-
-  RunRecord run(std::int64_t index, std::uint64_t seed) override {
-    const auto t0 = std::chrono::steady_clock::now();  // informative wall time only
-    const RunSetup setup = disperse(*nominal_, seed, draw_dispersions(*proposal_, seed));
-    renderer_->set_warehouse(setup.scenario->warehouse);
-    const RunResult result = run_cosimulation(setup, *renderer_);
-    const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    return make_run_record(index, setup, result, wall_s);
-  }
-
- private:
-  std::shared_ptr<const Scenario> nominal_;
-  std::shared_ptr<const ParameterProposals> proposal_;
-  std::unique_ptr<render::Renderer> renderer_;
-};
 
 }  // namespace
 
@@ -267,7 +239,10 @@ SearchRunResult run_search(std::shared_ptr<const Scenario> nominal, const Search
     }
     if (options.on_round) options.on_round(*round);
     const auto proposal = std::make_shared<const ParameterProposals>(round->proposal);
-    const WorkerFactory factory = [nominal, proposal](int) { return std::make_unique<SearchWorker>(nominal, proposal); };
+    const DrawFunction draw = [proposal](std::uint64_t seed) { return draw_dispersions(*proposal, seed); };
+    const WorkerFactory factory =
+        options.make_workers ? options.make_workers(nominal, draw)
+                             : [nominal, draw](int) { return std::make_unique<CampaignWorker>(nominal, draw); };
     result.committed += run_pending(store, settings.seed, round->first_run + round->runs, factory,
                                     {.jobs = options.jobs, .on_progress = options.on_progress, .stop = options.stop, .shard = {}});
     if (options.stop && options.stop->load()) return result;

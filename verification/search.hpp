@@ -20,7 +20,10 @@
 // one does. Reopening with other settings is refused.
 //
 // Parallelism: the runs of a round go through run_pending (campaign_pool.hpp) on `jobs`
-// threads, each with its own renderer. MPI and shards are not supported for searches.
+// workers, each with its own renderer; in `shelfcross search` each is a worker process
+// (run_process.hpp), which is sent each run's draws, so a run that crashes or hangs is recorded
+// as such (a mission failure of unknown margin: margin.hpp) and the search goes on. MPI and
+// shards are not supported for searches.
 
 #include <atomic>
 #include <cstdint>
@@ -33,6 +36,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "verification/campaign.hpp"
 #include "verification/campaign_pool.hpp"
 #include "verification/margin.hpp"
 #include "verification/rare_event.hpp"
@@ -93,6 +97,9 @@ struct SearchProgress {
 
 struct SearchRunOptions {
   int jobs = 1;
+  /// The workers of one round, drawing with `draw`; unset: CampaignWorker threads in this
+  /// process (`shelfcross search` runs them in worker processes, run_process.hpp).
+  std::function<WorkerFactory(std::shared_ptr<const Scenario> nominal, DrawFunction draw)> make_workers;
   const std::atomic<bool>* stop = nullptr;
   std::function<void(const CeRound&)> on_round;            ///< a round starts (or resumes)
   std::function<void(const CampaignProgress&)> on_progress; ///< after each committed run

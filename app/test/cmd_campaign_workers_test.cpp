@@ -1,7 +1,8 @@
 // A campaign's runs live in worker processes (verification/run_process.hpp): runs that crash
 // (cosim.inject_crash_s: a real SIGSEGV) or hang (cosim.inject_hang_s) are recorded as such
-// with their reason and seed, the campaign completes with exit 0 and its report lists them with
-// their replay commands; runs that complete give exactly the records of in-process workers.
+// with their reason and seed, the campaign (or search) completes with exit 0 and its report
+// lists them with their replay commands; runs that complete give exactly the records of
+// in-process workers.
 #include <csignal>
 #include <regex>
 #include <thread>
@@ -73,6 +74,30 @@ TEST(CampaignWorkers, RunsThatCrashAreRecordedAndTheCampaignCompletes) {
   EXPECT_EQ(summary["outcomes"], json({{"crashed", 3}}));
   const std::string report = read_text(out / "report.md");
   EXPECT_EQ(count_of(report, "killed by signal 11 (SIGSEGV) | `shelfcross replay "), 3) << report;
+}
+
+TEST(CampaignWorkers, ASearchWhoseRunsCrashRecordsThemAndCompletes) {
+  // A search's runs are drawn from its rounds' proposals and sent to the worker processes with
+  // their draws; a crash takes its worker only, and counts as a mission failure.
+  const fs::path root = fresh_dir("workers_search_crash");
+  const std::string scenario = faulty_scenario(root, "  inject_crash_s: 5\n", 6).string();
+  const fs::path out = root / "out";
+  EXPECT_EQ(wait_exit(spawn({SHELFCROSS_PROGRAM, "search", "--scenario", scenario, "--budget", "4", "--seed", "5",
+                             "--jobs", "2", "--class", "mission", "--round-runs", "2", "--estimation-runs", "2",
+                             "--out", out.string()},
+                            (root / "log.txt").string())),
+            0)
+      << read_text(root / "log.txt");
+  const std::vector<StoredRun> runs = stored_runs_of(out / "results.sqlite");
+  ASSERT_EQ(runs.size(), 4u);
+  for (const StoredRun& r : runs) {
+    EXPECT_EQ(r.outcome, "crashed");
+    EXPECT_EQ(r.metrics.value("signal", 0), SIGSEGV);
+  }
+  const json summary = json::parse(read_text(out / "search_summary.json"));
+  EXPECT_EQ(summary["estimates"]["mission"]["round"], 1);
+  EXPECT_EQ(summary["estimates"]["mission"]["failures"], 2);
+  EXPECT_EQ(summary["failures"].size(), 4u);
 }
 
 TEST(CampaignWorkers, RunsThatHangAreKilledAtTheirLimitAndRecorded) {
