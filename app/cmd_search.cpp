@@ -2,8 +2,12 @@
 // search for failures over the scenario's dispersions and the importance-sampling estimate of
 // each failure class's probability (verification/search.hpp, docs/search.md); resumable (the
 // same command again runs only what is missing). Runs happen in worker processes, as a
-// campaign's do (verification/run_process.hpp). No MPI, no shards.
+// campaign's do (verification/run_process.hpp). Under mpirun (built with SHELFCROSS_MPI), rank
+// 0 plans the rounds and stores, and each round's runs go to the other ranks as a campaign's
+// would (distributed/mpi_campaign.hpp), the round's proposal broadcast before them. No shards:
+// a round's proposal depends on every run of the rounds before it.
 #include <atomic>
+#include <chrono>
 #include <csignal>
 #include <iostream>
 #include <optional>
@@ -11,8 +15,11 @@
 #include "command_registry.hpp"
 #include "verification/run_process.hpp"
 #include "verification/search.hpp"
-#include "worker_options.hpp"
 #include "verification/search_report.hpp"
+#include "worker_options.hpp"
+#ifdef SHELFCROSS_WITH_MPI
+#include "distributed/mpi_campaign.hpp"
+#endif
 
 namespace shelfcross::app {
 namespace {
@@ -36,8 +43,113 @@ struct SearchOptions {
   double nominal_share = 0.1;
   std::string campaign;
   std::vector<std::string> parameters;
+  double rank_timeout_s = 60.0;
   verification::WorkerLimits limits;
 };
+
+/// Announces each round on stderr.
+void print_round(const verification::CeRound& round) {
+  std::cerr << "round " << round.index << ": runs " << round.first_run << ".." << round.first_run + round.runs - 1
+            << (round.index == 0       ? " from the nominal dispersions"
+                : round.estimation     ? " from the final proposal (estimation)"
+                                       : " from the refitted proposal")
+            << "\n";
+}
+
+void print_progress(const verification::CampaignProgress& p) {
+  std::cerr << "  " << p.done << "/" << p.total << " runs stored\n";
+}
+
+/// The options every way of running a search shares; `run_round` and `make_workers` are the
+/// caller's.
+verification::SearchRunOptions run_options(const SearchOptions& o) {
+  verification::SearchRunOptions r;
+  r.jobs = o.jobs;
+  r.stop = &g_stop;
+  r.on_round = print_round;
+  r.on_progress = print_progress;
+  return r;
+}
+
+/// Each run in a worker process of this program, with the round's draws.
+verification::WorkerFactory worker_factory(std::shared_ptr<const verification::Scenario> nominal,
+                                           verification::DrawFunction draw, const SearchOptions& o) {
+  return verification::process_worker_factory(std::move(nominal), o.limits, "/proc/self/exe", std::move(draw));
+}
+
+verification::SearchRunResult run_in_this_process(std::shared_ptr<const verification::Scenario> nominal,
+                                                  const verification::SearchSettings& settings,
+                                                  const SearchOptions& o) {
+  verification::SearchRunOptions r = run_options(o);
+  r.make_workers = [&o](std::shared_ptr<const verification::Scenario> scenario, verification::DrawFunction draw) {
+    return worker_factory(std::move(scenario), std::move(draw), o);
+  };
+  return verification::run_search(std::move(nominal), settings, o.out, r);
+}
+
+#ifdef SHELFCROSS_WITH_MPI
+/// Rank 0 plans and stores; before each round it broadcasts the round's proposal, then hands
+/// the round's runs out as a campaign (coordinate_campaign), which ends with the ranks leaving
+/// their serve loop; an empty broadcast ends the search. Ranks 1..N-1 serve round after round.
+/// A lost rank ends the search (no collective can complete without it): the same command
+/// resumes it. Returns nullopt on the worker ranks.
+std::optional<verification::SearchRunResult> run_under_mpi(std::shared_ptr<const verification::Scenario> nominal,
+                                                           const verification::SearchSettings& settings,
+                                                           const SearchOptions& o) {
+  distributed::MpiSession mpi;
+  if (mpi.size() == 1) return run_in_this_process(std::move(nominal), settings, o);
+  // As for a campaign: the launcher ends the job with SIGTERM; every rank goes at once.
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+  const auto rank_timeout = std::chrono::milliseconds(static_cast<std::int64_t>(o.rank_timeout_s * 1000.0));
+  distributed::CampaignSetup setup{verification::write_scenario(*nominal), settings.seed, ""};
+  distributed::share_setup(mpi, setup);  // every rank loaded the same file; rank 0's text rules
+  if (mpi.rank() != 0) {
+    auto scenario = std::make_shared<const verification::Scenario>(
+        verification::parse_scenario(setup.scenario_yaml, "scenario from rank 0"));
+    for (;;) {
+      std::string round;
+      distributed::broadcast_text(mpi, round);
+      if (round.empty()) break;
+      const verification::DrawFunction draw =
+          verification::round_draws(verification::proposals_from_json(nlohmann::json::parse(round)));
+      distributed::serve_campaign(mpi, setup.campaign_seed, o.jobs, worker_factory(scenario, draw, o), rank_timeout);
+      if (!mpi.intact()) break;
+    }
+    return std::nullopt;
+  }
+  std::cerr << "search on " << mpi.size() - 1 << " worker ranks x " << o.jobs << " workers\n";
+  verification::SearchRunOptions r = run_options(o);
+  bool serving = false;  // the worker ranks are in serve_campaign, not waiting for a round
+  r.run_round = [&](verification::ResultsStore& store, std::int64_t runs, const verification::CeRound& round) {
+    std::string text = verification::proposals_json(round.proposal).dump();
+    distributed::broadcast_text(mpi, text);
+    serving = true;
+    const distributed::CoordinatorResult c = distributed::coordinate_campaign(
+        mpi, store, runs, {.on_progress = print_progress, .stop = &g_stop, .rank_timeout = rank_timeout});
+    serving = false;
+    if (!mpi.intact()) {
+      std::cerr << c.ranks_lost << " worker rank(s) lost: the search stops here; run the same command to resume\n";
+      g_stop = true;
+    }
+    return c.committed;
+  };
+  const auto release_workers = [&] {
+    std::string done;
+    if (!serving && mpi.intact()) distributed::broadcast_text(mpi, done);
+  };
+  try {
+    const verification::SearchRunResult result = verification::run_search(std::move(nominal), settings, o.out, r);
+    release_workers();
+    return result;
+  } catch (...) {
+    // E.g. another search's settings in --out: the worker ranks, waiting for a round, leave.
+    // (Inside a round they give up on a silent rank 0 after --rank-timeout.)
+    release_workers();
+    throw;
+  }
+}
+#endif
 
 const CommandRegistration kSearch{
     "search",
@@ -50,7 +162,7 @@ const CommandRegistration kSearch{
       sub.add_option("--budget", o->budget, "runs in all")->capture_default_str()->check(CLI::Range(1, 10000000));
       sub.add_option("--seed", o->seed, "search seed; run k's seed is a fixed hash of (seed, k), as in a campaign")
           ->capture_default_str();
-      sub.add_option("--jobs", o->jobs, "worker processes")->capture_default_str()->check(CLI::Range(1, 1024));
+      sub.add_option("--jobs", o->jobs, "worker processes (per worker rank under mpirun)")->capture_default_str()->check(CLI::Range(1, 1024));
       sub.add_option("--out", o->out, "output folder: results.sqlite, report.md, search_summary.json, margins.csv, PNGs")
           ->capture_default_str();
       sub.add_option("--class", o->failure_class, "failure class searched for: contact, crossing or mission")
@@ -86,6 +198,11 @@ const CommandRegistration kSearch{
           ->delimiter(',');
       sub.add_option("--campaign", o->campaign,
                      "a campaign folder of the same scenario: its plain Monte Carlo estimates go beside the search's");
+      sub.add_option("--rank-timeout", o->rank_timeout_s,
+                     "under `mpirun --enable-recovery`: seconds of silence after which a worker rank counts as lost "
+                     "(the search then stops, to be resumed)")
+          ->capture_default_str()
+          ->check(CLI::Range(1.0, 86400.0));
       add_worker_limit_options(sub, o->limits);
       return [o]() -> int {
         const auto target = verification::parse_failure_class(o->failure_class);
@@ -122,29 +239,15 @@ const CommandRegistration kSearch{
         }
         std::signal(SIGINT, request_search_stop);
         std::signal(SIGTERM, request_search_stop);
-        const verification::SearchRunResult r = verification::run_search(
-            nominal, settings, o->out,
-            {.jobs = o->jobs,
-             .make_workers =
-                 [limits = o->limits](std::shared_ptr<const verification::Scenario> scenario,
-                                      verification::DrawFunction draw) {
-                   return verification::process_worker_factory(std::move(scenario), limits, "/proc/self/exe",
-                                                               std::move(draw));
-                 },
-             .stop = &g_stop,
-             .on_round =
-                 [](const verification::CeRound& round) {
-                   std::cerr << "round " << round.index << ": runs " << round.first_run << ".."
-                             << round.first_run + round.runs - 1
-                             << (round.index == 0 ? " from the nominal dispersions"
-                                                  : round.estimation ? " from the final proposal (estimation)"
-                                                                     : " from the refitted proposal")
-                             << "\n";
-                 },
-             .on_progress =
-                 [](const verification::CampaignProgress& p) {
-                   std::cerr << "  " << p.done << "/" << p.total << " runs stored\n";
-                 }});
+        std::optional<verification::SearchRunResult> ran;
+#ifdef SHELFCROSS_WITH_MPI
+        if (distributed::launched_by_mpi()) {
+          ran = run_under_mpi(nominal, settings, *o);
+          if (!ran) return 0;  // a worker rank: rank 0 reports
+        }
+#endif
+        if (!ran) ran = run_in_this_process(nominal, settings, *o);
+        const verification::SearchRunResult& r = *ran;
         const nlohmann::json summary = verification::write_search_report(o->out, campaign);
         const nlohmann::json& e = summary["estimates"][o->failure_class];
         std::cout << "search " << nominal->name << ": " << r.committed << " runs this time, " << summary["runs"]

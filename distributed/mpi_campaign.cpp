@@ -137,15 +137,19 @@ void share_setup(const MpiSession& mpi, CampaignSetup& setup) {
                            {"error", setup.error}}
                 .dump();
   }
-  std::int64_t size = static_cast<std::int64_t>(bytes.size());
-  check(MPI_Bcast(&size, 1, MPI_INT64_T, kCoordinator, MPI_COMM_WORLD), "MPI_Bcast");
-  bytes.resize(static_cast<size_t>(size));
-  check(MPI_Bcast(bytes.data(), static_cast<int>(size), MPI_CHAR, kCoordinator, MPI_COMM_WORLD), "MPI_Bcast");
+  broadcast_text(mpi, bytes);
   if (mpi.rank() != kCoordinator) {
     const auto j = nlohmann::json::parse(bytes);
     setup = {j.at("scenario_yaml").get<std::string>(), j.at("campaign_seed").get<std::uint64_t>(),
              j.at("error").get<std::string>()};
   }
+}
+
+void broadcast_text(const MpiSession&, std::string& text) {
+  std::int64_t size = static_cast<std::int64_t>(text.size());
+  check(MPI_Bcast(&size, 1, MPI_INT64_T, kCoordinator, MPI_COMM_WORLD), "MPI_Bcast");
+  text.resize(static_cast<size_t>(size));
+  check(MPI_Bcast(text.data(), static_cast<int>(size), MPI_CHAR, kCoordinator, MPI_COMM_WORLD), "MPI_Bcast");
 }
 
 std::string encode_record(const RunRecord& r) { return verification::encode_run_record(r); }

@@ -55,6 +55,8 @@ class MpiSession {
   int size() const { return size_; }
   /// Skip MPI_Finalize at the end (it would wait for a lost rank forever).
   void leave_without_finalize() { finalize_ = false; }
+  /// False once a rank was lost (leave_without_finalize): no collective can complete any more.
+  bool intact() const { return finalize_; }
 
  private:
   int rank_ = 0;
@@ -72,6 +74,9 @@ struct CampaignSetup {
 
 /// Collective: every rank gets rank 0's `setup`.
 void share_setup(const MpiSession& mpi, CampaignSetup& setup);
+
+/// Collective: every rank gets rank 0's `text` (a search's next round, app/cmd_search.cpp).
+void broadcast_text(const MpiSession& mpi, std::string& text);
 
 struct CoordinatorOptions {
   /// Called on rank 0 after each committed run.

@@ -155,22 +155,31 @@ std::vector<CeRound> SearchStore::rounds() const {
     r.estimation = q.getColumn(3).getInt() != 0;
     r.level = q.getColumn(4).isNull() ? std::numeric_limits<double>::quiet_NaN() : q.getColumn(4).getDouble();
     r.elites = q.getColumn(5).getInt64();
-    const nlohmann::json proposal = nlohmann::json::parse(q.getColumn(6).getString());  // outlives the loop
-    for (const auto& [name, d] : proposal.items()) {
-      r.proposal[name] = {distribution_from_json(d.at("shifted")), distribution_from_json(d.at("nominal")),
-                          d.at("nominal_share").get<double>()};
-    }
+    r.proposal = proposals_from_json(nlohmann::json::parse(q.getColumn(6).getString()));
     out.push_back(std::move(r));
   }
   return out;
 }
 
-void SearchStore::insert_round(const CeRound& r) {
-  nlohmann::json proposal = nlohmann::json::object();
-  for (const auto& [name, d] : r.proposal) {
-    proposal[name] = {{"shifted", distribution_json(d.shifted)}, {"nominal", distribution_json(d.nominal)},
-                      {"nominal_share", d.nominal_share}};
+nlohmann::json proposals_json(const ParameterProposals& q) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& [name, d] : q) {
+    j[name] = {{"shifted", distribution_json(d.shifted)}, {"nominal", distribution_json(d.nominal)},
+               {"nominal_share", d.nominal_share}};
   }
+  return j;
+}
+
+ParameterProposals proposals_from_json(const nlohmann::json& j) {
+  ParameterProposals q;
+  for (const auto& [name, d] : j.items()) {
+    q[name] = {distribution_from_json(d.at("shifted")), distribution_from_json(d.at("nominal")),
+               d.at("nominal_share").get<double>()};
+  }
+  return q;
+}
+
+void SearchStore::insert_round(const CeRound& r) {
   SQLite::Statement q(impl_->db,
                       "INSERT INTO search_rounds(round, first_run, runs, estimation, level, elites, proposal_json)"
                       " VALUES(?, ?, ?, ?, ?, ?, ?)");
@@ -184,11 +193,16 @@ void SearchStore::insert_round(const CeRound& r) {
     q.bind(5);  // NULL
   }
   q.bind(6, static_cast<std::int64_t>(r.elites));
-  q.bind(7, proposal.dump());
+  q.bind(7, proposals_json(r.proposal).dump());
   q.exec();
 }
 
 // ---------------------------------------------------------------------------------------------
+
+DrawFunction round_draws(ParameterProposals proposal) {
+  auto q = std::make_shared<const ParameterProposals>(std::move(proposal));
+  return [q](std::uint64_t seed) { return draw_dispersions(*q, seed); };
+}
 
 RunMargins record_margins(const Scenario& nominal, const RunRecord& record) {
   if (record.outcome == "worker_error") {
@@ -238,13 +252,17 @@ SearchRunResult run_search(std::shared_ptr<const Scenario> nominal, const Search
       rounds.push_back(*round);
     }
     if (options.on_round) options.on_round(*round);
-    const auto proposal = std::make_shared<const ParameterProposals>(round->proposal);
-    const DrawFunction draw = [proposal](std::uint64_t seed) { return draw_dispersions(*proposal, seed); };
-    const WorkerFactory factory =
-        options.make_workers ? options.make_workers(nominal, draw)
-                             : [nominal, draw](int) { return std::make_unique<CampaignWorker>(nominal, draw); };
-    result.committed += run_pending(store, settings.seed, round->first_run + round->runs, factory,
-                                    {.jobs = options.jobs, .on_progress = options.on_progress, .stop = options.stop, .shard = {}});
+    const std::int64_t round_end = round->first_run + round->runs;
+    if (options.run_round) {
+      result.committed += options.run_round(store, round_end, *round);
+    } else {
+      const DrawFunction draw = round_draws(round->proposal);
+      const WorkerFactory factory =
+          options.make_workers ? options.make_workers(nominal, draw)
+                               : [nominal, draw](int) { return std::make_unique<CampaignWorker>(nominal, draw); };
+      result.committed += run_pending(store, settings.seed, round_end, factory,
+                                      {.jobs = options.jobs, .on_progress = options.on_progress, .stop = options.stop});
+    }
     if (options.stop && options.stop->load()) return result;
   }
 }

@@ -22,8 +22,9 @@
 // Parallelism: the runs of a round go through run_pending (campaign_pool.hpp) on `jobs`
 // workers, each with its own renderer; in `shelfcross search` each is a worker process
 // (run_process.hpp), which is sent each run's draws, so a run that crashes or hangs is recorded
-// as such (a mission failure of unknown margin: margin.hpp) and the search goes on. MPI and
-// shards are not supported for searches.
+// as such (a mission failure of unknown margin: margin.hpp) and the search goes on. Under
+// mpirun, `run_round` hands each round to the worker ranks instead (app/cmd_search.cpp).
+// No shards: a round's proposal depends on every run before it.
 
 #include <atomic>
 #include <cstdint>
@@ -40,6 +41,7 @@
 #include "verification/campaign_pool.hpp"
 #include "verification/margin.hpp"
 #include "verification/rare_event.hpp"
+#include "verification/results_store.hpp"
 #include "verification/scenario.hpp"
 
 namespace shelfcross::verification {
@@ -58,6 +60,10 @@ nlohmann::json search_settings_json(const SearchSettings& settings);
 /// A distribution (a nominal or a proposal) as JSON {"kind": ..., parameters} and back.
 nlohmann::json distribution_json(const Distribution& d);
 Distribution distribution_from_json(const nlohmann::json& j);
+/// A round's proposal as stored (search_rounds.proposal_json) and sent to MPI worker ranks:
+/// {parameter: {"shifted": ..., "nominal": ..., "nominal_share": s}}; and back.
+nlohmann::json proposals_json(const ParameterProposals& q);
+ParameterProposals proposals_from_json(const nlohmann::json& j);
 
 /// The search's tables in a results database (see the file comment).
 class SearchStore {
@@ -88,6 +94,9 @@ bool is_search_database(const std::filesystem::path& db_path);
 /// The margins of a stored run; a "worker_error" run has none (NaN in every class).
 RunMargins record_margins(const Scenario& nominal, const RunRecord& record);
 
+/// The draws of a round's runs: draw_dispersions(proposal, seed).
+DrawFunction round_draws(ParameterProposals proposal);
+
 struct SearchProgress {
   int round = 0;
   std::int64_t round_runs = 0;
@@ -103,6 +112,10 @@ struct SearchRunOptions {
   const std::atomic<bool>* stop = nullptr;
   std::function<void(const CeRound&)> on_round;            ///< a round starts (or resumes)
   std::function<void(const CampaignProgress&)> on_progress; ///< after each committed run
+  /// Runs what is missing of runs [0, runs) of `store` (a round's end) and returns how many it
+  /// committed; unset: run_pending on this process's workers (make_workers). `shelfcross search`
+  /// under mpirun hands the round to the worker ranks instead.
+  std::function<std::int64_t(ResultsStore& store, std::int64_t runs, const CeRound& round)> run_round;
 };
 
 struct SearchRunResult {

@@ -69,6 +69,18 @@ inline std::vector<std::pair<int, std::string>> stored_hashes(const fs::path& db
 
 /// The default scenario with runs cut at 4 s: start-up and take-off, enough to differ per seed.
 /// Its link is the shipped one (sdk: the Tello's datagrams through tello_pilot's loop).
+/// (round, first_run, runs, estimation, proposal_json) of every stored round.
+inline std::vector<std::string> stored_rounds(const fs::path& db) {
+  SQLite::Database d(db.string(), SQLite::OPEN_READONLY);
+  SQLite::Statement q(d, "SELECT round, first_run, runs, estimation, proposal_json FROM search_rounds ORDER BY round");
+  std::vector<std::string> out;
+  while (q.executeStep()) {
+    out.push_back(q.getColumn(0).getString() + " " + q.getColumn(1).getString() + " " + q.getColumn(2).getString() +
+                  " " + q.getColumn(3).getString() + " " + q.getColumn(4).getString());
+  }
+  return out;
+}
+
 inline fs::path short_scenario(const fs::path& dir) {
   std::ifstream in(std::string(SHELFCROSS_SOURCE_DIR) + "/scenarios/paper_test_shelf.yaml");
   std::stringstream text;

@@ -2,7 +2,8 @@
 // ranks (a coordinator and two workers) give the per-run hashes and the campaign hash of one
 // process; a worker rank killed mid-campaign costs only its runs in flight: Open MPI aborts
 // the job, and the same command again completes it with every run once; with
-// `mpirun --enable-recovery` the job goes on and completes in one go.
+// `mpirun --enable-recovery` the job goes on and completes in one go. A search under mpirun
+// stores the runs and rounds of one process.
 #ifdef SHELFCROSS_MPIEXEC
 #include <dirent.h>
 
@@ -90,6 +91,31 @@ TEST(MpiCampaign, ThreeRanksEqualOneProcess) {
   // Bad input on rank 0 (another seed into the same folder): every rank leaves, exit code 2.
   auto other = concat(mpirun(3, {}), campaign_args(scenario, 4, root / "mpi"));
   other[other.size() - 5] = "2025";
+  EXPECT_EQ(wait_exit(spawn(other)), 2);
+}
+
+TEST(MpiSearch, ThreeRanksEqualOneProcess) {
+  // A search under mpirun: rank 0 plans the rounds, the worker ranks run them with the draws of
+  // each round's broadcast proposal. The short scenario's runs all time out, so round 1 (the
+  // estimation round) draws from a refitted proposal: its runs check the draws across ranks.
+  const fs::path root = fresh_dir("mpi_search_equal");
+  const fs::path scenario = short_scenario(root);
+  const auto search = [&](const fs::path& out) {
+    return std::vector<std::string>{"search", "--scenario", scenario.string(), "--budget", "6", "--seed", "77",
+                                    "--jobs", "1", "--class", "mission", "--round-runs", "2", "--estimation-runs", "2",
+                                    "--run-wall-floor", "1800", "--out", out.string()};
+  };
+  EXPECT_EQ(wait_exit(spawn(concat({SHELFCROSS_PROGRAM}, search(root / "one")))), 0);
+  const fs::path log = root / "mpi.log";
+  EXPECT_EQ(wait_exit(spawn(concat(mpirun(3, {}), search(root / "mpi")), log.string())), 0) << read_text(log);
+  EXPECT_NE(read_text(log).find("search on 2 worker ranks x 1 workers"), std::string::npos) << read_text(log);
+  EXPECT_EQ(stored_hashes(root / "mpi" / "results.sqlite").size(), 6u);
+  EXPECT_EQ(stored_hashes(root / "mpi" / "results.sqlite"), stored_hashes(root / "one" / "results.sqlite"));
+  EXPECT_EQ(stored_rounds(root / "mpi" / "results.sqlite"), stored_rounds(root / "one" / "results.sqlite"));
+  // Bad input on rank 0 (other settings into the same folder): every rank leaves, exit code 2.
+  auto other = concat(mpirun(3, {}), search(root / "mpi"));
+  other[other.size() - 5] = "3";  // --estimation-runs 3
+  EXPECT_EQ(other[other.size() - 6], "--estimation-runs");
   EXPECT_EQ(wait_exit(spawn(other)), 2);
 }
 

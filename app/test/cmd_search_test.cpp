@@ -14,18 +14,6 @@ std::vector<std::string> search_command(const std::string& scenario, const fs::p
           "--class", "mission", "--round-runs", "2", "--estimation-runs", "2", "--out", out.string()};
 }
 
-/// (round, first_run, runs, estimation, proposal_json) of every stored round.
-std::vector<std::string> stored_rounds(const fs::path& db) {
-  SQLite::Database d(db.string(), SQLite::OPEN_READONLY);
-  SQLite::Statement q(d, "SELECT round, first_run, runs, estimation, proposal_json FROM search_rounds ORDER BY round");
-  std::vector<std::string> out;
-  while (q.executeStep()) {
-    out.push_back(q.getColumn(0).getString() + " " + q.getColumn(1).getString() + " " + q.getColumn(2).getString() +
-                  " " + q.getColumn(3).getString() + " " + q.getColumn(4).getString());
-  }
-  return out;
-}
-
 TEST(CmdSearch, ResumesToTheUninterruptedSearchAndRepeatsTheCampaignInRoundZero) {
   const fs::path root = fresh_dir("cmd_search");
   const std::string scenario = short_scenario(root).string();
