@@ -70,7 +70,8 @@ TEST(Dispersion, PlacesTheShelfBehindAndTurnsTheLight) {
          "  ambient_scale: {choice: {values: [0.5]}}\n"
          "  light_azimuth_rad: {choice: {values: [1.5707963267948966]}}\n";
   s = parse_scenario(text, "row.yaml");
-  const Scenario& d = *disperse(s, 3).scenario;
+  const RunSetup setup = disperse(s, 3);  // owns the dispersed scenario
+  const Scenario& d = *setup.scenario;
   const Eigen::Vector3d& front = s.warehouse.shelves[0].origin_W_m;
   EXPECT_DOUBLE_EQ(d.warehouse.shelves[1].origin_W_m.x(), front.x() + 1.5);
   EXPECT_DOUBLE_EQ(d.warehouse.shelves[1].origin_W_m.y(), s.warehouse.shelves[1].origin_W_m.y() - 0.3);
