@@ -67,8 +67,9 @@ bool has_extension(const char* list, const char* name) {
 // failed, and helgrind (valgrind 3.19) did not finish one of them in 15 minutes; its reports
 // were all inside Mesa without symbols, several on the display's second word, likely a lock
 // built on a futex that it cannot see. Campaign runs now live in worker processes, so such
-// a crash costs one run, recorded `crashed`. An untried workaround: LP_NUM_THREADS=0 (llvmpipe
-// rasterises on the calling thread, no rasteriser threads to race with).
+// a crash costs one run, recorded `crashed`. And since session 9 a campaign's worker
+// processes set LP_NUM_THREADS=0 (llvmpipe rasterises on the calling thread: no rasteriser
+// threads to race with; verification/run_process.cpp), which also saves CPU time.
 std::mutex g_display_mutex;
 
 bool acquire_display(EGLDisplay d) {

@@ -12,6 +12,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <optional>
@@ -330,6 +331,14 @@ WorkerFactory process_worker_factory(std::shared_ptr<const Scenario> nominal, Wo
 }
 
 int serve_worker_runs(int fd) {
+  // llvmpipe rasterises on this thread instead of a pool of its own threads (one per CPU by
+  // default), unless the user chose otherwise. A campaign already runs one worker per core;
+  // the pool only adds hand-overs (a run of the default scenario, ideal link, seed 3: 1.99 s
+  // of CPU instead of 2.26, the same run hash; session 9). And the general protection fault
+  // in swrast_dri.so seen in campaigns was, by its address, a race between the context's
+  // thread and llvmpipe's rasteriser threads (render/egl_context.cpp): with none, it has
+  // nothing to race with. Read when the driver is loaded: before the renderer is made.
+  ::setenv("LP_NUM_THREADS", "0", /*overwrite=*/0);
   std::string buffer, line;
   if (read_line(fd, buffer, line, std::nullopt) != Wait::line) return 1;
   std::unique_ptr<CampaignWorker> worker;
