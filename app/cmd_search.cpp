@@ -162,7 +162,9 @@ const CommandRegistration kSearch{
       sub.add_option("--budget", o->budget, "runs in all")->capture_default_str()->check(CLI::Range(1, 10000000));
       sub.add_option("--seed", o->seed, "search seed; run k's seed is a fixed hash of (seed, k), as in a campaign")
           ->capture_default_str();
-      sub.add_option("--jobs", o->jobs, "worker processes (per worker rank under mpirun)")->capture_default_str()->check(CLI::Range(1, 1024));
+      sub.add_option("--jobs", o->jobs, "worker processes (per worker rank under mpirun)")
+          ->capture_default_str()
+          ->check(CLI::Range(1, 1024));
       sub.add_option("--out", o->out, "output folder: results.sqlite, report.md, search_summary.json, margins.csv, PNGs")
           ->capture_default_str();
       sub.add_option("--class", o->failure_class, "failure class searched for: contact, crossing or mission")

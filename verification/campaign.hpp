@@ -34,7 +34,7 @@ class CampaignWorker : public RunWorker {
   explicit CampaignWorker(std::shared_ptr<const Scenario> nominal, DrawFunction draw = {});
   /// The run with draw(seed), or the scenario's own draws when no draw function was given.
   RunRecord run(std::int64_t index, std::uint64_t seed) override;
-  /// The run with the given draws (a worker process is sent them by its parent).
+  /// The run with the given draws (what a worker process is sent by its parent).
   RunRecord run_drawn(std::int64_t index, std::uint64_t seed, const DrawnValues& drawn);
 
  private:

@@ -252,18 +252,14 @@ int ProcessRunWorker::end_child(bool kill_first) {
   return status;
 }
 
-RunRecord ProcessRunWorker::lost_run_record(std::int64_t index, std::uint64_t seed, const std::string& outcome,
-                                            const std::string& detail, int signal_number) const {
+RunRecord ProcessRunWorker::lost_run_record(std::int64_t index, std::uint64_t seed, const DrawnValues& drawn,
+                                            const std::string& outcome, const std::string& detail,
+                                            int signal_number) const {
   RunRecord r = worker_error_record(index, seed, detail);
   r.outcome = outcome;
   r.metrics_json =
       stored_metrics_json({std::nullopt, detail, signal_number > 0 ? std::optional<int>(signal_number) : std::nullopt});
-  // The run's draws, for the report and replay: they depend on (scenario, seed, draw) only.
-  try {
-    r.dispersion_json = json(draws_of(seed)).dump();
-  } catch (const std::exception&) {
-    // The draws themselves fail: the record keeps "{}", its detail says what happened.
-  }
+  r.dispersion_json = json(drawn).dump();  // for the report and replay
   return r;
 }
 
@@ -275,8 +271,10 @@ RunRecord ProcessRunWorker::run(std::int64_t index, std::uint64_t seed) {
   if (pid_ <= 0) start_child();  // the previous one died: a fresh worker
   const auto t0 = Clock::now();
   const double limit_s = run_wall_limit_s(*nominal_, limits_);
-  json request{{"index", index}, {"seed", seed}};
-  if (draw_) request["draws"] = draw_(seed);
+  // The parent draws (the scenario's own draws or the search round's), so the child has one
+  // path, and a lost run's record carries the same draws.
+  const DrawnValues drawn = draws_of(seed);
+  const json request{{"index", index}, {"seed", seed}, {"draws", drawn}};
   std::string line;
   Wait wait = Wait::closed;
   if (send_line(fd_, request.dump())) {
@@ -285,7 +283,7 @@ RunRecord ProcessRunWorker::run(std::int64_t index, std::uint64_t seed) {
                      limits_.memory_limit_mb);
   }
   const auto lost = [&](const std::string& outcome, const std::string& detail, int signal_number) {
-    RunRecord r = lost_run_record(index, seed, outcome, detail, signal_number);
+    RunRecord r = lost_run_record(index, seed, drawn, outcome, detail, signal_number);
     r.wall_s = std::chrono::duration<double>(Clock::now() - t0).count();
     return r;
   };
@@ -333,8 +331,9 @@ WorkerFactory process_worker_factory(std::shared_ptr<const Scenario> nominal, Wo
 int serve_worker_runs(int fd) {
   // llvmpipe rasterises on this thread instead of a pool of its own threads (one per CPU by
   // default), unless the user chose otherwise. A campaign already runs one worker per core;
-  // the pool only adds hand-overs (a run of the default scenario, ideal link, seed 3: 1.99 s
-  // of CPU instead of 2.26, the same run hash; session 9). And the general protection fault
+  // the pool only adds hand-overs (`shelfcross run` of the default scenario, ideal link, seed
+  // 3, twice each on a loaded machine: 2.0 s of user + system CPU instead of 2.26, the same run
+  // hash; session 9). And the general protection fault
   // in swrast_dri.so seen in campaigns was, by its address, a race between the context's
   // thread and llvmpipe's rasteriser threads (render/egl_context.cpp): with none, it has
   // nothing to race with. Read when the driver is loaded: before the renderer is made.
@@ -355,18 +354,18 @@ int serve_worker_runs(int fd) {
   while (read_line(fd, buffer, line, std::nullopt) == Wait::line) {
     std::int64_t index = 0;
     std::uint64_t seed = 0;
-    std::optional<DrawnValues> draws;
+    DrawnValues draws;
     try {
       const json request = json::parse(line);
       index = request.at("index").get<std::int64_t>();
       seed = request.at("seed").get<std::uint64_t>();
-      if (request.contains("draws")) draws = request["draws"].get<DrawnValues>();
+      draws = request.at("draws").get<DrawnValues>();
     } catch (const json::exception&) {
       return 1;  // the parent records the run as crashed: it cannot be a run of this campaign
     }
     RunRecord record;
     try {
-      record = draws ? worker->run_drawn(index, seed, *draws) : worker->run(index, seed);
+      record = worker->run_drawn(index, seed, draws);
     } catch (const std::exception& e) {
       record = worker_error_record(index, seed, e.what());
     }

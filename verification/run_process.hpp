@@ -9,15 +9,14 @@
 //   ProcessRunWorker ---- socketpair, fd 3 ----> serve_worker_runs
 //     {"scenario_yaml": ...}              --->   parses it, builds its CampaignWorker (one
 //                                         <---   {"ready": true} | {"error": "..."}   renderer,
-//     {"index": k, "seed": s}             --->   one EGL context for the worker's life)
-//       (+ "draws": {...} in a search)
+//     {"index": k, "seed": s, "draws": {..}} --> one EGL context for the worker's life)
 //                                         <---   the run's RunRecord as JSON
 //
-// One JSON document per line (JSON text never holds a raw newline). The child's record is the
-// one CampaignWorker::run makes in a thread, so results, run hashes and the campaign hash are
-// the same as with in-process workers. A search's runs draw their dispersions from the round's
-// proposal (campaign.hpp, DrawFunction): the parent draws them and sends them with the run;
-// JSON numbers round-trip doubles exactly, so the child runs the very draws. Limits, checked by the parent while it waits:
+// One JSON document per line (JSON text never holds a raw newline). The parent draws each
+// run's dispersions (the scenario's own, or a search round's proposal: campaign.hpp,
+// DrawFunction) and sends them; JSON numbers round-trip doubles exactly, so the child's record
+// is the one CampaignWorker makes in a thread, and results, run hashes and the campaign hash
+// are the same as with in-process workers. Limits, checked by the parent while it waits:
 //   wall clock   max(wall_floor_s, wall_factor x the run's cosim.timeout_s) from the moment
 //                the run is handed over (start-up, at most max(300 s, that limit), not
 //                counted; nor is any time the campaign itself was stopped or the machine
@@ -72,10 +71,10 @@ class ProcessRunWorker : public RunWorker {
   void start_child();
   /// Kills the child (if alive) and reaps it; returns its wait status.
   int end_child(bool kill_first);
-  RunRecord lost_run_record(std::int64_t index, std::uint64_t seed, const std::string& outcome,
-                            const std::string& detail, int signal_number) const;
+  RunRecord lost_run_record(std::int64_t index, std::uint64_t seed, const DrawnValues& drawn,
+                            const std::string& outcome, const std::string& detail, int signal_number) const;
 
-  /// The run's draws, for the child and for a lost run's record.
+  /// The run's draws: draw(seed), or the scenario's own.
   DrawnValues draws_of(std::uint64_t seed) const;
 
   std::shared_ptr<const Scenario> nominal_;

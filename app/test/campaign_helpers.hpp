@@ -67,8 +67,6 @@ inline std::vector<std::pair<int, std::string>> stored_hashes(const fs::path& db
   return out;
 }
 
-/// The default scenario with runs cut at 4 s: start-up and take-off, enough to differ per seed.
-/// Its link is the shipped one (sdk: the Tello's datagrams through tello_pilot's loop).
 /// (round, first_run, runs, estimation, proposal_json) of every stored round.
 inline std::vector<std::string> stored_rounds(const fs::path& db) {
   SQLite::Database d(db.string(), SQLite::OPEN_READONLY);
@@ -81,6 +79,8 @@ inline std::vector<std::string> stored_rounds(const fs::path& db) {
   return out;
 }
 
+/// The default scenario with runs cut at 4 s: start-up and take-off, enough to differ per seed.
+/// Its link is the shipped one (sdk: the Tello's datagrams through tello_pilot's loop).
 inline fs::path short_scenario(const fs::path& dir) {
   std::ifstream in(std::string(SHELFCROSS_SOURCE_DIR) + "/scenarios/paper_test_shelf.yaml");
   std::stringstream text;
@@ -107,6 +107,13 @@ inline std::vector<std::string> stored_link_models(const fs::path& db) {
 inline std::string campaign_hash(const fs::path& dir) {
   std::ifstream in(dir / "summary.json");
   return nlohmann::json::parse(in)["campaign_hash"].get<std::string>();
+}
+
+/// `shelfcross search`'s arguments (after the program) for the tests' small search of the short
+/// scenario: 6 runs, rounds of 2, 2 for the estimate, the mission class.
+inline std::vector<std::string> search_args(const std::string& scenario, const fs::path& out) {
+  return {"search", "--scenario", scenario, "--budget", "6", "--seed", "77", "--jobs", "1",
+          "--class", "mission", "--round-runs", "2", "--estimation-runs", "2", "--out", out.string()};
 }
 
 /// A whole file as text ("" if it cannot be read).

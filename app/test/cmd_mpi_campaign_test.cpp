@@ -107,11 +107,7 @@ TEST(MpiSearch, ThreeRanksEqualOneProcess) {
   // estimation round) draws from a refitted proposal: its runs check the draws across ranks.
   const fs::path root = fresh_dir("mpi_search_equal");
   const fs::path scenario = short_scenario(root);
-  const auto search = [&](const fs::path& out) {
-    return std::vector<std::string>{"search", "--scenario", scenario.string(), "--budget", "6", "--seed", "77",
-                                    "--jobs", "1", "--class", "mission", "--round-runs", "2", "--estimation-runs", "2",
-                                    "--out", out.string()};
-  };
+  const auto search = [&](const fs::path& out) { return search_args(scenario.string(), out); };
   EXPECT_EQ(wait_exit(spawn(concat({SHELFCROSS_PROGRAM}, search(root / "one")))), 0);
   const fs::path log = root / "mpi.log";
   EXPECT_EQ(wait_exit(spawn(concat(mpirun(3, {}), search(root / "mpi")), log.string())), 0) << read_text(log);

@@ -10,8 +10,10 @@ namespace {
 using namespace shelfcross::app::test;
 
 std::vector<std::string> search_command(const std::string& scenario, const fs::path& out) {
-  return {SHELFCROSS_PROGRAM, "search", "--scenario", scenario, "--budget", "6", "--seed", "77", "--jobs", "1",
-          "--class", "mission", "--round-runs", "2", "--estimation-runs", "2", "--out", out.string()};
+  std::vector<std::string> c{SHELFCROSS_PROGRAM};
+  const std::vector<std::string> args = search_args(scenario, out);
+  c.insert(c.end(), args.begin(), args.end());
+  return c;
 }
 
 TEST(CmdSearch, ResumesToTheUninterruptedSearchAndRepeatsTheCampaignInRoundZero) {
