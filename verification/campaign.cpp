@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <map>
 #include <utility>
 
@@ -34,12 +35,31 @@ RunRecord CampaignWorker::run_drawn(std::int64_t index, std::uint64_t seed, cons
   return run_setup(index, disperse(*nominal_, seed, drawn));
 }
 
+namespace {
+double cpu_clock_s(clockid_t clock) {
+  timespec t{};
+  ::clock_gettime(clock, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+}  // namespace
+
+double thread_cpu_s() { return cpu_clock_s(CLOCK_THREAD_CPUTIME_ID); }
+double process_cpu_s() { return cpu_clock_s(CLOCK_PROCESS_CPUTIME_ID); }
+
 RunRecord CampaignWorker::run_setup(std::int64_t index, const RunSetup& setup) {
   const auto t0 = std::chrono::steady_clock::now();  // informative wall time only
+  // The CPU time of this thread, which runs the whole co-simulation (the renderer inline, the
+  // video coded and decoded inline), so of this run alone even beside other workers' threads.
+  // llvmpipe's own rasteriser threads, if it has any, are not counted: it starts one per CPU
+  // unless LP_NUM_THREADS=0. A worker process sets that and replaces this figure with its
+  // whole process's (run_process.cpp).
+  const double cpu0_s = thread_cpu_s();
   renderer_->set_warehouse(setup.scenario->warehouse);
   const RunResult result = run_cosimulation(setup, *renderer_);
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return make_run_record(index, setup, result, wall_s);
+  RunRecord record = make_run_record(index, setup, result, wall_s);
+  record.cpu_s = thread_cpu_s() - cpu0_s;
+  return record;
 }
 
 RunRecord make_run_record(std::int64_t index, const RunSetup& setup, const RunResult& result, double wall_s) {
@@ -137,6 +157,8 @@ CampaignSummary summarize_campaign(const std::vector<RunRecord>& runs, std::int6
   const std::vector<std::string>& names = summary_metric_names();
   std::vector<std::vector<double>> values(names.size());
   std::vector<std::string> hashes, outcomes;
+  std::vector<double> cpu_s;
+  double cpu_s_simulated = 0.0, simulated_s = 0.0;  // over the runs with both figures
   for (const RunRecord& r : runs) {
     if (r.index >= runs_requested) continue;
     ++summary.runs;
@@ -144,8 +166,13 @@ CampaignSummary summarize_campaign(const std::vector<RunRecord>& runs, std::int6
     ++summary.outcomes[r.outcome];
     outcomes.push_back(r.outcome);
     hashes.push_back(r.run_hash);
+    if (r.cpu_s) cpu_s.push_back(*r.cpu_s);
     const StoredMetrics stored = stored_metrics(r);
     if (!stored.run) continue;  // a crashed, hung or failed worker measured nothing
+    if (r.cpu_s) {
+      cpu_s_simulated += *r.cpu_s;
+      simulated_s += stored.run->mission_time_s;
+    }
     const std::vector<std::optional<double>> v = summary_metric_values(*stored.run);
     for (size_t i = 0; i < v.size(); ++i) {
       if (v[i]) values[i].push_back(*v[i]);
@@ -159,17 +186,47 @@ CampaignSummary summarize_campaign(const std::vector<RunRecord>& runs, std::int6
   for (size_t i = 0; i < names.size(); ++i) {
     if (!values[i].empty()) summary.metrics[names[i]] = summarize(values[i]);
   }
+  CostSummary& cost = summary.cost;
+  cost.cpu_s_per_run = summarize(cpu_s);
+  if (cost.cpu_s_per_run.mean > 0.0) cost.runs_per_core_hour = 3600.0 / cost.cpu_s_per_run.mean;
+  if (simulated_s > 0.0) cost.cpu_s_per_simulated_s = cpu_s_simulated / simulated_s;
   summary.campaign_hash = summary.runs == runs_requested ? combine_run_hashes(hashes) : std::string();
   return summary;
 }
 
+namespace {
+
+nlohmann::json summary_json(const Summary& m) {
+  return {{"count", m.count}, {"mean", m.mean}, {"min", m.min}, {"p50", m.p50},
+          {"p95", m.p95},     {"p99", m.p99},   {"max", m.max}};
+}
+
+Summary read_summary(StrictObject m) {
+  Summary out;
+  out.count = m.integer("count");
+  out.mean = m.number("mean");
+  out.min = m.number("min");
+  out.p50 = m.number("p50");
+  out.p95 = m.number("p95");
+  out.p99 = m.number("p99");
+  out.max = m.number("max");
+  m.finish();
+  return out;
+}
+
+nlohmann::json optional_json(const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); }
+
+}  // namespace
+
 void to_json(nlohmann::json& j, const CampaignSummary& s) {
   using nlohmann::json;
   json metrics = json::object();
-  for (const auto& [name, m] : s.metrics) {
-    metrics[name] = {{"count", m.count}, {"mean", m.mean}, {"min", m.min}, {"p50", m.p50},
-                     {"p95", m.p95},     {"p99", m.p99},   {"max", m.max}};
-  }
+  for (const auto& [name, m] : s.metrics) metrics[name] = summary_json(m);
+  const CostSummary& c = s.cost;
+  const json cost{{"runs_with_cpu_s", c.cpu_s_per_run.count},
+                  {"cpu_s_per_run", c.cpu_s_per_run.count > 0 ? summary_json(c.cpu_s_per_run) : json(nullptr)},
+                  {"cpu_s_per_simulated_s", optional_json(c.cpu_s_per_simulated_s)},
+                  {"runs_per_core_hour", optional_json(c.runs_per_core_hour)}};
   const SafetySummary& f = s.safety;
   j = json{{"runs", s.runs},
            {"runs_requested", s.runs_requested},
@@ -183,6 +240,7 @@ void to_json(nlohmann::json& j, const CampaignSummary& s) {
              {"safe_aborts", f.safe_aborts}, {"inventory_errors", f.inventory_errors},
              {"other_failures", f.other_failures}}},
            {"metrics", metrics},
+           {"cost", cost},
            {"campaign_hash", s.campaign_hash}};
 }
 
@@ -215,17 +273,17 @@ void from_json(const nlohmann::json& j, CampaignSummary& s) {
   const std::vector<std::string>& names = summary_metric_names();
   for (const std::string& name : metrics.keys()) {
     if (std::find(names.begin(), names.end(), name) == names.end()) metrics.fail_at(metrics.path_of(name), "unknown metric");
-    StrictObject m = metrics.object(name);
-    Summary& out = s.metrics[name];
-    out.count = m.integer("count");
-    out.mean = m.number("mean");
-    out.min = m.number("min");
-    out.p50 = m.number("p50");
-    out.p95 = m.number("p95");
-    out.p99 = m.number("p99");
-    out.max = m.number("max");
-    m.finish();
+    s.metrics[name] = read_summary(metrics.object(name));
   }
+  StrictObject cost = o.object("cost");
+  const std::int64_t runs_with_cpu_s = cost.integer("runs_with_cpu_s");
+  if (auto per_run = cost.optional_object("cpu_s_per_run")) s.cost.cpu_s_per_run = read_summary(std::move(*per_run));
+  if (s.cost.cpu_s_per_run.count != runs_with_cpu_s) {
+    cost.fail_at(cost.path_of("runs_with_cpu_s"), "differs from cpu_s_per_run.count");
+  }
+  s.cost.cpu_s_per_simulated_s = cost.optional_number("cpu_s_per_simulated_s");
+  s.cost.runs_per_core_hour = cost.optional_number("runs_per_core_hour");
+  cost.finish();
   o.finish();
 }
 

@@ -47,7 +47,12 @@ class CampaignWorker : public RunWorker {
 /// The renderer options a scenario asks for (noise, blur).
 render::RenderOptions render_options_for(const Scenario& scenario);
 
-/// The record a run leaves in the results database.
+/// CPU seconds (user + system) of the calling thread, or of the whole process, from some fixed
+/// point: their difference across a run is its RunRecord::cpu_s.
+double thread_cpu_s();
+double process_cpu_s();
+
+/// The record a run leaves in the results database (cpu_s none: the caller measures it).
 RunRecord make_run_record(std::int64_t index, const RunSetup& setup, const RunResult& result, double wall_s);
 
 /// A compact trajectory (10 Hz: t, x, y, z, yaw; approach and crossing start times) as JSON.
@@ -61,6 +66,14 @@ const std::vector<std::string>& summary_metric_names();
 /// The run's value of each (aligned with summary_metric_names(); nullopt where it has none).
 std::vector<std::optional<double>> summary_metric_values(const RunMetrics& m);
 
+/// What a campaign's runs cost in CPU time (RunRecord::cpu_s), over the runs with a figure.
+/// Informative: it depends on the machine and its load, unlike everything else in a summary.
+struct CostSummary {
+  Summary cpu_s_per_run;  ///< count 0: no run has a figure (a database from before cpu_s)
+  std::optional<double> cpu_s_per_simulated_s;  ///< sum cpu_s / sum mission_time_s, runs with both
+  std::optional<double> runs_per_core_hour;     ///< 3600 s / mean cpu_s per run
+};
+
 /// A campaign's summary (summary.json), over the stored runs 0..runs_requested-1.
 struct CampaignSummary {
   std::int64_t runs = 0;            ///< stored runs counted
@@ -71,6 +84,7 @@ struct CampaignSummary {
   std::map<std::string, std::int64_t> outcomes;  ///< keys among known_run_outcomes()
   SafetySummary safety;             ///< contacts apart from safe aborts (issue 17)
   std::map<std::string, Summary> metrics;        ///< keys among summary_metric_names()
+  CostSummary cost;                 ///< summary.json's "cost"
   std::string campaign_hash;        ///< over the run hashes in run order; empty while runs are missing
 };
 void to_json(nlohmann::json& j, const CampaignSummary& s);

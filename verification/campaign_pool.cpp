@@ -28,7 +28,7 @@ Shard parse_shard(const std::string& text) {
 
 RunRecord worker_error_record(std::int64_t index, std::uint64_t seed, const std::string& message) {
   return RunRecord{index, seed, "{}", "worker_error", stored_metrics_json({std::nullopt, message, std::nullopt}),
-                   std::string(32, '0'), 0.0, "{}"};
+                   std::string(32, '0'), 0.0, "{}", std::nullopt};  // no CPU figure: the run did not finish
 }
 
 // ---------------------------------------------------------------------------------------------

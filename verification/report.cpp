@@ -107,6 +107,27 @@ std::string safety_section(const SafetySummary& s) {
   return md.str();
 }
 
+std::string cost_section(const CostSummary& c, std::int64_t runs) {
+  std::ostringstream md;
+  md << "## Cost\n\n";
+  if (c.cpu_s_per_run.count == 0) {
+    md << "CPU time not recorded: no run has a figure (runs stored by a version before it was, or lost runs "
+          "only).\n\n";
+    return md.str();
+  }
+  const Summary& s = c.cpu_s_per_run;
+  const auto or_none = [](const std::optional<double>& v, int decimals) { return v ? fixed(*v, decimals) : "-"; };
+  md << "| | |\n|---|---|\n"
+     << "| runs with a CPU figure | " << s.count << " of " << runs << " |\n"
+     << "| CPU seconds per run: mean, p50, p95, max | " << fixed(s.mean, 2) << ", " << fixed(s.p50, 2) << ", "
+     << fixed(s.p95, 2) << ", " << fixed(s.max, 2) << " |\n"
+     << "| CPU seconds per simulated second | " << or_none(c.cpu_s_per_simulated_s, 3) << " |\n"
+     << "| runs per core-hour | " << or_none(c.runs_per_core_hour, 0) << " |\n\n"
+     << "CPU time (user + system) each run took in its worker process; it depends on the machine and its load. "
+        "Runs lost with their worker (crashed, hung) or failed in it have no figure.\n\n";
+  return md.str();
+}
+
 CampaignSummary write_campaign_report(const std::filesystem::path& dir) {
   ResultsStore store = ResultsStore::open_existing(dir / "results.sqlite");
   const Scenario scenario = parse_scenario(store.meta().scenario_yaml, (dir / "results.sqlite").string() + " (scenario)");
@@ -221,6 +242,7 @@ CampaignSummary write_campaign_report(const std::filesystem::path& dir) {
   md << "\nSettling: from the start of the approach until the error stays inside max(" << scenario.cosim.settling_fraction * 100
      << " % of its initial value, " << scenario.cosim.settling_floor_z_m * 100 << " cm / "
      << fixed(scenario.cosim.settling_floor_yaw_rad * 180 / M_PI, 2) << " deg) for good.\n\n";
+  md << cost_section(summary.cost, summary.runs);
   md << "## Trajectories\n\n![top view](top_view.png)\n\n![side view](side_view.png)\n\n";
   md << "## Approach responses" << (scenario.warehouse.shelves.size() > 1 ? " (first shelf)" : "")
      << "\n\n![altitude](altitude_response.png)\n\n![heading](heading_response.png)\n\n"

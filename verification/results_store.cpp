@@ -15,7 +15,8 @@
 namespace shelfcross::verification {
 namespace {
 
-constexpr const char* kFormatVersion = "2";
+// 3: runs.cpu_s. A writer migrates a version-2 database (results_store.hpp); a reader reads it.
+constexpr int kFormatVersion = 3;
 
 void configure(SQLite::Database& db) {
   db.exec("PRAGMA journal_mode=WAL");
@@ -72,9 +73,11 @@ ResultsStore& ResultsStore::operator=(ResultsStore&&) noexcept = default;
 ResultsStore::~ResultsStore() = default;
 
 void ResultsStore::read_meta() {
-  if (get_meta(*db_, "format_version") != kFormatVersion) {
-    throw ResultsMismatch("results database has an unknown format version");
+  const std::string version = get_meta(*db_, "format_version");
+  if (version != "2" && version != std::to_string(kFormatVersion)) {
+    throw ResultsMismatch("results database has an unknown format version '" + version + "'");
   }
+  format_version_ = std::stoi(version);
   meta_.scenario_yaml = get_meta(*db_, "scenario_yaml");
   meta_.campaign_seed = std::stoull(get_meta(*db_, "campaign_seed"));
   meta_.runs_requested = std::stoll(get_meta(*db_, "runs_requested"));
@@ -93,8 +96,8 @@ ResultsStore ResultsStore::open_or_create(const std::filesystem::path& db_path, 
     store.db_->exec(
         "CREATE TABLE runs(run_index INTEGER PRIMARY KEY, seed TEXT NOT NULL, dispersion_json TEXT NOT NULL,"
         " outcome TEXT NOT NULL, metrics_json TEXT NOT NULL, run_hash TEXT NOT NULL, wall_s REAL NOT NULL,"
-        " trace_json TEXT NOT NULL)");
-    set_meta(*store.db_, "format_version", kFormatVersion);
+        " trace_json TEXT NOT NULL, cpu_s REAL)");  // cpu_s last, where a migration adds it
+    set_meta(*store.db_, "format_version", std::to_string(kFormatVersion));
     set_meta(*store.db_, "scenario_yaml", meta.scenario_yaml);
     set_meta(*store.db_, "campaign_seed", std::to_string(meta.campaign_seed));
     set_meta(*store.db_, "runs_requested", std::to_string(meta.runs_requested));
@@ -111,6 +114,14 @@ ResultsStore ResultsStore::open_or_create(const std::filesystem::path& db_path, 
   if (meta.runs_requested > store.meta_.runs_requested) {
     set_meta(*store.db_, "runs_requested", std::to_string(meta.runs_requested));
     store.meta_.runs_requested = meta.runs_requested;
+  }
+  if (store.format_version_ == 2) {
+    // Its runs were stored without a CPU figure: they keep cpu_s NULL.
+    SQLite::Transaction tx(*store.db_);
+    store.db_->exec("ALTER TABLE runs ADD COLUMN cpu_s REAL");
+    set_meta(*store.db_, "format_version", std::to_string(kFormatVersion));
+    tx.commit();
+    store.format_version_ = kFormatVersion;
   }
   return store;
 }
@@ -155,10 +166,14 @@ void ResultsStore::insert(const std::vector<RunRecord>& runs) {
                                   "' (not stored; known: verification::known_run_outcomes)");
     }
   }
+  if (format_version_ < kFormatVersion) {
+    throw ResultsMismatch("a version-" + std::to_string(format_version_) +
+                          " results database takes new runs only once a writer migrated it (open_or_create)");
+  }
   SQLite::Transaction tx(*db_);
   SQLite::Statement q(*db_,
-                      "INSERT INTO runs(run_index, seed, dispersion_json, outcome, metrics_json, run_hash, wall_s, trace_json)"
-                      " VALUES(?, ?, ?, ?, ?, ?, ?, ?)");
+                      "INSERT INTO runs(run_index, seed, dispersion_json, outcome, metrics_json, run_hash, wall_s,"
+                      " trace_json, cpu_s) VALUES(?, ?, ?, ?, ?, ?, ?, ?, ?)");
   for (const RunRecord& run : runs) {
     q.bind(1, static_cast<std::int64_t>(run.index));
     q.bind(2, std::to_string(run.seed));
@@ -168,6 +183,11 @@ void ResultsStore::insert(const std::vector<RunRecord>& runs) {
     q.bind(6, run.run_hash);
     q.bind(7, run.wall_s);
     q.bind(8, run.trace_json);
+    if (run.cpu_s) {
+      q.bind(9, *run.cpu_s);
+    } else {
+      q.bind(9);  // NULL
+    }
     q.exec();
     q.reset();
   }
@@ -176,9 +196,10 @@ void ResultsStore::insert(const std::vector<RunRecord>& runs) {
 
 std::vector<RunRecord> ResultsStore::runs() const {
   std::vector<RunRecord> out;
-  SQLite::Statement q(*db_,
-                      "SELECT run_index, seed, dispersion_json, outcome, metrics_json, run_hash, wall_s, trace_json"
-                      " FROM runs ORDER BY run_index");
+  // A version-2 database (a reader's) has no cpu_s column: none of its runs has a figure.
+  SQLite::Statement q(*db_, std::string("SELECT run_index, seed, dispersion_json, outcome, metrics_json, run_hash,"
+                                        " wall_s, trace_json, ") +
+                                (format_version_ >= 3 ? "cpu_s" : "NULL") + " FROM runs ORDER BY run_index");
   while (q.executeStep()) {
     RunRecord r;
     r.index = q.getColumn(0).getInt64();
@@ -189,6 +210,7 @@ std::vector<RunRecord> ResultsStore::runs() const {
     r.run_hash = q.getColumn(5).getString();
     r.wall_s = q.getColumn(6).getDouble();
     r.trace_json = q.getColumn(7).getString();
+    if (!q.getColumn(8).isNull()) r.cpu_s = q.getColumn(8).getDouble();
     out.push_back(std::move(r));
   }
   return out;
@@ -202,17 +224,25 @@ std::string encode_run_record(const RunRecord& r) {
                         {"metrics_json", r.metrics_json},
                         {"run_hash", r.run_hash},
                         {"wall_s", r.wall_s},
-                        {"trace_json", r.trace_json}}
+                        {"trace_json", r.trace_json},
+                        {"cpu_s", r.cpu_s ? nlohmann::json(*r.cpu_s) : nlohmann::json(nullptr)}}
       .dump();
 }
 
 RunRecord decode_run_record(const std::string& message) {
   try {
     const auto j = nlohmann::json::parse(message);
-    return RunRecord{j.at("index").get<std::int64_t>(),       j.at("seed").get<std::uint64_t>(),
-                     j.at("dispersion_json").get<std::string>(), j.at("outcome").get<std::string>(),
-                     j.at("metrics_json").get<std::string>(),    j.at("run_hash").get<std::string>(),
-                     j.at("wall_s").get<double>(),               j.at("trace_json").get<std::string>()};
+    RunRecord r{j.at("index").get<std::int64_t>(),       j.at("seed").get<std::uint64_t>(),
+                j.at("dispersion_json").get<std::string>(), j.at("outcome").get<std::string>(),
+                j.at("metrics_json").get<std::string>(),    j.at("run_hash").get<std::string>(),
+                j.at("wall_s").get<double>(),               j.at("trace_json").get<std::string>(),
+                std::nullopt};
+    // None when null (nothing measured it) or absent (a sender from before cpu_s).
+    if (const auto cpu = j.find("cpu_s"); cpu != j.end() && !cpu->is_null()) {
+      if (!cpu->is_number()) throw std::invalid_argument("malformed run record message: cpu_s is not a number");
+      r.cpu_s = cpu->get<double>();
+    }
+    return r;
   } catch (const nlohmann::json::exception& e) {
     throw std::invalid_argument(std::string("malformed run record message: ") + e.what());
   }

@@ -255,6 +255,7 @@ int ProcessRunWorker::end_child(bool kill_first) {
 RunRecord ProcessRunWorker::lost_run_record(std::int64_t index, std::uint64_t seed, const DrawnValues& drawn,
                                             const std::string& outcome, const std::string& detail,
                                             int signal_number) const {
+  // No CPU figure (cpu_s none, not 0): the process that ran it is gone, uncounted.
   RunRecord r = worker_error_record(index, seed, detail);
   r.outcome = outcome;
   r.metrics_json =
@@ -364,10 +365,16 @@ int serve_worker_runs(int fd) {
       return 1;  // the parent records the run as crashed: it cannot be a run of this campaign
     }
     RunRecord record;
+    // The run's CPU time is this process's across it (it serves many runs: the difference):
+    // with LP_NUM_THREADS=0 llvmpipe rasterises on this thread, so nothing else runs here, and
+    // any thread a driver did add would be counted. It replaces run_drawn's own figure, which
+    // is its thread's only.
+    const double cpu0_s = process_cpu_s();
     try {
       record = worker->run_drawn(index, seed, draws);
+      record.cpu_s = process_cpu_s() - cpu0_s;
     } catch (const std::exception& e) {
-      record = worker_error_record(index, seed, e.what());
+      record = worker_error_record(index, seed, e.what());  // no CPU figure, as in a worker thread
     }
     if (!send_line(fd, encode_run_record(record))) return 1;
   }

@@ -16,7 +16,8 @@
 // run's dispersions (the scenario's own, or a search round's proposal: campaign.hpp,
 // DrawFunction) and sends them; JSON numbers round-trip doubles exactly, so the child's record
 // is the one CampaignWorker makes in a thread, and results, run hashes and the campaign hash
-// are the same as with in-process workers. Limits, checked by the parent while it waits:
+// are the same as with in-process workers (all but the informative wall_s and cpu_s; cpu_s is
+// the child process's CPU time across the run). Limits, checked by the parent while it waits:
 //   wall clock   max(wall_floor_s, wall_factor x the run's cosim.timeout_s) from the moment
 //                the run is handed over (start-up, at most max(300 s, that limit), not
 //                counted; nor is any time the campaign itself was stopped or the machine

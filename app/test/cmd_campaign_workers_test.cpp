@@ -1,9 +1,11 @@
 // A campaign's runs live in worker processes (verification/run_process.hpp): runs that crash
 // (cosim.inject_crash_s: a real SIGSEGV) or hang (cosim.inject_hang_s) are recorded as such
-// with their reason and seed, the campaign (or search) completes with exit 0 and its report
-// lists them with their replay commands; runs that complete give exactly the records of
-// in-process workers.
+// with their reason and seed (and no CPU figure), the campaign (or search) completes with exit 0
+// and its report lists them with their replay commands; runs that complete give exactly the
+// records of in-process workers, apart from the informative wall and CPU times.
+#include <cmath>
 #include <csignal>
+#include <optional>
 #include <regex>
 #include <thread>
 
@@ -34,15 +36,17 @@ struct StoredRun {
   std::uint64_t seed;
   std::string outcome;
   json metrics;
+  std::optional<double> cpu_s;
 };
 
 std::vector<StoredRun> stored_runs_of(const fs::path& db) {
   SQLite::Database d(db.string(), SQLite::OPEN_READONLY);
-  SQLite::Statement q(d, "SELECT run_index, seed, outcome, metrics_json FROM runs ORDER BY run_index");
+  SQLite::Statement q(d, "SELECT run_index, seed, outcome, metrics_json, cpu_s FROM runs ORDER BY run_index");
   std::vector<StoredRun> out;
   while (q.executeStep()) {
     out.push_back({q.getColumn(0).getInt(), std::stoull(q.getColumn(1).getString()), q.getColumn(2).getString(),
-                   json::parse(q.getColumn(3).getString())});
+                   json::parse(q.getColumn(3).getString()),
+                   q.getColumn(4).isNull() ? std::nullopt : std::optional<double>(q.getColumn(4).getDouble())});
   }
   return out;
 }
@@ -69,11 +73,14 @@ TEST(CampaignWorkers, RunsThatCrashAreRecordedAndTheCampaignCompletes) {
     EXPECT_EQ(r.seed, shelfcross::run_seed(12, static_cast<std::uint64_t>(r.index)));
     EXPECT_EQ(r.metrics.value("signal", 0), SIGSEGV);
     EXPECT_EQ(r.metrics.value("detail", ""), "worker process killed by signal 11 (SIGSEGV)");
+    EXPECT_EQ(r.cpu_s, std::nullopt);  // lost with its process: no CPU figure, not 0
   }
   const json summary = json::parse(read_text(out / "summary.json"));
   EXPECT_EQ(summary["outcomes"], json({{"crashed", 3}}));
+  EXPECT_EQ(summary["cost"]["runs_with_cpu_s"], 0);
   const std::string report = read_text(out / "report.md");
   EXPECT_EQ(count_of(report, "killed by signal 11 (SIGSEGV) | `shelfcross replay "), 3) << report;
+  EXPECT_EQ(count_of(report, "CPU time not recorded"), 1) << report;
 }
 
 TEST(CampaignWorkers, ASearchWhoseRunsCrashRecordsThemAndCompletes) {
@@ -168,10 +175,21 @@ TEST(CampaignWorkers, WorkerProcessesStoreTheRecordsOfInProcessWorkers) {
   ASSERT_EQ(a.size(), 3u);
   ASSERT_EQ(b.size(), 3u);
   for (size_t i = 0; i < a.size(); ++i) {
+    // Each run's CPU seconds: its worker process's, or its worker thread's.
+    for (const v::RunRecord& r : {a[i], b[i]}) {
+      ASSERT_TRUE(r.cpu_s.has_value()) << "run " << i;
+      EXPECT_TRUE(std::isfinite(*r.cpu_s) && *r.cpu_s > 0.0) << *r.cpu_s;
+    }
     a[i].wall_s = b[i].wall_s = 0.0;  // informative, not part of the result
+    a[i].cpu_s = b[i].cpu_s = std::nullopt;
     EXPECT_EQ(a[i], b[i]) << "run " << i;
   }
   EXPECT_EQ(v::summarize_campaign(a, 3).campaign_hash, campaign_hash(out));
+  const json cost = json::parse(read_text(out / "summary.json"))["cost"];
+  EXPECT_EQ(cost["runs_with_cpu_s"], 3);
+  EXPECT_GT(cost["cpu_s_per_simulated_s"].get<double>(), 0.0);
+  EXPECT_GT(cost["runs_per_core_hour"].get<double>(), 0.0);
+  EXPECT_EQ(count_of(read_text(out / "report.md"), "| runs with a CPU figure | 3 of 3 |"), 1);
 }
 
 }  // namespace

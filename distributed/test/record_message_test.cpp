@@ -19,8 +19,23 @@ TEST(RecordMessage, RoundTripsExactly) {
       R"({"detail":"hit \"shelf\"\n","min_clearance_m":-0.0})",
       "0123456789abcdef0123456789abcdef",
       std::nextafter(0.1, 1.0),
-      std::string("{\"t\":[0.1]}") + std::string(1, '\0') + "\xc3\xa9"};
+      std::string("{\"t\":[0.1]}") + std::string(1, '\0') + "\xc3\xa9",
+      std::nextafter(2.5, 0.0)};
   EXPECT_EQ(decode_record(encode_record(r)), r);
+  // A lost run's record: no CPU figure, and none it comes back with.
+  verification::RunRecord lost = r;
+  lost.cpu_s.reset();
+  EXPECT_EQ(decode_record(encode_record(lost)), lost);
+}
+
+TEST(RecordMessage, CpuSecondsMayBeNullOrAbsentButNothingElse) {
+  const std::string fields = R"("index":1,"seed":2,"dispersion_json":"{}","outcome":"success","metrics_json":"{}",)"
+                             R"("run_hash":"","wall_s":0.5,"trace_json":"{}")";
+  EXPECT_EQ(decode_record("{" + fields + R"(,"cpu_s":0.25})").cpu_s, 0.25);
+  EXPECT_EQ(decode_record("{" + fields + R"(,"cpu_s":null})").cpu_s, std::nullopt);
+  EXPECT_EQ(decode_record("{" + fields + "}").cpu_s, std::nullopt);  // a sender from before cpu_s
+  EXPECT_THROW(decode_record("{" + fields + R"(,"cpu_s":"0.25"})"), std::invalid_argument);
+  EXPECT_THROW(decode_record("{" + fields + R"(,"cpu_s":true})"), std::invalid_argument);
 }
 
 TEST(RecordMessage, MalformedIsAnError) {

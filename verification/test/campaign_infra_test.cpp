@@ -9,8 +9,10 @@
 #include <unistd.h>
 
 #include <gtest/gtest.h>
+#include <SQLiteCpp/SQLiteCpp.h>
 
 #include "shelfcross/random.hpp"
+#include "verification/campaign_merge.hpp"
 #include "verification/results_store.hpp"
 #include "verification/run_hash.hpp"
 #include "verification/statistics.hpp"
@@ -123,7 +125,14 @@ class ResultsStoreTest : public ::testing::Test {
 
 RunRecord make_run(std::int64_t i) {
   return {i, run_seed(9, static_cast<std::uint64_t>(i)), "{\"start_distance_m\":3.1}", "success",
-          "{\"settling_z_s\":1.5}", std::string(32, 'a'), 0.25, "{\"t\":[0]}"};
+          "{\"settling_z_s\":1.5}", std::string(32, 'a'), 0.25, "{\"t\":[0]}", 1.5};
+}
+
+/// make_run(i) without a CPU figure: a lost run, or one stored before format 3.
+RunRecord make_run_without_cpu(std::int64_t i) {
+  RunRecord r = make_run(i);
+  r.cpu_s.reset();
+  return r;
 }
 
 TEST_F(ResultsStoreTest, StoresKnownOutcomesOnlyAndKeepsNothingOfARefusedBatch) {
@@ -205,6 +214,89 @@ TEST_F(ResultsStoreTest, ASecondWriterIsRefusedAndAKilledWriterLeavesNoLock) {
   ASSERT_TRUE(WIFSIGNALED(status));
   ResultsStore after = ResultsStore::open_or_create(db, meta);
   EXPECT_EQ(after.finished_indices(), (std::vector<std::int64_t>{0, 1}));
+}
+
+TEST_F(ResultsStoreTest, StoresACpuFigureOrNone) {
+  const std::filesystem::path db = dir_ / "results.sqlite";
+  RunRecord lost = make_run_without_cpu(1);
+  lost.outcome = "crashed";
+  ResultsStore::open_or_create(db, {"scenario: {}\n", 9, 10}).insert({make_run(0), lost});
+  const std::vector<RunRecord> runs = ResultsStore::open_existing(db).runs();
+  ASSERT_EQ(runs.size(), 2u);
+  EXPECT_EQ(runs[0], make_run(0));
+  EXPECT_EQ(runs[1], lost);
+  EXPECT_EQ(runs[1].cpu_s, std::nullopt);  // NULL, not 0
+}
+
+/// A database as format 2 stored it (before runs.cpu_s), holding make_run(i) of `indices`.
+void make_version_2_database(const std::filesystem::path& db, const CampaignMeta& meta,
+                             const std::vector<std::int64_t>& indices) {
+  SQLite::Database d(db.string(), SQLite::OPEN_READWRITE | SQLite::OPEN_CREATE);
+  d.exec("CREATE TABLE campaign(key TEXT PRIMARY KEY, value TEXT NOT NULL)");
+  d.exec(
+      "CREATE TABLE runs(run_index INTEGER PRIMARY KEY, seed TEXT NOT NULL, dispersion_json TEXT NOT NULL,"
+      " outcome TEXT NOT NULL, metrics_json TEXT NOT NULL, run_hash TEXT NOT NULL, wall_s REAL NOT NULL,"
+      " trace_json TEXT NOT NULL)");
+  SQLite::Statement key(d, "INSERT INTO campaign(key, value) VALUES(?, ?)");
+  for (const auto& [name, value] : std::vector<std::pair<std::string, std::string>>{
+           {"format_version", "2"},
+           {"scenario_yaml", meta.scenario_yaml},
+           {"campaign_seed", std::to_string(meta.campaign_seed)},
+           {"runs_requested", std::to_string(meta.runs_requested)}}) {
+    key.bind(1, name);
+    key.bind(2, value);
+    key.exec();
+    key.reset();
+  }
+  SQLite::Statement run(d, "INSERT INTO runs VALUES(?, ?, ?, ?, ?, ?, ?, ?)");
+  for (const std::int64_t i : indices) {
+    const RunRecord r = make_run(i);
+    run.bind(1, r.index);
+    run.bind(2, std::to_string(r.seed));
+    run.bind(3, r.dispersion_json);
+    run.bind(4, r.outcome);
+    run.bind(5, r.metrics_json);
+    run.bind(6, r.run_hash);
+    run.bind(7, r.wall_s);
+    run.bind(8, r.trace_json);
+    run.exec();
+    run.reset();
+  }
+}
+
+std::string format_version_of(const std::filesystem::path& db) {
+  SQLite::Database d(db.string(), SQLite::OPEN_READONLY);
+  return d.execAndGet("SELECT value FROM campaign WHERE key = 'format_version'").getString();
+}
+
+// Campaigns stored before runs.cpu_s (format 2) are read as they are, without CPU figures;
+// merged with a version-3 shard they give a version-3 database; the first writer that opens
+// one (a campaign resumed) migrates it, and its new runs have their figures.
+TEST_F(ResultsStoreTest, AVersion2DatabaseIsReadAsItIsAndMigratedByItsWriter) {
+  const CampaignMeta meta{"scenario: {}\n", 9, 10};
+  const std::filesystem::path old_db = dir_ / "old.sqlite", new_db = dir_ / "new.sqlite", merged = dir_ / "merged.sqlite";
+  make_version_2_database(old_db, meta, {0, 2});
+  {
+    ResultsStore reader = ResultsStore::open_existing(old_db);
+    EXPECT_EQ(reader.runs(), (std::vector<RunRecord>{make_run_without_cpu(0), make_run_without_cpu(2)}));
+    EXPECT_THROW(reader.insert(make_run(4)), ResultsMismatch);
+  }
+  EXPECT_EQ(format_version_of(old_db), "2");
+
+  ResultsStore::open_or_create(new_db, meta).insert(make_run(1));
+  EXPECT_EQ(merge_campaigns({old_db, new_db}, merged).added, 3);
+  EXPECT_EQ(format_version_of(merged), "3");
+  EXPECT_EQ(ResultsStore::open_existing(merged).runs(),
+            (std::vector<RunRecord>{make_run_without_cpu(0), make_run(1), make_run_without_cpu(2)}));
+  EXPECT_EQ(format_version_of(old_db), "2");  // a merge's source is only read
+
+  {
+    ResultsStore writer = ResultsStore::open_or_create(old_db, meta);
+    EXPECT_EQ(format_version_of(old_db), "3");
+    writer.insert(make_run(4));
+  }
+  EXPECT_EQ(ResultsStore::open_existing(old_db).runs(),
+            (std::vector<RunRecord>{make_run_without_cpu(0), make_run_without_cpu(2), make_run(4)}));
 }
 
 }  // namespace

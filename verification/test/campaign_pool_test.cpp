@@ -42,8 +42,12 @@ std::filesystem::path fresh_db(const std::string& name) {
   return dir / "results.sqlite";
 }
 
-std::vector<RunRecord> without_wall_time(std::vector<RunRecord> runs) {
-  for (auto& r : runs) r.wall_s = 0.0;
+/// The runs without their informative wall and CPU times, which vary from one run to the next.
+std::vector<RunRecord> without_timings(std::vector<RunRecord> runs) {
+  for (auto& r : runs) {
+    r.wall_s = 0.0;
+    r.cpu_s.reset();
+  }
   return runs;
 }
 
@@ -54,8 +58,8 @@ TEST(CampaignPool, SameRecordsForOneAndThreeWorkers) {
   ResultsStore three = ResultsStore::open_or_create(fresh_db("three"), meta);
   EXPECT_EQ(run_pending(one, 11, 40, factory, {.jobs = 1}), 40);
   EXPECT_EQ(run_pending(three, 11, 40, factory, {.jobs = 3}), 40);
-  const auto a = without_wall_time(one.runs());
-  const auto b = without_wall_time(three.runs());
+  const auto a = without_timings(one.runs());
+  const auto b = without_timings(three.runs());
   ASSERT_EQ(a.size(), 40u);
   EXPECT_EQ(a, b);
   EXPECT_EQ(a[5].outcome, "worker_error");
@@ -98,7 +102,7 @@ TEST(CampaignPool, StopsOnRequestAndResumesWithoutRepeats) {
 
   ResultsStore whole = ResultsStore::open_or_create(fresh_db("whole"), meta);
   run_pending(whole, 3, 30, factory, {.jobs = 1});
-  EXPECT_EQ(without_wall_time(store.runs()), without_wall_time(whole.runs()));
+  EXPECT_EQ(without_timings(store.runs()), without_timings(whole.runs()));
 }
 
 TEST(CampaignPool, ParsesShards) {
@@ -128,7 +132,7 @@ TEST(CampaignPool, ShardsMergeIntoTheWholeCampaign) {
   EXPECT_EQ(counts.duplicates, 0);
   ResultsStore merged = ResultsStore::open_existing(target);
   EXPECT_EQ(merged.meta(), meta);
-  EXPECT_EQ(without_wall_time(merged.runs()), without_wall_time(whole.runs()));
+  EXPECT_EQ(without_timings(merged.runs()), without_timings(whole.runs()));
   const auto hash = summarize_campaign(whole.runs(), 23).campaign_hash;
   EXPECT_EQ(hash.size(), 32u);
   EXPECT_EQ(summarize_campaign(merged.runs(), 23).campaign_hash, hash);

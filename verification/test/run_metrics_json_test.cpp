@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "verification/campaign.hpp"
+#include "verification/report.hpp"
 #include "verification/run_metrics_json.hpp"
 
 namespace shelfcross::verification {
@@ -194,6 +195,48 @@ TEST(CampaignSummary, EveryMetricIsSummarizedAndTheSummaryReadsBack) {
   json missing = j;
   missing["safety"].erase("contact_upper_95");
   EXPECT_EQ(error_of([&] { missing.get<CampaignSummary>(); }), "campaign summary: 'safety.contact_upper_95': missing");
+}
+
+// The cost is over the runs with a CPU figure (a lost run has none), per simulated second over
+// those with a mission time too; with no figure at all (a database from before cpu_s) the
+// report says so instead of showing zeros.
+TEST(CampaignSummary, CostOfTheRunsWithACpuFigure) {
+  RunMetrics slower = full_metrics();
+  slower.mission_time_s = 31.375;
+  std::vector<RunRecord> runs{record(0, "success", {full_metrics(), "", std::nullopt}),
+                              record(1, "collision", {slower, "shelf 0 beam 2", std::nullopt}),
+                              record(2, "crashed", {std::nullopt, "signal 11", 11})};
+  runs[0].cpu_s = 2.0;
+  runs[1].cpu_s = 4.0;
+  const CampaignSummary s = summarize_campaign(runs, 3);
+  EXPECT_EQ(s.cost.cpu_s_per_run.count, 2);
+  EXPECT_DOUBLE_EQ(s.cost.cpu_s_per_run.mean, 3.0);
+  EXPECT_DOUBLE_EQ(s.cost.cpu_s_per_run.max, 4.0);
+  EXPECT_DOUBLE_EQ(s.cost.cpu_s_per_simulated_s.value(), 6.0 / (21.375 + 31.375));
+  EXPECT_DOUBLE_EQ(s.cost.runs_per_core_hour.value(), 1200.0);
+  const json j = s;
+  EXPECT_EQ(j["cost"]["runs_with_cpu_s"], 2);
+  EXPECT_EQ(json(j.get<CampaignSummary>()), j);
+  json inconsistent = j;
+  inconsistent["cost"]["runs_with_cpu_s"] = 3;
+  EXPECT_EQ(error_of([&] { inconsistent.get<CampaignSummary>(); }),
+            "campaign summary: 'cost.runs_with_cpu_s': differs from cpu_s_per_run.count");
+  const std::string md = cost_section(s.cost, s.runs);
+  EXPECT_NE(md.find("| runs with a CPU figure | 2 of 3 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| CPU seconds per run: mean, p50, p95, max | 3.00, 3.00, 3.90, 4.00 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| CPU seconds per simulated second | 0.114 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| runs per core-hour | 1200 |"), std::string::npos) << md;
+
+  for (RunRecord& r : runs) r.cpu_s.reset();
+  const CampaignSummary none = summarize_campaign(runs, 3);
+  EXPECT_EQ(none.cost.cpu_s_per_run.count, 0);
+  EXPECT_EQ(none.cost.cpu_s_per_simulated_s, std::nullopt);
+  EXPECT_EQ(none.cost.runs_per_core_hour, std::nullopt);
+  const json k = none;
+  EXPECT_EQ(k["cost"], json::parse(R"({"runs_with_cpu_s": 0, "cpu_s_per_run": null, "cpu_s_per_simulated_s": null,)"
+                                   R"( "runs_per_core_hour": null})"));
+  EXPECT_EQ(json(k.get<CampaignSummary>()), k);
+  EXPECT_NE(cost_section(none.cost, none.runs).find("CPU time not recorded"), std::string::npos);
 }
 
 TEST(CampaignSummary, AStoredRunThatDoesNotReadBackStopsTheSummary) {
