@@ -226,7 +226,10 @@ CampaignSummary write_campaign_report(const std::filesystem::path& dir) {
   std::ofstream md(dir / "report.md");
   md << "# Crossing campaign: " << scenario.name << "\n\n";
   md << "Campaign seed " << store.meta().campaign_seed << ", " << summary.runs << " of " << store.meta().runs_requested
-     << " runs stored. Campaign hash `" << summary.campaign_hash << "`.\n\n";
+     << " runs stored. "
+     << (summary.campaign_hash.empty() ? std::string("Campaign hash: once every run is stored.")
+                                       : "Campaign hash `" + summary.campaign_hash + "`.")
+     << "\n\n";
   md << "| | |\n|---|---|\n";
   md << "| successes | " << summary.successes << " |\n";
   md << "| success rate | " << fixed(summary.success_rate, 4) << " |\n";

@@ -69,6 +69,9 @@ TEST(CmdCampaign, ShardsMergedEqualOneProcess) {
   EXPECT_EQ(indices(root / "s0" / "results.sqlite"), (std::vector<int>{0, 2}));
   EXPECT_EQ(indices(root / "s1" / "results.sqlite"), (std::vector<int>{1, 3}));
   EXPECT_EQ(campaign_hash(root / "s0"), "");  // a shard alone is not the campaign
+  EXPECT_NE(read_text(root / "s0" / "report.md").find("Campaign hash: once every run is stored."), std::string::npos);
+  EXPECT_NE(read_text(root / "whole" / "report.md").find("Campaign hash `" + campaign_hash(root / "whole") + "`."),
+            std::string::npos);
 
   // Merging the first shard only: incomplete; then the second too (the first again is harmless).
   const std::string merged = (root / "merged").string();
