@@ -108,6 +108,17 @@ int finish(const CampaignOptions& o, const verification::Shard& shard, verificat
               << nlohmann::json(summary.success_lower_95) << "\n";
     if (p.done == p.total) std::cout << "campaign hash " << summary.campaign_hash << "\n";
   }
+  if (const verification::CostSummary& cost = summary.cost; cost.cpu_s_per_run.count > 0) {
+    char line[160];
+    std::snprintf(line, sizeof line, "CPU per run %.2f s (mean of %lld runs with a figure)", cost.cpu_s_per_run.mean,
+                  static_cast<long long>(cost.cpu_s_per_run.count));
+    std::cout << line;
+    if (cost.cpu_s_per_simulated_s) {
+      std::snprintf(line, sizeof line, ", %.3f s per simulated second", *cost.cpu_s_per_simulated_s);
+      std::cout << line;
+    }
+    std::cout << "\n";
+  }
   std::cout << "wrote " << o.out << "/results.sqlite, summary.json, report.md\n";
   if (p.done < p.total) {
     std::cout << "interrupted: run the same command again to resume\n";
