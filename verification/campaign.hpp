@@ -71,7 +71,6 @@ std::vector<std::optional<double>> summary_metric_values(const RunMetrics& m);
 struct CostSummary {
   Summary cpu_s_per_run;  ///< count 0: no run has a figure (a database from before cpu_s)
   std::optional<double> cpu_s_per_simulated_s;  ///< sum cpu_s / sum mission_time_s, runs with both
-  std::optional<double> runs_per_core_hour;     ///< 3600 s / mean cpu_s per run
 };
 
 /// A campaign's summary (summary.json), over the stored runs 0..runs_requested-1.

@@ -122,9 +122,10 @@ std::string cost_section(const CostSummary& c, std::int64_t runs) {
      << "| CPU seconds per run: mean, p50, p95, max | " << fixed(s.mean, 2) << ", " << fixed(s.p50, 2) << ", "
      << fixed(s.p95, 2) << ", " << fixed(s.max, 2) << " |\n"
      << "| CPU seconds per simulated second | " << or_none(c.cpu_s_per_simulated_s, 3) << " |\n"
-     << "| runs per core-hour | " << or_none(c.runs_per_core_hour, 0) << " |\n\n"
-     << "CPU time (user + system) each run took in its worker process; it depends on the machine and its load. "
-        "Runs lost with their worker (crashed, hung) or failed in it have no figure.\n\n";
+     << "| runs per core-hour | " << (s.mean > 0.0 ? fixed(3600.0 / s.mean, 0) : std::string("-")) << " |\n\n"
+     << "CPU time (user + system) each run took in its worker process (with in-process worker threads: its "
+        "thread's); it depends on the machine and its load. Runs lost with their worker (crashed, hung) or "
+        "failed in it have no figure.\n\n";
   return md.str();
 }
 

@@ -237,10 +237,12 @@ RunRecord decode_run_record(const std::string& message) {
                 j.at("metrics_json").get<std::string>(),    j.at("run_hash").get<std::string>(),
                 j.at("wall_s").get<double>(),               j.at("trace_json").get<std::string>(),
                 std::nullopt};
-    // None when null (nothing measured it) or absent (a sender from before cpu_s).
-    if (const auto cpu = j.find("cpu_s"); cpu != j.end() && !cpu->is_null()) {
-      if (!cpu->is_number()) throw std::invalid_argument("malformed run record message: cpu_s is not a number");
-      r.cpu_s = cpu->get<double>();
+    // Required (every sender is this program's own build); null when nothing measured it.
+    if (const auto& cpu = j.at("cpu_s"); !cpu.is_null()) {
+      if (!cpu.is_number() || !(cpu.get<double>() >= 0.0)) {
+        throw std::invalid_argument("malformed run record message: cpu_s is not a number >= 0");
+      }
+      r.cpu_s = cpu.get<double>();
     }
     return r;
   } catch (const nlohmann::json::exception& e) {

@@ -93,6 +93,8 @@ TEST(MpiCampaign, ThreeRanksEqualOneProcess) {
   EXPECT_EQ(campaign_hash(root / "mpi"), campaign_hash(root / "one"));
   EXPECT_EQ(campaign_hash(root / "one").size(), 32u);
   EXPECT_EQ(stored_link_models(root / "mpi" / "results.sqlite"), std::vector<std::string>(4, "sdk"));
+  // Each run's CPU figure travels from the worker rank's process to rank 0's store.
+  EXPECT_EQ(nlohmann::json::parse(read_text(root / "mpi" / "summary.json"))["cost"]["cpu_s_per_run"]["count"], 4);
   // The same command again resumes: nothing left to do, nothing run twice.
   EXPECT_EQ(wait_exit(spawn(concat(mpirun(3, {}), campaign_args(scenario, 4, root / "mpi")))), 0);
   EXPECT_EQ(indices(root / "mpi" / "results.sqlite"), (std::vector<int>{0, 1, 2, 3}));

@@ -28,12 +28,13 @@ TEST(RecordMessage, RoundTripsExactly) {
   EXPECT_EQ(decode_record(encode_record(lost)), lost);
 }
 
-TEST(RecordMessage, CpuSecondsMayBeNullOrAbsentButNothingElse) {
+TEST(RecordMessage, CpuSecondsAreANumberAtLeastZeroOrNull) {
   const std::string fields = R"("index":1,"seed":2,"dispersion_json":"{}","outcome":"success","metrics_json":"{}",)"
                              R"("run_hash":"","wall_s":0.5,"trace_json":"{}")";
   EXPECT_EQ(decode_record("{" + fields + R"(,"cpu_s":0.25})").cpu_s, 0.25);
   EXPECT_EQ(decode_record("{" + fields + R"(,"cpu_s":null})").cpu_s, std::nullopt);
-  EXPECT_EQ(decode_record("{" + fields + "}").cpu_s, std::nullopt);  // a sender from before cpu_s
+  EXPECT_THROW(decode_record("{" + fields + "}"), std::invalid_argument);  // every sender writes it
+  EXPECT_THROW(decode_record("{" + fields + R"(,"cpu_s":-0.25})"), std::invalid_argument);
   EXPECT_THROW(decode_record("{" + fields + R"(,"cpu_s":"0.25"})"), std::invalid_argument);
   EXPECT_THROW(decode_record("{" + fields + R"(,"cpu_s":true})"), std::invalid_argument);
 }
