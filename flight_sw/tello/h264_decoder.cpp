@@ -1,8 +1,10 @@
 #include "flight_sw/tello/h264_decoder.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -38,6 +40,12 @@ struct H264Decoder::Impl {
   AVFrame* latest = nullptr;  // the last decoded picture
   bool have_latest = false;
   SwsContext* sws = nullptr;
+  // The access unit's bytes followed by AV_INPUT_BUFFER_PADDING_SIZE zero bytes: libavcodec's
+  // parser and bit readers read up to that far past the end of their input (avcodec.h,
+  // av_parser_parse2: "the full buffer size is assumed to be buf_size +
+  // AV_INPUT_BUFFER_PADDING_SIZE"); without them a damaged frame ending at a page boundary
+  // faults (the video_receiver fuzzer found it).
+  std::vector<uint8_t> padded;
 
   ~Impl() {
     sws_freeContext(sws);
@@ -100,7 +108,14 @@ H264Decoder::~H264Decoder() = default;
 
 DecodeResult H264Decoder::decode(std::string_view au) {
   DecodeResult r;
-  const auto* data = reinterpret_cast<const uint8_t*>(au.data());
+  if (au.size() > static_cast<std::size_t>(std::numeric_limits<int>::max() - AV_INPUT_BUFFER_PADDING_SIZE)) {
+    r.error = true;
+    return r;
+  }
+  std::vector<uint8_t>& buf = impl_->padded;
+  buf.assign(au.size() + AV_INPUT_BUFFER_PADDING_SIZE, 0);
+  std::copy(au.begin(), au.end(), reinterpret_cast<char*>(buf.data()));
+  const uint8_t* data = buf.data();
   int size = static_cast<int>(au.size());
   while (size > 0) {
     uint8_t* out = nullptr;
