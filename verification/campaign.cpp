@@ -22,9 +22,10 @@ render::RenderOptions render_options_for(const Scenario& s) {
   return o;
 }
 
-CampaignWorker::CampaignWorker(std::shared_ptr<const Scenario> nominal, DrawFunction draw)
+CampaignWorker::CampaignWorker(std::shared_ptr<const Scenario> nominal, DrawFunction draw, CpuClock cpu_clock)
     : nominal_(std::move(nominal)),
       draw_(std::move(draw)),
+      cpu_clock_(cpu_clock),
       renderer_(std::make_unique<render::Renderer>(nominal_->warehouse, nominal_->camera,
                                                    render_options_for(*nominal_))) {}
 
@@ -37,29 +38,28 @@ RunRecord CampaignWorker::run_drawn(std::int64_t index, std::uint64_t seed, cons
 }
 
 namespace {
-double cpu_clock_s(clockid_t clock) {
+// CPU seconds (user + system) of the calling thread or of the whole process since some fixed
+// point: their difference across a run is its RunRecord::cpu_s.
+double cpu_clock_s(CpuClock which) {
   timespec t{};
+  const clockid_t clock = which == CpuClock::thread ? CLOCK_THREAD_CPUTIME_ID : CLOCK_PROCESS_CPUTIME_ID;
   if (::clock_gettime(clock, &t) != 0) throw std::runtime_error("clock_gettime: no CPU-time clock");
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 }  // namespace
 
-double thread_cpu_s() { return cpu_clock_s(CLOCK_THREAD_CPUTIME_ID); }
-double process_cpu_s() { return cpu_clock_s(CLOCK_PROCESS_CPUTIME_ID); }
-
 RunRecord CampaignWorker::run_setup(std::int64_t index, const RunSetup& setup) {
   const auto t0 = std::chrono::steady_clock::now();  // informative wall time only
-  // The CPU time of this thread, which runs the whole co-simulation (the renderer inline, the
-  // video coded and decoded inline), so of this run alone even beside other workers' threads.
-  // llvmpipe's own rasteriser threads, if it has any, are not counted: it starts one per CPU
-  // unless LP_NUM_THREADS=0. A worker process sets that and replaces this figure with its
-  // whole process's (run_process.cpp).
-  const double cpu0_s = thread_cpu_s();
+  // The thread's CPU time runs the whole co-simulation (the renderer inline, the video coded
+  // and decoded inline), so it is this run's alone even beside other workers' threads; but
+  // llvmpipe's own rasteriser threads, if it has any, are not counted (it starts one per CPU
+  // unless LP_NUM_THREADS=0). A worker process sets that and counts its whole process.
+  const double cpu0_s = cpu_clock_s(cpu_clock_);
   renderer_->set_warehouse(setup.scenario->warehouse);
   const RunResult result = run_cosimulation(setup, *renderer_);
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   RunRecord record = make_run_record(index, setup, result, wall_s);
-  record.cpu_s = thread_cpu_s() - cpu0_s;
+  record.cpu_s = cpu_clock_s(cpu_clock_) - cpu0_s;
   return record;
 }
 
@@ -91,8 +91,8 @@ std::string trace_json(const RunResult& result) {
     yaw.push_back(rounded(s.yaw_rad, 1e-4));
   }
   nlohmann::json j{{"t", t}, {"x", x}, {"y", y}, {"z", z}, {"yaw", yaw}};
-  j["approach_start_s"] = result.approach_start_s ? nlohmann::json(*result.approach_start_s) : nlohmann::json(nullptr);
-  j["cross_start_s"] = result.cross_start_s ? nlohmann::json(*result.cross_start_s) : nlohmann::json(nullptr);
+  j["approach_start_s"] = number_or_null(result.approach_start_s);
+  j["cross_start_s"] = number_or_null(result.cross_start_s);
   return j.dump();
 }
 
@@ -214,8 +214,6 @@ Summary read_summary(StrictObject m) {
   return out;
 }
 
-nlohmann::json optional_json(const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); }
-
 }  // namespace
 
 void to_json(nlohmann::json& j, const CampaignSummary& s) {
@@ -225,7 +223,7 @@ void to_json(nlohmann::json& j, const CampaignSummary& s) {
   const CostSummary& c = s.cost;
   // null where no run has a figure (runs per core-hour: 3600 / cpu_s_per_run.mean)
   const json cost{{"cpu_s_per_run", c.cpu_s_per_run.count > 0 ? summary_json(c.cpu_s_per_run) : json(nullptr)},
-                  {"cpu_s_per_simulated_s", optional_json(c.cpu_s_per_simulated_s)}};
+                  {"cpu_s_per_simulated_s", number_or_null(c.cpu_s_per_simulated_s)}};
   const SafetySummary& f = s.safety;
   j = json{{"runs", s.runs},
            {"runs_requested", s.runs_requested},

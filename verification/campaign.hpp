@@ -27,11 +27,17 @@ namespace shelfcross::verification {
 /// proposal instead (search.hpp). Must be a pure function of the seed (runs replay).
 using DrawFunction = std::function<DrawnValues(std::uint64_t run_seed)>;
 
+/// Whose CPU time a run's RunRecord::cpu_s is: the worker thread's (a worker thread beside
+/// others in one process), or the whole process's (a worker process serving one run at a time,
+/// run_process.hpp, where any thread a driver adds is counted too).
+enum class CpuClock { thread, process };
+
 /// One worker thread: its own renderer (EGL context), re-targeted at each run's dispersed
 /// warehouse; everything else is built per run.
 class CampaignWorker : public RunWorker {
  public:
-  explicit CampaignWorker(std::shared_ptr<const Scenario> nominal, DrawFunction draw = {});
+  explicit CampaignWorker(std::shared_ptr<const Scenario> nominal, DrawFunction draw = {},
+                          CpuClock cpu_clock = CpuClock::thread);
   /// The run with draw(seed), or the scenario's own draws when no draw function was given.
   RunRecord run(std::int64_t index, std::uint64_t seed) override;
   /// The run with the given draws (what a worker process is sent by its parent).
@@ -41,16 +47,12 @@ class CampaignWorker : public RunWorker {
   RunRecord run_setup(std::int64_t index, const RunSetup& setup);
   std::shared_ptr<const Scenario> nominal_;
   DrawFunction draw_;
+  CpuClock cpu_clock_;
   std::unique_ptr<render::Renderer> renderer_;
 };
 
 /// The renderer options a scenario asks for (noise, blur).
 render::RenderOptions render_options_for(const Scenario& scenario);
-
-/// CPU seconds (user + system) of the calling thread, or of the whole process, from some fixed
-/// point: their difference across a run is its RunRecord::cpu_s.
-double thread_cpu_s();
-double process_cpu_s();
 
 /// The record a run leaves in the results database (cpu_s none: the caller measures it).
 RunRecord make_run_record(std::int64_t index, const RunSetup& setup, const RunResult& result, double wall_s);

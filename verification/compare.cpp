@@ -11,6 +11,7 @@
 #include "verification/report.hpp"
 #include "verification/run_metrics_json.hpp"
 #include "verification/statistics.hpp"
+#include "verification/strict_json.hpp"
 
 namespace shelfcross::verification {
 namespace {
@@ -198,7 +199,6 @@ json run_comparison(const Scenario& nominal, std::int64_t runs, std::uint64_t se
   const std::int64_t shown = write_comparison_plots(nominal, all_runs, out_dir);
   json j{{"scenario", nominal.name}, {"seed", seed}, {"runs", runs}, {"plotted_run", shown}, {"complete", complete}};
   json table = json::array();
-  const auto opt = [](const std::optional<double>& v) { return v ? json(*v) : json(nullptr); };
   for (const StrategyRow& r : rows) {
     table.push_back({{"strategy", r.strategy},
                      {"runs", r.runs},
@@ -209,9 +209,9 @@ json run_comparison(const Scenario& nominal, std::int64_t runs, std::uint64_t se
                      {"contact_upper_95", r.contact_upper_95},
                      {"safe_aborts", r.safe_aborts},
                      {"inventory_errors", r.inventory_errors},
-                     {"mean_distance_m", opt(r.mean_distance_m)},
-                     {"mean_time_s", opt(r.mean_time_s)},
-                     {"mean_inventory_recall", opt(r.mean_recall)},
+                     {"mean_distance_m", number_or_null(r.mean_distance_m)},
+                     {"mean_time_s", number_or_null(r.mean_time_s)},
+                     {"mean_inventory_recall", number_or_null(r.mean_recall)},
                      {"paper_distance_m", r.paper_distance_m},
                      {"paper_time_s", r.paper_time_s}});
   }

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "verification/cosim.hpp"
+#include "verification/strict_json.hpp"
 
 namespace shelfcross::verification {
 namespace {
@@ -225,7 +226,7 @@ std::string encode_run_record(const RunRecord& r) {
                         {"run_hash", r.run_hash},
                         {"wall_s", r.wall_s},
                         {"trace_json", r.trace_json},
-                        {"cpu_s", r.cpu_s ? nlohmann::json(*r.cpu_s) : nlohmann::json(nullptr)}}
+                        {"cpu_s", number_or_null(r.cpu_s)}}
       .dump();
 }
 

@@ -9,8 +9,6 @@ namespace {
 
 using nlohmann::json;
 
-json optional_number(const std::optional<double>& v) { return v ? json(*v) : json(nullptr); }
-
 json cell_json(const std::optional<flight_sw::CellIndex>& c) {
   return c ? json{{"level", c->level}, {"column", c->column}} : json(nullptr);
 }
@@ -18,7 +16,7 @@ json cell_json(const std::optional<flight_sw::CellIndex>& c) {
 json response_json(const std::optional<StepResponse>& r) {
   if (!r) return nullptr;
   return {{"initial_error", r->initial_error},       {"band", r->band},
-          {"settling_time_s", optional_number(r->settling_time_s)}, {"overshoot", optional_number(r->overshoot)},
+          {"settling_time_s", number_or_null(r->settling_time_s)}, {"overshoot", number_or_null(r->overshoot)},
           {"overshoot_abs", r->overshoot_abs},       {"peak_abs_error", r->peak_abs_error}};
 }
 
@@ -146,9 +144,9 @@ void to_json(json& j, const RunMetrics& m) {
            {"target", cell_json(m.target)},
            {"crossed", cell_json(m.crossed)},
            {"crossed_target", m.crossed_target},
-           {"entry_offset_y_m", optional_number(m.entry_offset_y_m)},
-           {"entry_offset_z_m", optional_number(m.entry_offset_z_m)},
-           {"min_clearance_m", optional_number(m.min_clearance_m)},
+           {"entry_offset_y_m", number_or_null(m.entry_offset_y_m)},
+           {"entry_offset_z_m", number_or_null(m.entry_offset_z_m)},
+           {"min_clearance_m", number_or_null(m.min_clearance_m)},
            {"altitude", response_json(m.altitude)},
            {"heading", response_json(m.heading)},
            {"lateral", response_json(m.lateral)},

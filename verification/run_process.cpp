@@ -346,7 +346,7 @@ int serve_worker_runs(int fd) {
     const json setup = json::parse(line);
     auto nominal = std::make_shared<const Scenario>(
         parse_scenario(setup.at("scenario_yaml").get<std::string>(), "the campaign's scenario"));
-    worker = std::make_unique<CampaignWorker>(nominal);
+    worker = std::make_unique<CampaignWorker>(nominal, DrawFunction{}, CpuClock::process);
   } catch (const std::exception& e) {
     send_line(fd, json{{"error", e.what()}}.dump());
     return 1;
@@ -365,14 +365,8 @@ int serve_worker_runs(int fd) {
       return 1;  // the parent records the run as crashed: it cannot be a run of this campaign
     }
     RunRecord record;
-    // The run's CPU time is this process's across it (it serves many runs: the difference):
-    // with LP_NUM_THREADS=0 llvmpipe rasterises on this thread, so nothing else runs here, and
-    // any thread a driver did add would be counted. It replaces run_drawn's own figure, which
-    // is its thread's only.
-    const double cpu0_s = process_cpu_s();
     try {
       record = worker->run_drawn(index, seed, draws);
-      record.cpu_s = process_cpu_s() - cpu0_s;
     } catch (const std::exception& e) {
       record = worker_error_record(index, seed, e.what());  // no CPU figure, as in a worker thread
     }

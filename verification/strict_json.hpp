@@ -14,6 +14,11 @@
 
 namespace shelfcross::verification {
 
+/// The writer's side of StrictObject::optional_number: the number, or null when there is none.
+inline nlohmann::json number_or_null(const std::optional<double>& v) {
+  return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
+}
+
 class StrictObject {
  public:
   using json = nlohmann::json;

@@ -22,6 +22,7 @@
 #include "verification/cosim.hpp"
 #include "verification/h264_encoder.hpp"
 #include "verification/run_metrics_json.hpp"
+#include "verification/strict_json.hpp"
 #include "verification/tello_state_format.hpp"
 
 namespace shelfcross::verification {
@@ -622,7 +623,6 @@ EmulatorReport TelloEmulator::report() const {
 
 std::string emulator_report_json(const EmulatorReport& r) {
   using nlohmann::json;
-  const auto opt = [](const std::optional<double>& v) { return v ? json(*v) : json(nullptr); };
   json inventory = json::array();
   for (const auto& [id, shelf, level, column] : r.inventory_truth) {
     inventory.push_back({{"id", id}, {"shelf", shelf}, {"level", level}, {"column", column}});
@@ -636,9 +636,9 @@ std::string emulator_report_json(const EmulatorReport& r) {
          {"flew", r.flew},
          {"landed", r.landed},
          {"crossed", r.crossed ? json{{"level", r.crossed->level}, {"column", r.crossed->column}} : json(nullptr)},
-         {"entry_offset_y_m", opt(r.entry_offset_y_m)},
-         {"entry_offset_z_m", opt(r.entry_offset_z_m)},
-         {"min_clearance_m", opt(r.min_clearance_m)},
+         {"entry_offset_y_m", number_or_null(r.entry_offset_y_m)},
+         {"entry_offset_z_m", number_or_null(r.entry_offset_z_m)},
+         {"min_clearance_m", number_or_null(r.min_clearance_m)},
          {"inventory_truth", inventory},
          {"start", {{"p_W_m", {r.start_p_W_m.x(), r.start_p_W_m.y(), r.start_p_W_m.z()}}, {"yaw_rad", r.start_yaw_rad}}},
          {"seed", r.seed},
