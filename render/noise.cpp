@@ -4,8 +4,9 @@
 #include <cassert>
 #include <cmath>
 
-#include <opencv2/core/hal/intrin.hpp>
-#include <opencv2/imgproc.hpp>
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
 
 #include "shelfcross/random.hpp"
 
@@ -46,39 +47,85 @@ void SensorNoise::apply(cv::Mat& image, std::uint64_t frame_seed) const {
   }
 }
 
+namespace {
+
+// One row of the fused pass, pixels [from, cols): bgr[3i + k] = sat(rgba[4i + 2 - k] + n[3i + k])
+// for k = 0, 1, 2 (B, G, R), sat clamping to 0..255.
+void rgba_to_bgr_noise_tail(const std::uint8_t* rgba, const std::int8_t* n, std::uint8_t* bgr,
+                            int from, int cols) {
+  for (int i = from; i < cols; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      const int v = rgba[4 * i + 2 - k] + n[3 * i + k];
+      bgr[3 * i + k] = static_cast<std::uint8_t>(v < 0 ? 0 : (v > 255 ? 255 : v));
+    }
+  }
+}
+
+#if defined(__x86_64__)
+// The same, 16 pixels per step with SSSE3 (every x86-64 CPU since 2006; checked at run time):
+// returns the number of pixels done (a multiple of 16), the rest is left to the scalar tail.
+// Per 4 pixels, PSHUFB picks bytes 2 1 0, 6 5 4, 10 9 8, 14 13 12 of the RGBA quad (B G R of
+// each pixel; the alpha bytes dropped) into the low 12 bytes; the four 12-byte pieces are
+// joined into three 16-byte vectors by byte shifts. Saturating u8 + s8: with p' = p - 128 (the
+// top bit flipped), the signed saturating sum p' + n, flipped back, is min(255, max(0, p + n)).
+__attribute__((target("ssse3"))) int rgba_to_bgr_noise_ssse3(const std::uint8_t* rgba,
+                                                             const std::int8_t* n,
+                                                             std::uint8_t* bgr, int cols) {
+  const __m128i pick = _mm_setr_epi8(2, 1, 0, 6, 5, 4, 10, 9, 8, 14, 13, 12, -1, -1, -1, -1);
+  const __m128i bias = _mm_set1_epi8(static_cast<char>(0x80));
+  auto load = [](const void* p) { return _mm_loadu_si128(static_cast<const __m128i*>(p)); };
+  auto add_store = [&](std::uint8_t* out, __m128i p, const std::int8_t* noise) {
+    const __m128i sum = _mm_adds_epi8(_mm_xor_si128(p, bias), load(noise));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out), _mm_xor_si128(sum, bias));
+  };
+  int i = 0;
+  for (; i + 16 <= cols; i += 16) {
+    const std::uint8_t* s = rgba + 4 * i;
+    const __m128i q0 = _mm_shuffle_epi8(load(s), pick), q1 = _mm_shuffle_epi8(load(s + 16), pick),
+                  q2 = _mm_shuffle_epi8(load(s + 32), pick), q3 = _mm_shuffle_epi8(load(s + 48), pick);
+    // Bytes 0..47 of the BGR row piece: q0[0..11] q1[0..11] q2[0..11] q3[0..11].
+    const __m128i b0 = _mm_or_si128(q0, _mm_slli_si128(q1, 12));
+    const __m128i b1 = _mm_or_si128(_mm_srli_si128(q1, 4), _mm_slli_si128(q2, 8));
+    const __m128i b2 = _mm_or_si128(_mm_srli_si128(q2, 8), _mm_slli_si128(q3, 4));
+    add_store(bgr + 3 * i, b0, n + 3 * i);
+    add_store(bgr + 3 * i + 16, b1, n + 3 * i + 16);
+    add_store(bgr + 3 * i + 32, b2, n + 3 * i + 32);
+  }
+  return i;
+}
+#endif
+
+void rgba_to_bgr_noise_row(const std::uint8_t* rgba, const std::int8_t* n, std::uint8_t* bgr,
+                           int cols) {
+  int done = 0;
+#if defined(__x86_64__)
+  static const bool ssse3 = __builtin_cpu_supports("ssse3");
+  if (ssse3) done = rgba_to_bgr_noise_ssse3(rgba, n, bgr, cols);
+#endif
+  rgba_to_bgr_noise_tail(rgba, n, bgr, done, cols);
+}
+
+}  // namespace
+
 void SensorNoise::apply_rgba_to_bgr(const cv::Mat& rgba, cv::Mat& bgr, std::uint64_t frame_seed) const {
-  assert(channels_ == 3 && rgba.type() == CV_8UC4 && rgba.rows == rows_ && rgba.cols == cols_);
+  assert(rgba.rows == rows_);
   bgr.create(rows_, cols_, CV_8UC3);
+  apply_rgba_rows_to_bgr(rgba, 0, bgr, frame_seed);
+}
+
+void SensorNoise::apply_rgba_rows_to_bgr(const cv::Mat& rgba_rows, int first_row, cv::Mat& bgr,
+                                         std::uint64_t frame_seed) const {
+  assert(channels_ == 3 && rgba_rows.type() == CV_8UC4 && rgba_rows.cols == cols_ &&
+         first_row >= 0 && first_row + rgba_rows.rows <= rows_ && bgr.type() == CV_8UC3 &&
+         bgr.rows == rows_ && bgr.cols == cols_);
   // The same window as apply().
   const std::uint64_t h = mix64(frame_seed ^ 0xbb67ae8584caa73bULL);
   const std::vector<std::int8_t>& field = fields_[h % kFields];
   const int dx = static_cast<int>((h >> 8) % kMargin), dy = static_cast<int>((h >> 24) % kMargin);
-  const int row_bytes = cols_ * 3;
-  // Blocks of rows small enough to stay in the L2 cache between the conversion (OpenCV's own
-  // SIMD) and the noise pass over the same bytes.
-  constexpr int kBlockRows = 16;
-  for (int r0 = 0; r0 < rows_; r0 += kBlockRows) {
-    const int r1 = std::min(rows_, r0 + kBlockRows);
-    cv::Mat out = bgr.rowRange(r0, r1);
-    cv::cvtColor(rgba.rowRange(r0, r1), out, cv::COLOR_RGBA2BGR);
-    for (int r = r0; r < r1; ++r) {
-      std::uint8_t* p = bgr.ptr<std::uint8_t>(r);
-      const std::int8_t* n = field.data() + (static_cast<size_t>(r + dy) * field_cols_ + dx) * 3;
-      int c = 0;
-#if CV_SIMD128
-      // Saturating u8 + s8: with p' = p - 128 (flip the top bit), the signed saturating sum
-      // p' + n flipped back is min(255, max(0, p + n)).
-      const cv::v_uint8x16 bias = cv::v_setall_u8(0x80);
-      for (; c + 16 <= row_bytes; c += 16) {
-        const cv::v_int8x16 sum = cv::v_reinterpret_as_s8(cv::v_load(p + c) ^ bias) + cv::v_load(n + c);
-        cv::v_store(p + c, cv::v_reinterpret_as_u8(sum) ^ bias);
-      }
-#endif
-      for (; c < row_bytes; ++c) {
-        const int v = p[c] + n[c];
-        p[c] = static_cast<std::uint8_t>(v < 0 ? 0 : (v > 255 ? 255 : v));
-      }
-    }
+  for (int k = 0; k < rgba_rows.rows; ++k) {
+    const int r = first_row + k;
+    const std::int8_t* n = field.data() + (static_cast<size_t>(r + dy) * field_cols_ + dx) * 3;
+    rgba_to_bgr_noise_row(rgba_rows.ptr<std::uint8_t>(k), n, bgr.ptr<std::uint8_t>(r), cols_);
   }
 }
 

@@ -216,12 +216,14 @@ struct Renderer::Impl {
   // overlap: the inside of a convex box) can be drawn first without the depth test.
   bool room_first = false;
   // The world box the room's faces bound, and the largest |(x, y, 1)| over the lens region
-  // (for the test that the room covers every pixel, see draw_and_read).
+  // (for the test that the room covers every pixel, see draw).
   Eigen::AlignedBox3d arena;
   double max_ray_stretch = 1.0;
 
   std::unique_ptr<SensorNoise> noise;  // when options.noise_stddev > 0
   cv::Mat rgba_hi, rgba, acc;          // per-frame RGBA buffers, allocated once
+  static constexpr int kBandRows = 48;
+  cv::Mat band;                        // kBandRows RGBA rows (read_and_finish)
 
   Impl(const Warehouse& w, const CameraIntrinsics& k, const RenderOptions& o)
       : warehouse(w),
@@ -239,8 +241,10 @@ struct Renderer::Impl {
 
   void build(const SceneLayout& layout);
   void release_gl();  // deletes the GL objects build() made (context current)
-  void draw_and_read(const Eigen::Isometry3d& X_WC);  // -> rgba (1x image size)
-  void finish(std::uint64_t noise_seed, cv::Mat& bgr);
+  void draw(const Eigen::Isometry3d& X_WC);  // the frame into the framebuffer
+  void read();                                // framebuffer -> image() (1x image size)
+  void finish(std::uint64_t noise_seed, cv::Mat& bgr);  // image() -> bgr
+  void read_and_finish(std::uint64_t noise_seed, cv::Mat& bgr);  // framebuffer -> bgr
   cv::Mat& image() { return options.supersample > 1 ? rgba : rgba_hi; }
 };
 
@@ -396,9 +400,10 @@ void Renderer::Impl::build(const SceneLayout& layout) {
   // ---- per-frame buffers, once ----
   rgba_hi.create(hi_height, hi_width, CV_8UC4);
   rgba.create(K.height_px, K.width_px, CV_8UC4);
+  band.create(kBandRows, K.width_px, CV_8UC4);
 }
 
-void Renderer::Impl::draw_and_read(const Eigen::Isometry3d& X_WC) {
+void Renderer::Impl::draw(const Eigen::Isometry3d& X_WC) {
   egl.make_current();
   mesher.build(X_WC);
   const std::vector<GpuVertex>& vertices = mesher.vertices();
@@ -466,11 +471,15 @@ void Renderer::Impl::draw_and_read(const Eigen::Isometry3d& X_WC) {
   glUseProgram(textured_program);
   draw(kTexturedFaces, kFaceGroups);
   glDisable(GL_POLYGON_OFFSET_FILL);
-  // Rows come back bottom GL row first = image row 0 first (see gl_clip_from_camera).
-  // RGBA, the renderbuffer's own layout on Mesa: a plain copy (BGRA costs a swizzle pass,
-  // ~6x slower on llvmpipe); the channel order is fixed in finish().
+  check_gl("draw");
+}
+
+// Rows come back bottom GL row first = image row 0 first (see gl_clip_from_camera).
+// RGBA, the renderbuffer's own layout on Mesa: a plain copy (BGRA costs a swizzle pass,
+// ~6x slower on llvmpipe); the channel order is fixed in finish().
+void Renderer::Impl::read() {
   glReadPixels(0, 0, hi_width, hi_height, GL_RGBA, GL_UNSIGNED_BYTE, rgba_hi.data);
-  check_gl("draw and readback");
+  check_gl("readback");
   if (options.supersample > 1) {
     // Exact s x s block means for an integer factor.
     cv::resize(rgba_hi, rgba, rgba.size(), 0, 0, cv::INTER_AREA);
@@ -484,6 +493,30 @@ void Renderer::Impl::finish(std::uint64_t noise_seed, cv::Mat& bgr) {
   } else {
     cv::cvtColor(image(), bgr, cv::COLOR_RGBA2BGR);
   }
+}
+
+void Renderer::Impl::read_and_finish(std::uint64_t noise_seed, cv::Mat& bgr) {
+  if (options.supersample > 1) {
+    read();
+    finish(noise_seed, bgr);
+    return;
+  }
+  // Supersample 1: read() and finish() band by band, the same bytes. A band of RGBA rows is
+  // read into a buffer small enough to stay in the cache and converted from there, instead of
+  // the whole RGBA image going out to memory and coming back.
+  bgr.create(K.height_px, K.width_px, CV_8UC3);
+  for (int r0 = 0; r0 < K.height_px; r0 += kBandRows) {
+    const int r1 = std::min(K.height_px, r0 + kBandRows);
+    cv::Mat rows = band.rowRange(0, r1 - r0);
+    glReadPixels(0, r0, K.width_px, r1 - r0, GL_RGBA, GL_UNSIGNED_BYTE, rows.data);
+    if (noise) {
+      noise->apply_rgba_rows_to_bgr(rows, r0, bgr, noise_seed);
+    } else {
+      cv::Mat out = bgr.rowRange(r0, r1);
+      cv::cvtColor(rows, out, cv::COLOR_RGBA2BGR);
+    }
+  }
+  check_gl("readback");
 }
 
 Renderer::Renderer(const Warehouse& warehouse, const CameraIntrinsics& intrinsics,
@@ -548,8 +581,8 @@ cv::Mat Renderer::render(const Eigen::Isometry3d& X_WC, std::uint64_t noise_seed
 
 void Renderer::render_into(const Eigen::Isometry3d& X_WC, std::uint64_t noise_seed,
                            cv::Mat& bgr) {
-  impl_->draw_and_read(X_WC);
-  impl_->finish(noise_seed, bgr);
+  impl_->draw(X_WC);
+  impl_->read_and_finish(noise_seed, bgr);
 }
 
 cv::Mat Renderer::render_blurred(const Eigen::Isometry3d& X_WC_prev, const Eigen::Isometry3d& X_WC,
@@ -574,7 +607,8 @@ void Renderer::render_blurred_into(const Eigen::Isometry3d& X_WC_prev,
   for (int k = 0; k < n; ++k) {
     const Eigen::Isometry3d X =
         k == n - 1 ? X_WC : interpolate_pose(X_WC_prev, X_WC, static_cast<double>(k + 1) / n);
-    m.draw_and_read(X);
+    m.draw(X);
+    m.read();
     cv::add(m.acc, image, m.acc, cv::noArray(), CV_16U);
   }
   // Integer mean rounded half up: (sum + n/2) / n, exact (sum <= 64 * 255).

@@ -20,7 +20,8 @@
 //   4. [supersample s > 1: exact s x s block average (cv::resize INTER_AREA)]
 //      [motion blur: average of the N sub-pose renders, integer, rounded]
 //   5. RGBA -> BGR, fused with the noise when there is some: seeded, see noise.hpp (a field
-//      drawn once, a seeded window of it per frame).
+//      drawn once, a seeded window of it per frame). Without supersampling or motion blur,
+//      3 and 5 go band by band (a few dozen rows read, then converted while in the cache).
 // Deterministic: the same warehouse, intrinsics, options, pose and seed give byte-identical
 // images from one renderer or several (same machine and driver). No MSAA.
 //

@@ -17,6 +17,7 @@
 // checked against 1 px.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <iostream>
 #include <map>
@@ -281,6 +282,28 @@ TEST(SensorNoise, IsSeededWithTheRequestedSpread) {
   cv::meanStdDev(a.reshape(1), mean, stddev);
   EXPECT_NEAR(mean[0], 100.0, 0.3);
   EXPECT_NEAR(stddev[0], std::sqrt(25.0 + 1.0 / 12.0), 0.3);
+}
+
+TEST(SensorNoise, FusedConversionEqualsConvertThenAdd) {
+  // The renderer's fused pass (SIMD and scalar tail) against the two-step definition, on
+  // random bytes (so both saturations occur) of a width that is not a multiple of 16, whole
+  // and in bands.
+  for (int cols : {37, 960}) {
+    const SensorNoise noise(45, cols, 3, 40.0);
+    cv::Mat rgba(45, cols, CV_8UC4);
+    cv::randu(rgba, 0, 256);
+    for (std::uint64_t seed : {1u, 2u, 77u}) {
+      cv::Mat expected;
+      cv::cvtColor(rgba, expected, cv::COLOR_RGBA2BGR);
+      noise.apply(expected, seed);
+      cv::Mat whole, banded(45, cols, CV_8UC3, cv::Scalar::all(0));
+      noise.apply_rgba_to_bgr(rgba, whole, seed);
+      for (int r0 = 0; r0 < 45; r0 += 16)
+        noise.apply_rgba_rows_to_bgr(rgba.rowRange(r0, std::min(45, r0 + 16)), r0, banded, seed);
+      EXPECT_EQ(cv::norm(whole, expected, cv::NORM_INF), 0.0) << cols << " " << seed;
+      EXPECT_EQ(cv::norm(banded, expected, cv::NORM_INF), 0.0) << cols << " " << seed;
+    }
+  }
 }
 
 }  // namespace
