@@ -4,8 +4,8 @@
 # sanitizer report or a failed property stops the script with libFuzzer's report and the input
 # saved as build/fuzz/artifacts/<target>-crash-<sha1>.
 #   scripts/run-fuzz.sh ci [TARGET...]       what CI runs: each target a fixed number of inputs
-#                                            from libFuzzer seed 1, the same inputs on every
-#                                            machine (about 25 s each on CI's 2 cores)
+#                                            from libFuzzer seed 1 (repeatable: see below and
+#                                            fuzz/README.md; about 25 s each on CI's 2 cores)
 #   scripts/run-fuzz.sh SECONDS [TARGET...]  exploration: SECONDS each, a new random seed each
 #                                            time (libFuzzer prints it: "INFO: Seed: N")
 set -euo pipefail
@@ -16,6 +16,18 @@ shift || true
 # Inputs per target in CI mode: about 25 s at the rates CI measured (fuzz/README.md).
 declare -A ci_runs=([state_record]=800000 [sdk_command]=4000000 [scenario]=25000 [flight_config]=80000
                     [video_receiver]=25000)
+# The same seed alone does not give the same run: libFuzzer also steers by compared values, and
+# with address-space randomisation those include different pointers each time, and it re-reads
+# its corpus folder on a timer. CI mode turns both off (setarch -R, -reload=0) where the
+# machine allows it (a container's seccomp profile may refuse setarch -R: then it says so).
+no_aslr=()
+if [ "$mode" = ci ]; then
+  if setarch "$(uname -m)" -R true 2>/dev/null; then
+    no_aslr=(setarch "$(uname -m)" -R)
+  else
+    echo "run-fuzz: setarch -R refused here: address-space randomisation stays on, runs may differ slightly"
+  fi
+fi
 targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=(state_record sdk_command scenario flight_config video_receiver)
 cmake --preset fuzz >/dev/null
@@ -26,7 +38,7 @@ trap 'rm -rf "$scratch"' EXIT
 for t in "${targets[@]}"; do
   if [ "$mode" = ci ]; then
     [ -n "${ci_runs[$t]:-}" ] || { echo "run-fuzz.sh: no CI input count for target $t" >&2; exit 2; }
-    budget=(-seed=1 -runs="${ci_runs[$t]}")
+    budget=(-seed=1 -runs="${ci_runs[$t]}" -reload=0)
     echo "== fuzz: $t, ${ci_runs[$t]} inputs from seed 1, on fuzz/corpus/$t"
   else
     budget=(-max_total_time="$mode")
@@ -35,7 +47,7 @@ for t in "${targets[@]}"; do
   mkdir -p "$scratch/$t"
   # -rss_limit_mb: every target stays well below it; a leak or a blow-up does not.
   status=0
-  build/fuzz/fuzz/"${t}"_fuzz "${budget[@]}" -print_final_stats=1 -rss_limit_mb=2048 \
+  "${no_aslr[@]}" build/fuzz/fuzz/"${t}"_fuzz "${budget[@]}" -print_final_stats=1 -rss_limit_mb=2048 \
     -artifact_prefix=build/fuzz/artifacts/"$t"- "$scratch/$t" fuzz/corpus/"$t" >"$scratch/$t.log" 2>&1 || status=$?
   grep -aE "INFO: Seed:|INFO: seed corpus|#[0-9]+[[:space:]]+(INITED|DONE)|stat::(number_of_executed_units|peak_rss)" "$scratch/$t.log" || true
   if [ "$status" -ne 0 ]; then
