@@ -244,6 +244,8 @@ struct Renderer::Impl {
   void draw(const Eigen::Isometry3d& X_WC);  // the frame into the framebuffer
   void read();                                // framebuffer -> image() (1x image size)
   void finish(std::uint64_t noise_seed, cv::Mat& bgr);  // image() -> bgr
+  // RGBA rows first_row.. of the frame -> the same rows of bgr (allocated): BGR, noise added
+  void convert_rows(const cv::Mat& rgba_rows, int first_row, std::uint64_t noise_seed, cv::Mat& bgr);
   void read_and_finish(std::uint64_t noise_seed, cv::Mat& bgr);  // framebuffer -> bgr
   cv::Mat& image() { return options.supersample > 1 ? rgba : rgba_hi; }
 };
@@ -486,13 +488,18 @@ void Renderer::Impl::read() {
   }
 }
 
+void Renderer::Impl::convert_rows(const cv::Mat& rgba_rows, int first_row, std::uint64_t noise_seed, cv::Mat& bgr) {
+  if (noise) {
+    noise->apply_rgba_rows_to_bgr(rgba_rows, first_row, bgr, noise_seed);
+  } else {
+    cv::Mat out = bgr.rowRange(first_row, first_row + rgba_rows.rows);
+    cv::cvtColor(rgba_rows, out, cv::COLOR_RGBA2BGR);
+  }
+}
+
 void Renderer::Impl::finish(std::uint64_t noise_seed, cv::Mat& bgr) {
   bgr.create(K.height_px, K.width_px, CV_8UC3);
-  if (noise) {
-    noise->apply_rgba_to_bgr(image(), bgr, noise_seed);
-  } else {
-    cv::cvtColor(image(), bgr, cv::COLOR_RGBA2BGR);
-  }
+  convert_rows(image(), 0, noise_seed, bgr);
 }
 
 void Renderer::Impl::read_and_finish(std::uint64_t noise_seed, cv::Mat& bgr) {
@@ -509,12 +516,7 @@ void Renderer::Impl::read_and_finish(std::uint64_t noise_seed, cv::Mat& bgr) {
     const int r1 = std::min(K.height_px, r0 + kBandRows);
     cv::Mat rows = band.rowRange(0, r1 - r0);
     glReadPixels(0, r0, K.width_px, r1 - r0, GL_RGBA, GL_UNSIGNED_BYTE, rows.data);
-    if (noise) {
-      noise->apply_rgba_rows_to_bgr(rows, r0, bgr, noise_seed);
-    } else {
-      cv::Mat out = bgr.rowRange(r0, r1);
-      cv::cvtColor(rows, out, cv::COLOR_RGBA2BGR);
-    }
+    convert_rows(rows, r0, noise_seed, bgr);
   }
   check_gl("readback");
 }

@@ -1,7 +1,7 @@
 #include "flight_sw/tello/h264_decoder.hpp"
 
-#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <vector>
@@ -113,8 +113,9 @@ DecodeResult H264Decoder::decode(std::string_view au) {
     return r;
   }
   std::vector<uint8_t>& buf = impl_->padded;
-  buf.assign(au.size() + AV_INPUT_BUFFER_PADDING_SIZE, 0);
-  std::copy(au.begin(), au.end(), reinterpret_cast<char*>(buf.data()));
+  buf.resize(au.size() + AV_INPUT_BUFFER_PADDING_SIZE);  // reallocates only for a larger frame
+  std::memcpy(buf.data(), au.data(), au.size());
+  std::memset(buf.data() + au.size(), 0, AV_INPUT_BUFFER_PADDING_SIZE);
   const uint8_t* data = buf.data();
   int size = static_cast<int>(au.size());
   while (size > 0) {
