@@ -557,7 +557,7 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
     std::vector<cv::Mat> frame_buffers;
     const auto free_frame_buffer = [&frame_buffers]() -> cv::Mat& {
       for (cv::Mat& b : frame_buffers) {
-        if (b.u && b.u->refcount == 1) return b;  // held by the pool alone
+        if (!b.u || b.u->refcount == 1) return b;  // not drawn into yet, or held by the pool alone
       }
       return frame_buffers.emplace_back();
     };
