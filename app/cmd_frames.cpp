@@ -1,5 +1,5 @@
 // shelfcross frames --scenario FILE --out DIR [--condition NAME] [--check]: renders the
-// perception benchmark's frame set (bench/frame_set.hpp, issue 7) into DIR, and with --check
+// perception benchmark's frame set (bench/frame_set.hpp) into DIR, and with --check
 // flies the flight software over each sequence of the set and prints what it decided.
 #include <iostream>
 

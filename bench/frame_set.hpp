@@ -1,13 +1,13 @@
 #pragma once
-// The perception benchmark's frame set (issue 7): a fixed, versioned list of camera poses and
+// The perception benchmark's frame set: a fixed, versioned list of camera poses and
 // conditions over a scenario (by default scenarios/paper_test_shelf.yaml), rendered by the
 // co-simulation's renderer at the scenario's 960 x 720 camera. Shared by
 // `shelfcross frames` (app/cmd_frames.cpp), which writes the set, and the benchmark
 // (bench/perception_bench.cpp), which reads it or writes it on first use. Header-only because
 // the benchmark program and the `shelfcross` program link no common library of bench code.
 //
-// Versions: 1, the renderer of issues 1-15 (undistorted pinhole render + bilinear lens
-// remap); 2 (issue 16), the lens in the geometry, point-sampled at pixel centres: edge pixels
+// Versions: 1, the first renderer (undistorted pinhole render + bilinear lens
+// remap); 2, the lens in the geometry, point-sampled at pixel centres: edge pixels
 // change (measured on four poses of the test shelf: 1.4-5.1 % of pixels differ, mean absolute
 // difference 0.18-0.62 grey levels, all within 2 px of an edge but for the old renderer's
 // darkened top row and right column, where its remap sampled past its render).

@@ -1,4 +1,4 @@
-// Perception latency (issue 7): every stage of the flight software's perception and its whole
+// Perception latency: every stage of the flight software's perception and its whole
 // per-frame step, on the benchmark frame set (bench/frame_set.hpp), single-threaded, next to
 // the stock-OpenCV baseline in the same run. How to run and read it: bench/README.md.
 //

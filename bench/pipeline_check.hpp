@@ -1,5 +1,5 @@
 #pragma once
-// Decision equivalence of the fast and the reference perception pipelines (issue 7) on a
+// Decision equivalence of the fast and the reference perception pipelines on a
 // sequence of the benchmark frame set: both flight softwares get the same inputs (the
 // SequencePlayer's), and after every frame their phase, target, rc commands, full-view state
 // and inventory so far must be equal, their SI velocity commands within kVelocityTolerance and

@@ -1,4 +1,4 @@
-// Renderer throughput at 960 x 720 on one core with llvmpipe (issue 16).
+// Renderer throughput at 960 x 720 on one core with llvmpipe.
 //
 // Run: taskset -c 1 build/release/bench/shelfcross_bench --benchmark_filter=Render
 // LP_NUM_THREADS=1 is set here before the first EGL display is created (llvmpipe reads it

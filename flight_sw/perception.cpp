@@ -205,7 +205,7 @@ GridLimits grid_limits(double w, double h) {
 GridLimits grid_limits(const KnownShelf& shelf, double px_per_m) {
   const auto [w_min, w_max] = std::minmax_element(shelf.column_pitch_m.begin(), shelf.column_pitch_m.end());
   const auto [h_min, h_max] = std::minmax_element(shelf.row_pitch_m.begin(), shelf.row_pitch_m.end());
-  // Eq. 3-4 generalised (issue 17). A row's chain must take its co-row neighbour, up to W
+  // Eq. 3-4 generalised. A row's chain must take its co-row neighbour, up to W
   // away (the widest column), at |dy| = W sin(theta), and never a point of the next row, whose
   // offset h cos(theta) - w sin(theta) (the diagonal neighbour) vanishes first for the lowest
   // row h_min over the widest column: theta < atan(h_min / W). Columns alike:

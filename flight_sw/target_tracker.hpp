@@ -1,5 +1,5 @@
 #pragma once
-// The target tracker's identity check (issue 17): which cell of the known shelf is the tracked
+// The target tracker's identity check: which cell of the known shelf is the tracked
 // box, from what one picture shows around it, not only from where the box was last seen.
 //
 // The tracker follows the four corner tags of a cell from frame to frame. A tag grid repeats

@@ -45,13 +45,13 @@ bool has_extension(const char* list, const char* name) {
 
 // EGL displays are per (platform, native display), shared by every context of the process.
 // A display, once initialised, stays initialised until the process exits: eglTerminate is
-// never called. Why (issue 18): with Mesa 22.3 (egl_dri2), terminating the display's last
+// never called. Why: with Mesa 22.3 (egl_dri2), terminating the display's last
 // user destroys the screen and dlcloses the driver, swrast_dri.so with LLVM, and the next
 // renderer's eglInitialize maps it again: a thread still exiting or a pointer kept across the
 // unload would run code that is gone, and LeakSanitizer reported the unloaded driver's state
 // as leaked (19 tests under the debug preset). Cost: the driver stays loaded until exit.
-// This is NOT the cause of the general protection fault in swrast_dri.so seen in campaigns
-// (issue 18), as first thought. The kernel's line, "general protection fault ip:...00dc ...
+// This is NOT the cause of the general protection fault in swrast_dri.so seen in campaigns,
+// as first thought. The kernel's line, "general protection fault ip:...00dc ...
 // in swrast_dri.so[6e00dc,<base>+1049000]", gives the file offset first: 0x6e00dc, the same
 // in both crashes logged on the build machine (11:44 and 13:05 UTC on 2026-11-24, the second
 // 14 minutes after this change was committed; which code that process ran is not known). It is
@@ -67,7 +67,7 @@ bool has_extension(const char* list, const char* name) {
 // failed, and helgrind (valgrind 3.19) did not finish one of them in 15 minutes; its reports
 // were all inside Mesa without symbols, several on the display's second word, likely a lock
 // built on a futex that it cannot see. Campaign runs now live in worker processes, so such
-// a crash costs one run, recorded `crashed`. And since session 9 a campaign's worker
+// a crash costs one run, recorded `crashed`. And a campaign's worker
 // processes set LP_NUM_THREADS=0 (llvmpipe rasterises on the calling thread: no rasteriser
 // threads to race with; verification/run_process.cpp), which also saves CPU time.
 std::mutex g_display_mutex;

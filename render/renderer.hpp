@@ -46,7 +46,7 @@ namespace shelfcross::render {
 
 /// Largest distance, in output pixels, between a drawn face edge (a chord between two exactly
 /// projected vertices) and the true image of that edge under the lens, by construction of the
-/// lens grid (lens_mesh.hpp); the tests measure it against the 0.25 px of issue 16.
+/// lens grid (lens_mesh.hpp); the tests measure it against a 0.25 px tolerance.
 inline constexpr double kLensChordTolerance_px = 0.25;
 
 struct RenderOptions {

@@ -83,7 +83,7 @@ struct CampaignSummary {
   double success_rate = 0.0;
   double success_lower_95 = 0.0;    ///< one-sided Clopper-Pearson
   std::map<std::string, std::int64_t> outcomes;  ///< keys among known_run_outcomes()
-  SafetySummary safety;             ///< contacts apart from safe aborts (issue 17)
+  SafetySummary safety;             ///< contacts apart from safe aborts
   std::map<std::string, Summary> metrics;        ///< keys among summary_metric_names()
   CostSummary cost;                 ///< summary.json's "cost"
   std::string campaign_hash;        ///< over the run hashes in run order; empty while runs are missing

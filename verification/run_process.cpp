@@ -67,7 +67,7 @@ std::int64_t resident_mb(pid_t pid) {
 /// means the campaign itself was not running: stopped (Ctrl-Z, SIGSTOP) or the machine
 /// suspended. Its workers were stopped with it (they are in its process group), so the gap is
 /// not counted against a run's wall-clock limit; a run is `hung` for what it did while the
-/// campaign ran. (Session 8: a campaign stopped for 47 min recorded its run in flight `hung`
+/// campaign ran. (A campaign stopped for 47 min once recorded its run in flight `hung`
 /// on resuming.) A parent merely slow to be scheduled on a loaded machine only delays the
 /// verdict.
 constexpr auto kNotRunningGap = std::chrono::seconds(5);
@@ -334,7 +334,7 @@ int serve_worker_runs(int fd) {
   // default), unless the user chose otherwise. A campaign already runs one worker per core;
   // the pool only adds hand-overs (`shelfcross run` of the default scenario, ideal link, seed
   // 3, twice each on a loaded machine: 2.0 s of user + system CPU instead of 2.26, the same run
-  // hash; session 9). And the general protection fault
+  // hash). And the general protection fault
   // in swrast_dri.so seen in campaigns was, by its address, a race between the context's
   // thread and llvmpipe's rasteriser threads (render/egl_context.cpp): with none, it has
   // nothing to race with. Read when the driver is loaded: before the renderer is made.

@@ -20,7 +20,7 @@ double clopper_pearson_lower(std::int64_t successes, std::int64_t trials, double
 /// below 0.1 % at 95 %, 0 in 299 below 1 %.
 double clopper_pearson_upper(std::int64_t events, std::int64_t trials, double confidence = 0.95);
 
-/// Safety apart from mission success (issue 17): what each run outcome (cosim.hpp's names)
+/// Safety apart from mission success: what each run outcome (cosim.hpp's names)
 /// means for the hardware. A contact (the vehicle touched a shelf, "collision", or a wall,
 /// "left_arena") is the safety failure; a safe abort ("mission_aborted", "no_crossing": the
 /// flight software gave up and landed without touching anything) is only a lost mission; an

@@ -130,7 +130,7 @@ TEST(CampaignWorkers, RunsThatHangAreKilledAtTheirLimitAndRecorded) {
 
 // A campaign stopped with a run in flight (Ctrl-Z, SIGSTOP, a suspended machine) and continued
 // after longer than the run's wall-clock limit: the stop is not counted against the run, which
-// completes (session 8: a campaign stopped for 47 min stored its run in flight `hung`).
+// completes (a campaign stopped for 47 min once stored its run in flight `hung`).
 TEST(CampaignWorkers, AStoppedCampaignDoesNotCountTheStopAgainstItsRun) {
   const fs::path root = fresh_dir("workers_stopped");
   const std::string scenario = short_scenario(root).string();

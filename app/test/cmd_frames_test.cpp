@@ -1,5 +1,5 @@
 // `shelfcross frames`: renders the perception benchmark's frame set and, with --check, shows
-// that the fast and the reference perception pipelines decide the same on it (issue 7).
+// that the fast and the reference perception pipelines decide the same on it.
 
 #include <gtest/gtest.h>
 

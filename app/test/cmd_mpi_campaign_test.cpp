@@ -27,10 +27,10 @@ std::vector<std::string> mpirun(int ranks, const std::vector<std::string>& extra
   // module>" that no suppression can name (117 kB in about 3,340 allocations per rank). Whole
   // DWARF stacks (fast_unwind_on_malloc=0) would reach libmpi, but the worker processes inherit
   // the option, and there it deadlocks: libgcc's _Unwind_Find_FDE holds its lock while it
-  // allocates, ASan's malloc unwinds again and waits for that lock (seen in session 9 under
+  // allocates, ASan's malloc unwinds again and waits for that lock (seen under
   // gdb, with the frames llvmpipe's JIT registers: every MPI test hung until its time limit).
-  // The ranks' code but distributed/ is leak-checked by the single-process tests. (Session 8
-  // took the hang for slowness and gave these runs a 30 min wall-clock floor; without the
+  // The ranks' code but distributed/ is leak-checked by the single-process tests. (The hang
+  // was once taken for slowness and gave these runs a 30 min wall-clock floor; without the
   // deadlock each of these tests takes about 22 s under the debug preset.)
   std::vector<std::string> c{SHELFCROSS_MPIEXEC, "-np", std::to_string(ranks), "--oversubscribe", "--bind-to", "none",
                              "--mca", "btl", "self,vader", "--mca", "oob_tcp_if_include", "lo",

@@ -118,7 +118,7 @@ TEST_F(CmdPlant, GoodRunWritesHeaderAndExpectedRows) {
   EXPECT_NE(reply_lines[1].find("(deferred) -> ok"), std::string::npos);
 }
 
-// Issue 19: a command file that flies nothing says why. Every command the firmware ignored or
+// A command file that flies nothing says why. Every command the firmware ignored or
 // refused is printed with its time and the reason; the run still writes its CSV (exit 0).
 TEST_F(CmdPlant, TakeoffBeforeCommandIsReportedAsIgnored) {
   const std::string f = write("early.commands", "0 takeoff\n0.5 rc 0 50 0 0\n1 command\n");

@@ -1,4 +1,4 @@
-// The replay video (issue 19): H.264 (`avc1`) in MP4, yuv420p, 30 fps, 960 x 720; pictures
+// The replay video: H.264 (`avc1`) in MP4, yuv420p, 30 fps, 960 x 720; pictures
 // placed on the camera's timeline; and each annotation drawn on the picture it was computed
 // from, never on a later picture.
 

@@ -224,10 +224,10 @@ TEST_F(TelloEndToEnd, PilotFliesTheEmulatorTakesInventoryCrossesAndLands) {
 // further flights crossed and landed.)
 // At 5 % loss on every channel nearly every picture reaches the flight software
 // error-concealed (a lost datagram damages the rest of its 1 s group of pictures: 847 of 855
-// in one flight), and since issue 17's identity check the flight software mostly gives up
+// in one flight), and since the identity check the flight software mostly gives up
 // safely there rather than decide on such pictures: over the co-simulation's sdk link, 1 of 16
 // runs at 5 % video datagram loss crossed, 15 aborted, 0 contacts (commit 4d31c84,
-// lossy_level_check_on.yaml, closing note of session 5). What must hold at 5 %, flight after
+// lossy_level_check_on.yaml). What must hold at 5 %, flight after
 // flight: no contact, landed, nothing listed wrong in the inventory; a crossing when it comes.
 TEST_F(TelloEndToEnd, SameWithFivePercentLossOnEveryChannel) {
   const std::vector<std::string> faults{"--loss-commands", "0.05", "--loss-replies", "0.05", "--loss-state", "0.05",

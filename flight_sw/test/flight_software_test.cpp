@@ -401,7 +401,7 @@ TEST(FlightSoftware, LostTakeoffReplyCountsWhenTheHeightSaysAirborne) {
 }
 
 // The `ok` of `land` is lost; the repeated `land` finds the drone on the ground and gets
-// `error` (session 6: one run in 100 of the default sdk campaign ended "land not
+// `error` (one run in 100 of the default sdk campaign ended "land not
 // acknowledged" this way, counted an abort though the drone had crossed and landed). The state
 // height says it is down: landed, the mission's outcome kept.
 /// A whole mission whose `land` reply goes wrong as `o` says: it crossed, and it ends landed
@@ -592,7 +592,7 @@ void expect_through_cell_2_3(const Harness& h, std::optional<Eigen::Vector2d> en
 
 // ---- The whole mission ----
 
-// Issue 17: the vehicle is carried one column aside (to the wide column L2 C2, which holds box
+// The vehicle is carried one column aside (to the wide column L2 C2, which holds box
 // 4) while the video is blank during the approach; the target's box is re-acquired where it
 // was in the picture, i.e. on the neighbouring cell, whose corner tags give a plausible pose of
 // the right level. The flight software must not settle on it: the target is unidentified, the
@@ -616,7 +616,7 @@ TEST(FlightSoftware, ReacquisitionOnTheNeighbouringColumnIsNeverCrossed) {
   expect_through_cell_2_3(h);
 }
 
-// Issues 15 and 17: the vehicle is carried one level up (a gust, an altitude step the video
+// The vehicle is carried one level up (a gust, an altitude step the video
 // never showed) while the video is blank during the approach; the target's box is re-acquired
 // where it was in the picture, i.e. on L3 C3, the cell above the target, which holds box 17.
 // Its corner tags give a plausible pose, and in the picture the box continues where the target
@@ -653,7 +653,7 @@ TEST(FlightSoftware, ReacquisitionOnTheLevelAboveIsNeverCrossed) {
 }
 
 // The same with the level check switched off (mission.level_check: false, for studies only):
-// the identity check alone catches the slide (defence in depth since issue 17): no pose is
+// the identity check alone catches the slide (defence in depth): no pose is
 // refused for its level, the identity is contradicted, the shelf re-read, and the crossing is
 // through L2 C3, the target.
 TEST(FlightSoftware, WithoutTheLevelCheckTheIdentityCheckCatchesTheLevelAbove) {
@@ -746,7 +746,7 @@ TEST(FlightSoftware, CrossesCentredDespiteVideoLatencyAndVelocityLag) {
   expect_through_cell_2_3(h, Eigen::Vector2d(0.02, 0.03));
 }
 
-// Issue 17, run 19 of grid_2x2 seed 2 (ideal link): the vehicle sank 21 cm over its open-loop
+// Run 19 of grid_2x2 seed 2 (ideal link): the vehicle sank 21 cm over its open-loop
 // crossing (it entered still settling vertically, on a pose a video latency old) and touched
 // the beam under the target level at the back face. Here a sink of 0.07 m/s nobody commanded
 // acts in the crossing, with the video 0.3 s late and the vertical speed lagging the stick by
@@ -835,7 +835,7 @@ TEST(FlightSoftware, DecidesOnlyOnNearlyWholePicturesOfADamagedStream) {
   expect_through_cell_2_3(h, Eigen::Vector2d(0.015, 0.015));
 }
 
-// The conventional strategies (issue 8) between two shelves 2.6 m apart: after the first
+// The conventional strategies between two shelves 2.6 m apart: after the first
 // inventory, the Transfer phase flies its waypoints on odometry (the state record's heading-frame
 // velocities at the SDK's 0.1 m/s resolution, integrated), then finds and inventories the
 // second shelf visually, and passes it the same way before landing. Over the tops the vehicle
@@ -887,7 +887,7 @@ TEST(FlightSoftware, SameInputsGiveTheSameCommands) {
 }
 
 
-// Issue 7: the fast perception decides exactly as the reference pipeline (full-frame OpenCV
+// The fast perception decides exactly as the reference pipeline (full-frame OpenCV
 // composition, Median Flow, ArUco over the whole frame): a whole closed-loop mission with
 // video latency, velocity lag and a start off the centre line sends the very same commands and
 // ends with the same inventory. (The rendered benchmark frames: app test CmdFrames.)

@@ -225,7 +225,7 @@ TEST(StairClassification, DrawnShelfRolledUnderAndPastTheLimit) {
 }
 
 
-// ---- The fast pipeline against the reference (issue 7) ----
+// ---- The fast pipeline against the reference ----
 
 PerceptionParams with_pipeline(PerceptionParams p, PerceptionPipeline pipeline) {
   p.pipeline = pipeline;

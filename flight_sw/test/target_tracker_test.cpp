@@ -1,4 +1,4 @@
-// The target tracker's identity check (issue 17) on drawn frames: a tracked box that slid one
+// The target tracker's identity check on drawn frames: a tracked box that slid one
 // column or one level is not the target, and the crossing is refused on it; the true cell seen
 // the same way is confirmed; tags of a shelf behind, seen through the cells, change nothing.
 
@@ -236,7 +236,7 @@ TEST(CrossingGate, RefusesAnUnidentifiedCellEvenPerfectlyCentred) {
   EXPECT_EQ(crossing_refusal(config, {2, 2}, pose, gate).value_or(""), "last pose too old");
 }
 
-// Issue 17, run 19 of grid_2x2 seed 2 (ideal link), at its commit: the last pose (0.3 s old
+// Run 19 of grid_2x2 seed 2 (ideal link), at its commit: the last pose (0.3 s old
 // with the video latency) showed the vehicle about 13 cm above the centre of L2 C1 (34 cm row,
 // 32 cm opening) at 0.83 m; the crossing line from it through the cell centre at mid-depth
 // passes the faces 2.3 cm off the centre, inside the 11 cm the opening leaves (0.5 (0.32 -

@@ -1,4 +1,4 @@
-// The lens in the geometry (lens_mesh.hpp), against issue 16's fidelity conditions:
+// The lens in the geometry (lens_mesh.hpp), against its fidelity conditions:
 //   - every vertex of a frame is exactly where cv::projectPoints puts its 3-D point;
 //   - every drawn edge between vertices lies within 0.25 px of the true (curved) image of the
 //     face edge it stands for, measured densely along the curve, not taken from the bound;

@@ -186,7 +186,7 @@ void check_markers(Renderer& renderer, double tol_px) {
 
 TEST(Renderer, VisibleMarkersDecodeWithTheirIdsAtTheProjectedCorners) {
   check_markers(aa_renderer(), 1.0);
-  check_markers(shared_renderer(), 1.0);  // issue 16: within 1 px without antialiasing too
+  check_markers(shared_renderer(), 1.0);  // within 1 px without antialiasing too
 }
 
 TEST(Renderer, SamePoseGivesByteIdenticalImagesFromOneOrTwoRenderers) {

@@ -1,5 +1,5 @@
 // Renderers started and torn down in parallel threads, as a campaign's worker threads and the
-// co-simulations of one process do (issue 18: a general protection fault in Mesa's
+// co-simulations of one process do (once a general protection fault in Mesa's
 // swrast_dri.so once took down a campaign). Every round, several threads start together,
 // each creates its renderer (its own EGL context on the shared display), renders one frame,
 // compares it with the reference frame byte for byte, destroys the renderer and exits; the

@@ -183,7 +183,7 @@ TEST_F(ResultsStoreTest, KeepsRunsAcrossReopenAndRefusesOtherCampaigns) {
   EXPECT_THROW(ResultsStore::open_existing(dir_ / "missing.sqlite"), ResultsMismatch);
 }
 
-// Two writers of one campaign folder (a campaign started twice, session 8: the second ran run
+// Two writers of one campaign folder (a campaign started twice: the second ran run
 // 851 again and died on "UNIQUE constraint failed" after the first had stored it): the second
 // is refused at once, naming the first's pid, and nothing it could store is lost; readers
 // (report, replay) still open it. The lock dies with its process, even by SIGKILL.

@@ -58,7 +58,7 @@ TEST(Dispersion, AppliesDrawsToTruthAndBeliefs) {
   EXPECT_DOUBLE_EQ(d.cosim.link.frame_drop_probability, 0.2);
 }
 
-// Issue 17's stress family: the shelf behind (shelf 1) placed by its draws in shelf 0's frame,
+// The stress family: the shelf behind (shelf 1) placed by its draws in shelf 0's frame,
 // uneven light; the shelf-behind parameters need two shelves.
 TEST(Dispersion, PlacesTheShelfBehindAndTurnsTheLight) {
   const std::string row = std::string(SHELFCROSS_SOURCE_DIR) + "/scenarios/stress/row_shelf_behind.yaml";

@@ -1,4 +1,4 @@
-// Latency in the loop (issue 7): the co-simulation's compute latency defaults to the measured
+// Latency in the loop: the co-simulation's compute latency defaults to the measured
 // median step time, the dispersion compute_latency_quantile draws it from the measured
 // distribution, and the latency-sweep scenario loads.
 

@@ -1,4 +1,4 @@
-// Typed run metrics and campaign summaries (issue 18): what a run stores reads back to the same
+// Typed run metrics and campaign summaries: what a run stores reads back to the same
 // value, and a missing, unknown or mistyped key is refused by name instead of silently dropping
 // a statistic.
 

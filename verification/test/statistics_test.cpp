@@ -1,4 +1,4 @@
-// Safety apart from mission success (issue 17): the contact rate's one-sided Clopper-Pearson
+// Safety apart from mission success: the contact rate's one-sided Clopper-Pearson
 // upper bound and the classification of run outcomes.
 #include <cmath>
 

@@ -58,7 +58,7 @@ TEST(Warehouse, EveryStrategyInventoriesFiveShelvesAndThroughTheCellsIsShortest)
   // Seed 12 over the shipped sdk link (the Tello's datagrams through tello_pilot's loop) with
   // no datagram lost, seed 11 over the ideal link: both links, in half the time of two sdk
   // seeds. A lossy link makes each of the five crossings a safe abort now and then (about one
-  // crossing in eight at the default scenario's 0 to 2 % video loss, session 6): a lossy run's
+  // crossing in eight at the default scenario's 0 to 2 % video loss): a lossy run's
   // legitimate outcome, which campaigns measure, not what this test is about.
   const std::array<std::pair<std::uint64_t, const char*>, 2> seeds{{{12, "sdk"}, {11, "ideal"}}};
   const auto& strategies = compared_strategies();
