@@ -126,7 +126,7 @@ std::optional<verification::SearchRunResult> run_under_mpi(std::shared_ptr<const
     distributed::broadcast_text(mpi, text);
     serving = true;
     const distributed::CoordinatorResult c = distributed::coordinate_campaign(
-        mpi, store, runs, {.on_progress = print_progress, .stop = &g_stop, .rank_timeout = rank_timeout});
+        mpi, store, runs, {.on_progress = print_progress, .stop = &g_stop, .shard = {}, .rank_timeout = rank_timeout});
     serving = false;
     if (!mpi.intact()) {
       std::cerr << c.ranks_lost << " worker rank(s) lost: the search stops here; run the same command to resume\n";

@@ -56,7 +56,13 @@ FlightConfig validated(FlightConfig c) {
 }
 
 std::string cell_text(CellIndex c) {
-  return "L" + std::to_string(c.level) + " C" + std::to_string(c.column);
+  // Appended piece by piece: GCC 12 misreads "literal" + std::string as an overlapping copy
+  // (-Wrestrict, a false positive in its own <string>).
+  std::string text = "L";
+  text += std::to_string(c.level);
+  text += " C";
+  text += std::to_string(c.column);
+  return text;
 }
 
 // A length for logs: metres with two decimals.

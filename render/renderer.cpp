@@ -29,6 +29,10 @@ constexpr std::uint8_t kBlackTexel = 51;
 constexpr double kTagFlat = 0.7;
 // Albedo of the marker paper.
 constexpr double kPaperAlbedo = 0.90;
+// The texture coordinates of a face without texture: zeros. (Eigen's default constructor leaves
+// a vector's coefficients unset, and copying them would read indeterminate values.)
+const std::array<Eigen::Vector2f, 4> kNoTexture{Eigen::Vector2f::Zero(), Eigen::Vector2f::Zero(),
+                                                Eigen::Vector2f::Zero(), Eigen::Vector2f::Zero()};
 
 double srgb_encode(double linear) {
   const double c = std::clamp(linear, 0.0, 1.0);
@@ -148,7 +152,7 @@ class FaceBuilder {
 
   // A quad c0 c1 c2 c3 (in order around its edge), seen from the side n_W points to.
   void face(FaceGroup group, const std::array<Eigen::Vector3d, 4>& c, const Eigen::Vector3d& n_W,
-            const Eigen::Vector3f& rgb, const std::array<Eigen::Vector2f, 4>& uv = {}) {
+            const Eigen::Vector3f& rgb, const std::array<Eigen::Vector2f, 4>& uv = kNoTexture) {
     MeshFace f;
     f.corners_W_m = c;
     f.normal_W = n_W;

@@ -547,7 +547,7 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
       }
     };
     const auto reply_to_fsw = [&](TimeNs t_sent, const std::string& text) {
-      to_fsw.push({link.state_arrival(t_sent), seq++, SdkReply{0, text}});
+      to_fsw.emplace(link.state_arrival(t_sent), seq++, SdkReply{0, text});
     };
     Eigen::Isometry3d X_WC_prev_frame = render::camera_pose_W(X_prev, sc.camera_mount);
     bool sdk_on = false, video_on = false;

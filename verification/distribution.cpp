@@ -181,21 +181,21 @@ Distribution parse_distribution(const config::Map& parent, const std::string& ke
     const config::Map p = spec.map("uniform");
     d.kind = Distribution::Kind::uniform;
     d.min = p.required<double>("min");
-    d.max = p.required<double>("max", {.min = d.min});
+    d.max = p.required<double>("max", {.min = d.min, .max = std::nullopt, .min_exclusive = false, .max_exclusive = false});
     p.finish();
   } else if (spec.has("normal")) {
     const config::Map p = spec.map("normal");
     d.kind = Distribution::Kind::normal;
     d.mean = p.required<double>("mean");
-    d.stddev = p.required<double>("stddev", {.min = 0.0});
+    d.stddev = p.required<double>("stddev", {.min = 0.0, .max = std::nullopt, .min_exclusive = false, .max_exclusive = false});
     p.finish();
   } else if (spec.has("truncated_normal")) {
     const config::Map p = spec.map("truncated_normal");
     d.kind = Distribution::Kind::truncated_normal;
     d.mean = p.required<double>("mean");
-    d.stddev = p.required<double>("stddev", {.min = 0.0});
+    d.stddev = p.required<double>("stddev", {.min = 0.0, .max = std::nullopt, .min_exclusive = false, .max_exclusive = false});
     d.min = p.required<double>("min");
-    d.max = p.required<double>("max", {.min = d.min});
+    d.max = p.required<double>("max", {.min = d.min, .max = std::nullopt, .min_exclusive = false, .max_exclusive = false});
     p.finish();
   } else {
     const config::Map p = spec.map("choice");
@@ -203,7 +203,8 @@ Distribution parse_distribution(const config::Map& parent, const std::string& ke
     d.values = p.required_list<double>("values");
     if (d.values.empty()) p.fail("values", "a choice needs at least one value");
     d.weights = p.optional_list<double>("weights", std::vector<double>(d.values.size(), 1.0),
-                                        {.min = 0.0, .min_exclusive = true}, d.values.size());
+                                        {.min = 0.0, .max = std::nullopt, .min_exclusive = true, .max_exclusive = false},
+                                        d.values.size());
     p.finish();
   }
   spec.finish();

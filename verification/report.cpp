@@ -179,7 +179,8 @@ CampaignSummary write_campaign_report(const std::filesystem::path& dir) {
                  yaw = numbers(trace["yaw"]);
       top.add_line(x, y, colour);
       side.add_line(x, z, colour);
-      const std::optional<flight_sw::CellIndex> target = stored.run ? stored.run->target : std::nullopt;
+      std::optional<flight_sw::CellIndex> target;
+      if (stored.run) target = stored.run->target;
       if (trace["approach_start_s"].is_number() && target) {
         const double t0 = trace["approach_start_s"].get<double>();
         const double t1 = trace["cross_start_s"].is_number() ? trace["cross_start_s"].get<double>() : t.back();

@@ -261,7 +261,7 @@ SearchRunResult run_search(std::shared_ptr<const Scenario> nominal, const Search
           options.make_workers ? options.make_workers(nominal, draw)
                                : [nominal, draw](int) { return std::make_unique<CampaignWorker>(nominal, draw); };
       result.committed += run_pending(store, settings.seed, round_end, factory,
-                                      {.jobs = options.jobs, .on_progress = options.on_progress, .stop = options.stop});
+                                      {.jobs = options.jobs, .on_progress = options.on_progress, .stop = options.stop, .shard = {}});
     }
     if (options.stop && options.stop->load()) return result;
   }

@@ -472,7 +472,9 @@ TEST(FlightSoftware, VideoStallHoversThenLands) {
       hover_t = c.t_ns;
     }
     if (c.text == "land") land_t = c.t_ns;
-    if (c.t_ns > 4 * kNsPerSecond && c.text.rfind("rc", 0) == 0) EXPECT_EQ(c.text, "rc 0 0 0 0");
+    if (c.t_ns > 4 * kNsPerSecond && c.text.rfind("rc", 0) == 0) {
+      EXPECT_EQ(c.text, "rc 0 0 0 0");
+    }
   }
   const double last_frame_s = std::floor(4.0 * 15 - 1e-9) / 15.0;
   EXPECT_NEAR(ns_to_seconds(hover_t) - last_frame_s, 0.5, 0.1 + 1e-9);

@@ -22,7 +22,9 @@ TEST(GroundTruth, FrontalViewSeesAllFrontTagsAndNoBackTags) {
   EXPECT_EQ(count_visible(tags, true), 25);
   EXPECT_EQ(count_visible(tags, false), 0);
   for (const auto& t : tags) {
-    if (!t.front_face) EXPECT_FALSE(t.facing);
+    if (!t.front_face) {
+      EXPECT_FALSE(t.facing);
+    }
   }
   // Column boundary 0 is the left edge as seen on approach: leftmost in the image.
   const auto find = [&](int i, int j) {
