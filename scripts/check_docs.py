@@ -1,0 +1,249 @@
+#!/usr/bin/env python3
+"""Keeps the repository's documents true and about the product (docs/getting-started.md, "The
+documentation check").
+
+  scripts/check_docs.py [--root DIR]
+      Static checks over the text files git tracks or would (ls-files --cached --others
+      --exclude-standard; every file but build/ and out/ when DIR is not a git
+      work tree), exit 1 on any finding, each printed as file:line: reason:
+      - words of development history: development sessions, issue numbers, branch names,
+        absolute paths of a development machine (HISTORY below);
+      - Markdown links to relative paths that do not exist, and backticked repository paths
+        (`docs/results.md`, `scenarios/stress/grid_2x2.yaml`) that do not exist;
+      - README.md longer than README_MAX_LINES, or without the two commands in its first
+        README_COMMANDS_WITHIN lines.
+  scripts/check_docs.py --root DIR --run-blocks --build-dir BUILD [--only FILE]
+      Runs every command block of the Markdown files marked runnable (a line `<!-- runnable -->`
+      right before a fenced block) with bash -euo pipefail, in a scratch folder that mirrors the
+      repository (its top-level entries linked) with `build/release` pointing at BUILD, so the
+      guide's commands run as a user runs them from the repository root and their outputs stay
+      out of the tree. Exit 1 when a block fails; its output is printed.
+
+Python 3 standard library only.
+"""
+import argparse
+import os
+import re
+import subprocess
+import sys
+import tempfile
+
+README_MAX_LINES = 120
+README_COMMANDS_WITHIN = 40
+README_COMMANDS = ("bash scripts/run-main-job.sh", "bash scripts/run-tests.sh")
+RUNNABLE_MARKER = "<!-- runnable -->"
+
+# Development history has no place in the product's files. The patterns are spelled so that
+# this file does not match them itself ("[/]", "[ ]").
+HISTORY = re.compile(
+    r"\bsessions? [0-9]+"             # a development session by its number
+    r"|\bissues? [0-9]+\b"            # an issue by its number
+    r"|\bbranch[ ]issue"              # a branch named after an issue
+    r"|/work[/]"                      # the development machine's work tree
+    r"|/tmp/[A-Za-z0-9_]+[/]"         # its scratch folders
+    r"|\bthis (2-core )?VM\b",        # the development machine named as such
+    re.IGNORECASE)
+
+LINK = re.compile(r"!?\[[^\]]*\]\(([^)\s]+)(?:\s+\"[^\"]*\")?\)")
+CODE_SPAN = re.compile(r"(?<!`)`([^`\n]+)`(?!`)")
+FENCE = re.compile(r"^\s*(```|~~~)")
+# A backticked path is checked when it looks like one: no spaces, a slash, a file name or a
+# folder, and no placeholder (FILE, DIR, <id>, *, ..., $VAR, {a,b}).
+PATH_LIKE = re.compile(r"^[A-Za-z0-9_.\-/]+$")
+PLACEHOLDER = re.compile(r"(^|/)[A-Z][A-Z0-9_]*([./]|$)|\.\.\.|[*<>{}$?]")
+
+
+def tracked_files(root):
+    """The repository's files, relative to root: git's list when root is a work tree."""
+    try:
+        out = subprocess.run(["git", "-C", root, "ls-files", "-z", "--cached", "--others",
+                              "--exclude-standard"], check=True,
+                             capture_output=True).stdout
+        files = [f for f in out.decode("utf-8", "surrogateescape").split("\0") if f]
+        if files:
+            return sorted(f for f in files if os.path.isfile(os.path.join(root, f)))
+    except (OSError, subprocess.CalledProcessError):
+        pass
+    files = []
+    for folder, dirs, names in os.walk(root):
+        dirs[:] = [d for d in dirs if d not in (".git", "build", "out")]
+        files.extend(os.path.relpath(os.path.join(folder, n), root) for n in names)
+    return sorted(files)
+
+
+def read_text(path):
+    """The file's lines, or None for a binary file (a NUL byte in its first 8 KiB, as git -I)."""
+    with open(path, "rb") as f:
+        data = f.read()
+    if b"\0" in data[:8192]:
+        return None
+    return data.decode("utf-8", "replace").splitlines()
+
+
+def markdown_prose(lines):
+    """(line number, text) of the lines outside fenced code blocks."""
+    inside = False
+    for number, line in enumerate(lines, 1):
+        if FENCE.match(line):
+            inside = not inside
+            continue
+        if not inside:
+            yield number, line
+
+
+def slug(heading):
+    """A heading's anchor as GitHub makes it: lower case, punctuation dropped, spaces to '-'."""
+    return re.sub(r"[^\w\- ]", "", heading.strip().lower()).replace(" ", "-")
+
+
+def anchors(lines):
+    return {slug(line.lstrip("#")) for _, line in markdown_prose(lines) if re.match(r"^#{1,6} ", line)}
+
+
+class Repository:
+    def __init__(self, root):
+        self.root = root
+        self.files = tracked_files(root)
+        self.known = set(self.files)
+        for f in self.files:  # every folder that holds a tracked file
+            parts = f.split("/")
+            for i in range(1, len(parts)):
+                self.known.add("/".join(parts[:i]))
+        self.top_level = {f.split("/")[0] for f in self.files}
+
+    def exists(self, relative):
+        return os.path.normpath(relative).replace(os.sep, "/").strip("/") in self.known
+
+
+def check_history(repo, name, lines, findings):
+    for number, line in enumerate(lines, 1):
+        m = HISTORY.search(line)
+        if m:
+            findings.append(f"{name}:{number}: development history or a development machine's "
+                            f"path: \"{m.group(0)}\" (describe the product, and a machine by its kind)")
+
+
+def check_links(repo, name, lines, findings):
+    here = os.path.dirname(name)
+    for number, line in markdown_prose(lines):
+        for target in LINK.findall(line):
+            if re.match(r"^[a-z][a-z0-9+.-]*:", target):
+                continue  # a URL
+            path, _, anchor = target.partition("#")
+            path = path or os.path.basename(name)  # "#heading": this page
+            full = os.path.normpath(os.path.join(here, path))
+            if not repo.exists(full):
+                findings.append(f"{name}:{number}: link to a missing file: {target}")
+            elif anchor and full.endswith(".md"):
+                if anchor not in anchors(read_text(os.path.join(repo.root, full)) or []):
+                    findings.append(f"{name}:{number}: link to a missing heading: {target}")
+        for span in CODE_SPAN.findall(line):
+            path = span.split(":", 1)[0].rstrip("/")
+            if ("/" not in path or path.startswith("/") or not PATH_LIKE.match(path)
+                    or PLACEHOLDER.search(path)):
+                continue  # not a path, an absolute one (not the repository's), a placeholder
+            first = path.split("/")[0]
+            if first in repo.top_level:
+                candidate = path
+            elif first == ".." or repo.exists(os.path.join(here, first)):
+                candidate = os.path.join(here, path)
+            else:
+                continue  # not a repository path (an output, an option value, a URL part)
+            if not repo.exists(candidate):
+                findings.append(f"{name}:{number}: backticked path does not exist: `{span}`")
+
+
+def check_readme(repo, findings):
+    if "README.md" not in repo.known:
+        findings.append("README.md: missing")
+        return
+    lines = read_text(os.path.join(repo.root, "README.md")) or []
+    if len(lines) > README_MAX_LINES:
+        findings.append(f"README.md:{len(lines)}: {len(lines)} lines, more than {README_MAX_LINES}: "
+                        "move the detail to the guide in docs/")
+    head = "\n".join(lines[:README_COMMANDS_WITHIN])
+    for command in README_COMMANDS:
+        if command not in head:
+            findings.append(f"README.md: `{command}` not in its first {README_COMMANDS_WITHIN} lines")
+
+
+def static_checks(root):
+    repo = Repository(root)
+    findings = []
+    for name in repo.files:
+        lines = read_text(os.path.join(root, name))
+        if lines is None:
+            continue
+        check_history(repo, name, lines, findings)
+        if name.endswith(".md"):
+            check_links(repo, name, lines, findings)
+    check_readme(repo, findings)
+    return findings
+
+
+def runnable_blocks(root, name):
+    """(line number, script) of each fenced block preceded by the runnable marker."""
+    lines = read_text(os.path.join(root, name)) or []
+    blocks, i = [], 0
+    while i < len(lines):
+        if lines[i].strip() == RUNNABLE_MARKER:
+            j = i + 1
+            if j >= len(lines) or not FENCE.match(lines[j]):
+                raise ValueError(f"{name}:{i + 1}: {RUNNABLE_MARKER} not followed by a fenced block")
+            k = j + 1
+            while k < len(lines) and not FENCE.match(lines[k]):
+                k += 1
+            blocks.append((j + 1, "\n".join(lines[j + 1:k]) + "\n"))
+            i = k
+        i += 1
+    return blocks
+
+
+def run_blocks(root, build_dir, only):
+    repo = Repository(root)
+    pages = [only] if only else [f for f in repo.files if f.endswith(".md")]
+    failures, count = 0, 0
+    with tempfile.TemporaryDirectory(prefix="shelfcross-docs-") as scratch:
+        for entry in sorted(repo.top_level):  # the repository's top level, linked
+            if entry != "build":
+                os.symlink(os.path.join(os.path.abspath(root), entry), os.path.join(scratch, entry))
+        os.makedirs(os.path.join(scratch, "build"))
+        os.symlink(os.path.abspath(build_dir), os.path.join(scratch, "build", "release"))
+        for page in pages:
+            for number, script in runnable_blocks(root, page):
+                count += 1
+                print(f"== {page}:{number}", flush=True)
+                result = subprocess.run(["bash", "-euo", "pipefail", "-c", script], cwd=scratch,
+                                        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+                if result.returncode != 0:
+                    failures += 1
+                    print(result.stdout[-6000:])
+                    print(f"{page}:{number}: runnable block failed (exit {result.returncode})")
+    print(f"check_docs: {count} runnable blocks, {failures} failed")
+    return 1 if failures or count == 0 else 0
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--root", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+    parser.add_argument("--run-blocks", action="store_true", help="run the runnable blocks")
+    parser.add_argument("--build-dir", help="the release build folder (with --run-blocks)")
+    parser.add_argument("--only", help="run the blocks of this page only (relative to the root)")
+    args = parser.parse_args()
+    if args.run_blocks:
+        if not args.build_dir:
+            parser.error("--run-blocks needs --build-dir")
+        try:
+            return run_blocks(args.root, args.build_dir, args.only)
+        except ValueError as e:
+            print(f"check_docs: {e}")
+            return 2
+    findings = static_checks(args.root)
+    for finding in findings:
+        print(finding)
+    print(f"check_docs: {len(findings)} findings")
+    return 1 if findings else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
