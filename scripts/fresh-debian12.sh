@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Times the README's two commands on a fresh Debian 12, as README.md reports them: a minimal
+# Times the README's two commands on a fresh Debian 12, as docs/results.md reports them: a minimal
 # `debootstrap bookworm` tree per command (its base system only), a clean clone of this
 # repository's HEAD inside it, entered with chroot as root. Needs root and Debian's mirror.
 #   bash scripts/fresh-debian12.sh WORKDIR       (WORKDIR: an empty folder with ~10 GB free)

@@ -14,7 +14,7 @@
 # Run workers one rank per host with --jobs = its cores (each thread runs whole simulations).
 # Inside a Slurm allocation (salloc/sbatch -N ...), drop the hostfile: mpirun takes the
 # allocation's nodes. The same command again resumes; `mpirun --enable-recovery` (added below)
-# lets the campaign go on when a worker host dies (see README).
+# lets the campaign go on when a worker host dies (docs/campaigns.md).
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 program="${SHELFCROSS:-$here/build/release/app/shelfcross}"

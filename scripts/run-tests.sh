@@ -7,7 +7,7 @@ cmake --preset release
 cmake --build --preset release
 ctest --preset release -j "$(nproc)"
 # The parsers' (config, sdk, tello), plant's and flight software's tests under AddressSanitizer
-# and UndefinedBehaviorSanitizer (the debug preset; the whole suite under it: README.md). Only
+# and UndefinedBehaviorSanitizer (the debug preset; the whole suite under it: docs/getting-started.md). Only
 # these: the debug build of the rest (render, verification, app) would not fit CI's time.
 cmake --preset debug
 cmake --build build/debug --target config_test sdk_test plant_test flight_sw_test tello_test

@@ -29,8 +29,8 @@
 //             on the target cell") comes at its third off-centre arrival at the crossing gate
 //             (or after 5 s of backing off), and each earlier one costs a back-off and a new
 //             approach (seconds of mission time), so a success's time to spare falls with the
-//             arrivals it used. Measured on the gust scenarios (docs/search.md, "Demonstration";
-//             405 runs): successes slower than 23 s (the undisturbed mission takes 21-22 s) are
+//             arrivals it used. Measured on 405 runs of the gust scenarios (docs/search.md,
+//             "What it finds, measured"): successes slower than 23 s (the undisturbed mission takes 21-22 s) are
 //             3 % below 0.2 m/s of gust intensity, 44 % at 0.4-0.5 m/s and all at 0.5-0.6 m/s,
 //             where 4 runs in 13 fail. Below about 0.3 m/s it barely moves: there the ranking of
 //             runs by it is mostly the seed's noise.
