@@ -57,4 +57,72 @@ struct Summary {
 /// default of R and NumPy): q-quantile at rank (n - 1) q. An empty input gives count 0.
 Summary summarize(std::vector<double> values);
 
+// ---- Paired comparisons: the same runs (same seeds, same draws) flown by two builds ----------
+// Two campaigns on the same seeds are not independent samples: each run is a pair, and the
+// tests below use the pairing (shelfcross diff, verification/paired_diff.hpp).
+
+/// A paired 2 x 2 table of one yes/no event (a failed mission, a contact) in BASE and in NEW.
+struct PairedTable {
+  std::int64_t both = 0;      ///< the event in both
+  std::int64_t base_only = 0; ///< in BASE only: NEW is better on this pair
+  std::int64_t new_only = 0;  ///< in NEW only: NEW is worse on this pair
+  std::int64_t neither = 0;
+  std::int64_t pairs() const { return both + base_only + new_only + neither; }
+};
+
+/// The exact McNemar test: under "NEW no different from BASE" each of the n = base_only +
+/// new_only discordant pairs is equally likely either way, so new_only ~ Binomial(n, 1/2).
+///   one-sided "NEW worse":  p = P(X >= new_only) = sum_{x >= new_only} C(n, x) / 2^n
+///   two-sided:              p = min(1, 2 P(X <= min(base_only, new_only)))
+/// (no discordant pair: both 1). Example: 6 pairs worse, 0 better: one-sided 1/64, two-sided 1/32.
+struct McNemarTest {
+  std::int64_t discordant = 0;
+  double p_two_sided = 1.0;
+  double p_new_worse = 1.0;
+};
+McNemarTest mcnemar_exact(const PairedTable& table);
+
+/// A two-sided confidence interval.
+struct Interval {
+  double lower = 0.0;
+  double upper = 0.0;
+  bool contains(double v) const { return lower <= v && v <= upper; }
+};
+
+/// Wilson's score interval for a binomial proportion k / n (no continuity correction):
+/// (p + z^2/2n -+ z sqrt(p(1-p)/n + z^2/4n^2)) / (1 + z^2/n), z the normal (1+confidence)/2 quantile.
+Interval wilson_interval(std::int64_t k, std::int64_t n, double confidence = 0.95);
+
+/// The difference of the event's rates, NEW - BASE = (new_only - base_only) / n, with Newcombe's
+/// hybrid score interval for paired proportions (Newcombe 1998, Stat. Med. 17:2635, method 10):
+/// the Wilson intervals (l_B, u_B), (l_N, u_N) of the two marginal rates combined as
+///   lower = d - sqrt((p_N - l_N)^2 - 2 phi (p_N - l_N)(u_B - p_B) + (u_B - p_B)^2)
+///   upper = d + sqrt((u_N - p_N)^2 - 2 phi (u_N - p_N)(p_B - l_B) + (p_B - l_B)^2)
+/// with phi the table's correlation (ad - bc) / sqrt of the four margins' product, ad - bc taken
+/// as max(ad - bc - n/2, 0) when positive (Newcombe's correction) and phi 0 when a margin is 0.
+/// Throws std::invalid_argument on an empty table.
+Interval newcombe_paired_difference(const PairedTable& table, double confidence = 0.95);
+
+/// Paired differences of a metric (NEW - BASE over the pairs where both have it): the Wilcoxon
+/// signed-rank test of "symmetric about 0" and the Hodges-Lehmann estimate of the shift with its
+/// confidence interval.
+///   test: the zero differences dropped (Wilcoxon's convention), mid-ranks for ties of |d|; the
+///     exact null distribution of W+ when at most 50 differences remain and none are tied, else
+///     the normal approximation with the tie correction and a continuity correction of 1/2.
+///   estimate: the median of the n(n+1)/2 Walsh averages (d_i + d_j)/2, i <= j, over every
+///     difference, zeros included (so runs that did not move pull the estimate toward 0);
+///     interval: the Walsh averages of ranks C and N + 1 - C, C the signed-rank critical count
+///     (exact for n <= 50, normal beyond), as in Hollander & Wolfe, Nonparametric Statistical
+///     Methods, section 3.2.
+struct SignedRankResult {
+  std::int64_t n = 0;           ///< differences
+  std::int64_t nonzero = 0;     ///< of which not 0 (the test's)
+  double median = 0.0;          ///< the plain median of the differences
+  double hodges_lehmann = 0.0;  ///< the shift estimate
+  Interval interval;            ///< for the shift, at the confidence asked
+  double p_two_sided = 1.0;     ///< 1 when every difference is 0
+};
+/// Throws std::invalid_argument on an empty input or a non-finite difference.
+SignedRankResult wilcoxon_signed_rank(const std::vector<double>& differences, double confidence = 0.95);
+
 }  // namespace shelfcross::verification
