@@ -112,8 +112,9 @@ Interval wilson_interval(std::int64_t k, std::int64_t n, double confidence) {
   const double denominator = 1.0 + z2 / nn;
   const double centre = (p + z2 / (2.0 * nn)) / denominator;
   const double half = z * std::sqrt(p * (1.0 - p) / nn + z2 / (4.0 * nn * nn)) / denominator;
-  // At k = 0 (k = n) the limit is exactly 0 (1); clamp rounding there.
-  return {std::max(0.0, centre - half), std::min(1.0, centre + half)};
+  // At k = 0 (k = n) the lower (upper) limit is exactly 0 (1): centre and half are equal there
+  // but for rounding.
+  return {k == 0 ? 0.0 : std::max(0.0, centre - half), k == n ? 1.0 : std::min(1.0, centre + half)};
 }
 
 Interval newcombe_paired_difference(const PairedTable& t, double confidence) {

@@ -90,11 +90,11 @@ TEST(PairedStatistics, NewcombeIntervalMatchesThePublishedExample) {
 }
 
 // Coverage: paired yes/no outcomes drawn with known rates (a correlated pair: NEW fails whenever
-// BASE does, and besides on 2 % of the runs), 300 pairs a table, 2,000 tables from a fixed seed:
-// the interval covers the true difference (+0.02) in about 95 % of them.
+// BASE does, and besides on 3 % of the runs), 300 pairs a table, 2,000 tables from a fixed seed:
+// the interval covers the true difference (+0.0291) in about 95 % of them.
 TEST(PairedStatistics, NewcombeIntervalCoversAKnownDifference) {
   RandomStream stream(20261126, StreamId::dispersion);
-  const double p_base = 0.03, p_extra = 0.02;
+  const double p_base = 0.03, p_extra = 0.03;
   const double true_difference = (1.0 - p_base) * p_extra;  // P(NEW fails) - P(BASE fails)
   int covered = 0, rejected_not_worse = 0;
   constexpr int kTables = 2000;
@@ -114,8 +114,9 @@ TEST(PairedStatistics, NewcombeIntervalCoversAKnownDifference) {
   const double coverage = static_cast<double>(covered) / kTables;
   EXPECT_GT(coverage, 0.93);
   EXPECT_LT(coverage, 0.985);
-  // 6 extra failures in 300 expected: the one-sided test sees it in most tables.
-  EXPECT_GT(rejected_not_worse, kTables * 3 / 4);
+  // 8.7 extra failures in 300 expected, none the other way: the one-sided test needs 5 of them
+  // (1/32 <= 0.05) and sees the change in about 93 % of the tables.
+  EXPECT_GT(rejected_not_worse, kTables * 85 / 100);
 }
 
 TEST(PairedStatistics, SignedRankTestAndHodgesLehmannOnSmallSamples) {
