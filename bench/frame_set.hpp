@@ -13,7 +13,11 @@
 // darkened top row and right column, where its remap sampled past its render); 3, the
 // adaptive lens grid (lens_mesh.hpp: a k-d tree of cells, large where the lens bends little):
 // faces are split at other places, so drawn edges move by up to the chord tolerance (0.25 px)
-// and edge pixels change (PIXEL_DIFF_SUMMARY).
+// and edge pixels change: over the 428 noise-free frames, 186,239 of 295.8 million pixels
+// (0.063 %; at most 0.12 % of one frame) differ from version 2, 98.9 % of them within 2 px of
+// an edge, each a pixel centre that changed face (differences up to 202 grey levels; mean
+// absolute difference over all pixels 0.033). `--check` gives the same decisions as on
+// version 2.
 //
 // What the set holds (kFrameSetVersion 3). For each condition (nominal light; dim, light x0.5;
 // bright, light x1.6; behind: a second shelf 1.2 m behind shelf 0 with boxes in every cell
