@@ -13,8 +13,6 @@
 // 2 grey levels), the configuration of the target. BM_RenderMeshOnly and
 // BM_RenderFinishOnly time two CPU stages alone: the per-frame lens mesh (cull, clip, split,
 // project) and the fused RGBA->BGR + noise pass; draw + readback is the rest.
-// BM_RenderFrameToEncoder/I420:1 is Renderer::render_i420_into (the sdk link's capture),
-// I420:0 the same frame as render_into + cv::cvtColor to I420.
 #include <benchmark/benchmark.h>
 
 #include <cstdlib>
@@ -69,27 +67,6 @@ void BM_RenderFrame(benchmark::State& state) {
 }
 BENCHMARK(BM_RenderFrame)->Args({1, 1})->Args({1, 0})->Args({2, 0})
     ->ArgNames({"supersample", "noise"})->MeasureProcessCPUTime()->Unit(benchmark::kMillisecond);
-
-// The sdk link's capture: the frame as the encoder takes it (I420), rendered straight into
-// that layout band by band (I420:1), against rendering BGR and converting the whole frame
-// with cv::cvtColor (I420:0, the path before; the same bytes).
-void BM_RenderFrameToEncoder(benchmark::State& state) {
-  Renderer& r = bench_renderer(1, true);
-  cv::Mat bgr, i420;
-  std::uint64_t seed = 0;
-  const bool direct = state.range(0) != 0;
-  for (auto _ : state) {
-    if (direct) {
-      r.render_i420_into(bench_pose(), ++seed, i420);
-    } else {
-      r.render_into(bench_pose(), ++seed, bgr);
-      cv::cvtColor(bgr, i420, cv::COLOR_BGR2YUV_I420);
-    }
-    benchmark::DoNotOptimize(i420.data);
-  }
-}
-BENCHMARK(BM_RenderFrameToEncoder)->Arg(0)->Arg(1)->ArgName("I420")->MeasureProcessCPUTime()
-    ->Unit(benchmark::kMillisecond);
 
 void BM_RenderMeshOnly(benchmark::State& state) {
   // A copy of the renderer's mesher (its faces and lens grid), rebuilt for the frame's pose.

@@ -113,11 +113,11 @@ void SensorNoise::apply_rgba_to_bgr(const cv::Mat& rgba, cv::Mat& bgr, std::uint
   apply_rgba_rows_to_bgr(rgba, 0, bgr, frame_seed);
 }
 
-void SensorNoise::apply_rgba_rows_to_bgr(const cv::Mat& rgba_rows, int first_row, cv::Mat& bgr_rows,
+void SensorNoise::apply_rgba_rows_to_bgr(const cv::Mat& rgba_rows, int first_row, cv::Mat& bgr,
                                          std::uint64_t frame_seed) const {
   assert(channels_ == 3 && rgba_rows.type() == CV_8UC4 && rgba_rows.cols == cols_ &&
-         first_row >= 0 && first_row + rgba_rows.rows <= rows_ && bgr_rows.type() == CV_8UC3 &&
-         bgr_rows.rows == rgba_rows.rows && bgr_rows.cols == cols_);
+         first_row >= 0 && first_row + rgba_rows.rows <= rows_ && bgr.type() == CV_8UC3 &&
+         bgr.rows == rows_ && bgr.cols == cols_);
   // The same window as apply().
   const std::uint64_t h = mix64(frame_seed ^ 0xbb67ae8584caa73bULL);
   const std::vector<std::int8_t>& field = fields_[h % kFields];
@@ -125,7 +125,7 @@ void SensorNoise::apply_rgba_rows_to_bgr(const cv::Mat& rgba_rows, int first_row
   for (int k = 0; k < rgba_rows.rows; ++k) {
     const int r = first_row + k;
     const std::int8_t* n = field.data() + (static_cast<size_t>(r + dy) * field_cols_ + dx) * 3;
-    rgba_to_bgr_noise_row(rgba_rows.ptr<std::uint8_t>(k), n, bgr_rows.ptr<std::uint8_t>(k), cols_);
+    rgba_to_bgr_noise_row(rgba_rows.ptr<std::uint8_t>(k), n, bgr.ptr<std::uint8_t>(r), cols_);
   }
 }
 

@@ -34,10 +34,10 @@ class SensorNoise {
   /// CV_8UC4 of the constructed size; `bgr` is (re)allocated CV_8UC3.
   void apply_rgba_to_bgr(const cv::Mat& rgba, cv::Mat& bgr, std::uint64_t frame_seed) const;
   /// The same for a band of the frame: `rgba_rows` (CV_8UC4, the constructed width) holds the
-  /// frame's rows first_row .. first_row + rgba_rows.rows - 1, which are written to
-  /// `bgr_rows` (CV_8UC3, the band's size, allocated by the caller: a band of the whole BGR
-  /// image, or a buffer of its own) with the same bytes apply_rgba_to_bgr gives those rows.
-  void apply_rgba_rows_to_bgr(const cv::Mat& rgba_rows, int first_row, cv::Mat& bgr_rows,
+  /// frame's rows first_row .. first_row + rgba_rows.rows - 1, which are written to the same
+  /// rows of `bgr` (CV_8UC3 of the constructed size, allocated by the caller) with the same
+  /// bytes apply_rgba_to_bgr gives them; the other rows of `bgr` are untouched.
+  void apply_rgba_rows_to_bgr(const cv::Mat& rgba_rows, int first_row, cv::Mat& bgr,
                               std::uint64_t frame_seed) const;
 
  private:

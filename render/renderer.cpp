@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstring>
 #include <map>
 #include <sstream>
 #include <vector>
@@ -225,8 +224,6 @@ struct Renderer::Impl {
   cv::Mat rgba_hi, rgba, acc;          // per-frame RGBA buffers, allocated once
   static constexpr int kBandRows = 48;
   cv::Mat band;                        // kBandRows RGBA rows (read_and_finish)
-  cv::Mat band_bgr, band_i420;         // the band as BGR and as I420 (read_and_finish_i420)
-  cv::Mat bgr_scratch;                 // the whole BGR frame, for I420 on the unbanded paths
 
   Impl(const Warehouse& w, const CameraIntrinsics& k, const RenderOptions& o)
       : warehouse(w),
@@ -247,10 +244,9 @@ struct Renderer::Impl {
   void draw(const Eigen::Isometry3d& X_WC);  // the frame into the framebuffer
   void read();                                // framebuffer -> image() (1x image size)
   void finish(std::uint64_t noise_seed, cv::Mat& bgr);  // image() -> bgr
-  // RGBA rows first_row.. of the frame -> bgr_rows (allocated, the band's size): BGR, noise added
-  void convert_rows(const cv::Mat& rgba_rows, int first_row, std::uint64_t noise_seed, cv::Mat& bgr_rows);
+  // RGBA rows first_row.. of the frame -> the same rows of bgr (allocated): BGR, noise added
+  void convert_rows(const cv::Mat& rgba_rows, int first_row, std::uint64_t noise_seed, cv::Mat& bgr);
   void read_and_finish(std::uint64_t noise_seed, cv::Mat& bgr);  // framebuffer -> bgr
-  void read_and_finish_i420(std::uint64_t noise_seed, cv::Mat& i420);  // framebuffer -> I420
   cv::Mat& image() { return options.supersample > 1 ? rgba : rgba_hi; }
 };
 
@@ -492,58 +488,18 @@ void Renderer::Impl::read() {
   }
 }
 
-void Renderer::Impl::convert_rows(const cv::Mat& rgba_rows, int first_row, std::uint64_t noise_seed, cv::Mat& bgr_rows) {
+void Renderer::Impl::convert_rows(const cv::Mat& rgba_rows, int first_row, std::uint64_t noise_seed, cv::Mat& bgr) {
   if (noise) {
-    noise->apply_rgba_rows_to_bgr(rgba_rows, first_row, bgr_rows, noise_seed);
+    noise->apply_rgba_rows_to_bgr(rgba_rows, first_row, bgr, noise_seed);
   } else {
-    cv::cvtColor(rgba_rows, bgr_rows, cv::COLOR_RGBA2BGR);
+    cv::Mat out = bgr.rowRange(first_row, first_row + rgba_rows.rows);
+    cv::cvtColor(rgba_rows, out, cv::COLOR_RGBA2BGR);
   }
 }
 
 void Renderer::Impl::finish(std::uint64_t noise_seed, cv::Mat& bgr) {
   bgr.create(K.height_px, K.width_px, CV_8UC3);
   convert_rows(image(), 0, noise_seed, bgr);
-}
-
-// I420 as the encoder takes it (OpenCV's layout: Y, h x w; then U and V, each h/2 rows of w/2
-// bytes, contiguous), band by band: each band's BGR (noise added) goes through cvtColor's
-// BGR -> I420 while in the cache, and its Y rows and its half-height U and V rows are copied to
-// their places. cvtColor's I420 takes each 2 x 2 block's chroma from that block alone, and the
-// bands start at even rows, so the bytes are those of the whole frame's conversion.
-void Renderer::Impl::read_and_finish_i420(std::uint64_t noise_seed, cv::Mat& i420) {
-  const int w = K.width_px, h = K.height_px;
-  if (w % 2 || h % 2) throw RenderError("I420 needs an even image width and height");
-  // In place when the caller's Mat already has the layout (a header on the encoder's buffer).
-  if (i420.rows != h * 3 / 2 || i420.cols != w || i420.type() != CV_8UC1 || !i420.isContinuous())
-    i420.create(h * 3 / 2, w, CV_8UC1);
-  if (options.supersample > 1) {
-    read();
-    finish(noise_seed, bgr_scratch);
-    cv::cvtColor(bgr_scratch, i420, cv::COLOR_BGR2YUV_I420);
-    return;
-  }
-  static_assert(kBandRows % 2 == 0, "bands start at even rows");
-  band_bgr.create(kBandRows, w, CV_8UC3);
-  band_i420.create(kBandRows * 3 / 2, w, CV_8UC1);
-  const std::size_t chroma_plane = static_cast<std::size_t>(w / 2) * static_cast<std::size_t>(h / 2);
-  std::uint8_t* y_plane = i420.data;
-  std::uint8_t* u_plane = y_plane + static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
-  std::uint8_t* v_plane = u_plane + chroma_plane;
-  for (int r0 = 0; r0 < h; r0 += kBandRows) {
-    const int n = std::min(h, r0 + kBandRows) - r0;
-    cv::Mat rows = band.rowRange(0, n);
-    glReadPixels(0, r0, w, n, GL_RGBA, GL_UNSIGNED_BYTE, rows.data);
-    cv::Mat bgr_rows = band_bgr.rowRange(0, n);
-    convert_rows(rows, r0, noise_seed, bgr_rows);
-    cv::Mat yuv(n * 3 / 2, w, CV_8UC1, band_i420.data);
-    cv::cvtColor(bgr_rows, yuv, cv::COLOR_BGR2YUV_I420);
-    const std::size_t y_bytes = static_cast<std::size_t>(w) * static_cast<std::size_t>(n);
-    const std::size_t c_bytes = y_bytes / 4, c_offset = static_cast<std::size_t>(w / 2) * static_cast<std::size_t>(r0 / 2);
-    std::memcpy(y_plane + static_cast<std::size_t>(w) * static_cast<std::size_t>(r0), yuv.data, y_bytes);
-    std::memcpy(u_plane + c_offset, yuv.data + y_bytes, c_bytes);
-    std::memcpy(v_plane + c_offset, yuv.data + y_bytes + c_bytes, c_bytes);
-  }
-  check_gl("readback");
 }
 
 void Renderer::Impl::read_and_finish(std::uint64_t noise_seed, cv::Mat& bgr) {
@@ -560,8 +516,7 @@ void Renderer::Impl::read_and_finish(std::uint64_t noise_seed, cv::Mat& bgr) {
     const int r1 = std::min(K.height_px, r0 + kBandRows);
     cv::Mat rows = band.rowRange(0, r1 - r0);
     glReadPixels(0, r0, K.width_px, r1 - r0, GL_RGBA, GL_UNSIGNED_BYTE, rows.data);
-    cv::Mat bgr_rows = bgr.rowRange(r0, r1);
-    convert_rows(rows, r0, noise_seed, bgr_rows);
+    convert_rows(rows, r0, noise_seed, bgr);
   }
   check_gl("readback");
 }
@@ -630,11 +585,6 @@ void Renderer::render_into(const Eigen::Isometry3d& X_WC, std::uint64_t noise_se
                            cv::Mat& bgr) {
   impl_->draw(X_WC);
   impl_->read_and_finish(noise_seed, bgr);
-}
-
-void Renderer::render_i420_into(const Eigen::Isometry3d& X_WC, std::uint64_t noise_seed, cv::Mat& i420) {
-  impl_->draw(X_WC);
-  impl_->read_and_finish_i420(noise_seed, i420);
 }
 
 cv::Mat Renderer::render_blurred(const Eigen::Isometry3d& X_WC_prev, const Eigen::Isometry3d& X_WC,

@@ -3,8 +3,7 @@
 // (camera frame C of shelfcross/camera.hpp: x right, y down, z forward), headless, through
 // EGL + OpenGL 3.3 core into a framebuffer object, with the lens distortion applied to the
 // geometry; then adds the optional sensor noise on the CPU. Output: BGR, CV_8UC3, the
-// intrinsics' width x height; or the same frame as I420 (render_i420_into), the H.264
-// encoder's input, converted band by band without a whole BGR frame in between.
+// intrinsics' width x height.
 //
 // Pipeline of one frame:
 //   1. the static world's faces (each lit per face, ambient + Lambert directional, baked into
@@ -22,8 +21,7 @@
 //      [motion blur: average of the N sub-pose renders, integer, rounded]
 //   5. RGBA -> BGR, fused with the noise when there is some: seeded, see noise.hpp (a field
 //      drawn once, a seeded window of it per frame). Without supersampling or motion blur,
-//      3 and 5 go band by band (a few dozen rows read, then converted while in the cache);
-//   6. [I420: each band's BGR -> I420 (cv::cvtColor) while in the cache, copied to its planes]
+//      3 and 5 go band by band (a few dozen rows read, then converted while in the cache).
 // Deterministic: the same warehouse, intrinsics, options, pose and seed give byte-identical
 // images from one renderer or several (same machine and driver). No MSAA.
 //
@@ -79,15 +77,6 @@ class Renderer {
   /// Same, into `bgr` (reallocated only if its size or type is wrong: no per-frame
   /// allocation when the caller keeps the Mat).
   void render_into(const Eigen::Isometry3d& X_WC, std::uint64_t noise_seed, cv::Mat& bgr);
-
-  /// Same frame, as the H.264 encoder takes it: planar YUV 4:2:0 in OpenCV's I420 layout (a
-  /// (3 height / 2) x width CV_8UC1 image: Y rows, then U, then V, each chroma row half a row
-  /// long), the very bytes of cv::cvtColor(render(X_WC, noise_seed), COLOR_BGR2YUV_I420), but
-  /// converted band by band while the band is in the cache, with no whole BGR frame in
-  /// between. Written in place when `i420` already has that size, type and a continuous
-  /// buffer (a header on the encoder's picture), else allocated. Throws RenderError for an odd
-  /// image width or height.
-  void render_i420_into(const Eigen::Isometry3d& X_WC, std::uint64_t noise_seed, cv::Mat& i420);
 
   /// Motion blur: the average of motion_blur_samples renders at the sub-poses
   /// s_k = (k + 1) / N, k = 0..N-1, between X_WC_prev (s = 0, excluded) and X_WC (s = 1),

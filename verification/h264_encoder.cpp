@@ -112,25 +112,17 @@ std::string H264Encoder::encode(const cv::Mat& bgr, bool force_key_frame) {
   if (bgr.type() != CV_8UC3 || bgr.cols != m.ctx->width || bgr.rows != m.ctx->height) {
     throw std::invalid_argument("H264Encoder::encode: expected a BGR image of the encoder's size");
   }
-  // BGR -> YUV 4:2:0 (ITU-R BT.601, studio range, as libswscale's default) with OpenCV's
-  // vectorised conversion, straight into the frame's buffer: libswscale has no unscaled fast
-  // path from BGR24, and its generic scaler cost about a third as much as the encoding itself.
-  cv::Mat i420 = picture();
-  cv::cvtColor(bgr, i420, cv::COLOR_BGR2YUV_I420);
-  CV_Assert(i420.data == m.i420.data);  // written in place, not reallocated
-  return encode_picture(force_key_frame);
-}
-
-cv::Mat H264Encoder::picture() {
   // libx264 copies each picture into its own frame pool within the call that encodes it (no
   // look-ahead, no B-frames), so once the last picture's packet is out FFmpeg holds no
   // reference to the buffer and it may be written again.
-  if (av_buffer_get_ref_count(impl_->frame->buf[0]) != 1) throw std::logic_error("H264Encoder: the picture is still referenced");
-  return cv::Mat(impl_->ctx->height * 3 / 2, impl_->ctx->width, CV_8UC1, impl_->i420.data);
-}
-
-std::string H264Encoder::encode_picture(bool force_key_frame) {
-  Impl& m = *impl_;
+  if (av_buffer_get_ref_count(m.frame->buf[0]) != 1) throw std::logic_error("H264Encoder: the picture is still referenced");
+  // BGR -> YUV 4:2:0 (ITU-R BT.601, studio range, as libswscale's default) with OpenCV's
+  // vectorised conversion, straight into the frame's buffer: libswscale has no unscaled fast
+  // path from BGR24, and its generic scaler cost about a third as much as the encoding itself.
+  const int w = bgr.cols, h = bgr.rows;
+  cv::Mat picture(h * 3 / 2, w, CV_8UC1, m.i420.data);
+  cv::cvtColor(bgr, picture, cv::COLOR_BGR2YUV_I420);
+  CV_Assert(picture.data == m.i420.data);  // written in place, not reallocated
   m.frame->pts = m.pts++;
   m.frame->pict_type = force_key_frame ? AV_PICTURE_TYPE_I : AV_PICTURE_TYPE_NONE;
   m.frame->key_frame = force_key_frame ? 1 : 0;

@@ -31,17 +31,8 @@ class H264Encoder {
   H264Encoder(const H264Encoder&) = delete;
   H264Encoder& operator=(const H264Encoder&) = delete;
 
-  /// One BGR frame (CV_8UC3, the encoder's size) in, one access unit out (Annex-B bytes):
-  /// the frame converted into picture() (BT.601 studio range, OpenCV's BGR -> I420), then
-  /// encode_picture().
+  /// One BGR frame (CV_8UC3, the encoder's size) in, one access unit out (Annex-B bytes).
   std::string encode(const cv::Mat& bgr, bool force_key_frame = false);
-
-  /// The picture libx264 reads, I420 (a (3 height / 2) x width CV_8UC1 header on the
-  /// encoder's own buffer: Y rows, then U, then V): a producer that can write this layout
-  /// directly (Renderer::render_i420_into) skips the BGR frame and its conversion.
-  cv::Mat picture();
-  /// Encodes what picture() holds now: one access unit out (Annex-B bytes).
-  std::string encode_picture(bool force_key_frame = false);
 
  private:
   struct Impl;

@@ -578,19 +578,12 @@ void TelloEmulator::video_loop() {
 
 TelloEmulator::EncodedFrame TelloEmulator::encode_frame(VideoWorker& video, render::Renderer& renderer,
                                                         const FrameJob& job) {
-  std::string access_unit;
   if (video.motion_blur) {
     renderer.render_blurred_into(job.X_WC_prev, job.X_WC, job.noise_seed, video.bgr);
-    access_unit = video.encoder.encode(video.bgr, job.force_key);
   } else {
-    // Straight into the encoder's I420 picture, band by band: no BGR frame, no second pass
-    // over it (the same bytes as encode(bgr)).
-    cv::Mat picture = video.encoder.picture();
-    const std::uint8_t* buffer = picture.data;
-    renderer.render_i420_into(job.X_WC, job.noise_seed, picture);
-    CV_Assert(picture.data == buffer);  // written in place, not reallocated
-    access_unit = video.encoder.encode_picture(job.force_key);
+    renderer.render_into(job.X_WC, job.noise_seed, video.bgr);
   }
+  const std::string access_unit = video.encoder.encode(video.bgr, job.force_key);
   const std::vector<int> types = sdk::nal_unit_types(access_unit);
   EncodedFrame frame;
   frame.key = std::find(types.begin(), types.end(), 5) != types.end();
