@@ -23,7 +23,7 @@
 // (the centre) and small where it bends most (the corners); a tensor grid's columns and rows
 // instead each take the worst statistics along their whole length. Two grids:
 //   edges     bound (2), for flat faces: every drawn edge within tolerance_px of the true
-//             curve; the interpolated interior (depth) may be off by bound (1), about 0.5 px
+//             curve; the interpolated interior (depth) may be off by bound (1), about 0.7 px
 //             for the default lens, which decals absorb with a depth offset (renderer.cpp);
 //   interior  bound (1), for textured faces: texture coordinates within tolerance_px too.
 // Vertices themselves are exact: each is a point of the face, projected in double precision
