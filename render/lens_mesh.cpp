@@ -52,28 +52,131 @@ void split_line(const std::vector<Vec2>& p, int axis, double value, std::vector<
   }
 }
 
-// Splits `poly` along the interior lines of `lines` (axis 0: x, 1: y) and hands each part to
-// `part` in ascending order. `poly` must already lie within [lines.front(), lines.back()].
-template <class Part>
-void split_along(std::vector<Vec2>& poly, int axis, const std::vector<double>& lines,
-                 std::vector<Vec2>& lo, std::vector<Vec2>& hi, Part&& part) {
-  double mn = std::numeric_limits<double>::infinity(), mx = -mn;
-  for (const Vec2& v : poly) mn = std::min(mn, v[axis]), mx = std::max(mx, v[axis]);
-  // First interior line strictly above mn.
-  auto it = std::upper_bound(lines.begin() + 1, lines.end() - 1, mn);
-  for (; it != lines.end() - 1 && *it < mx; ++it) {
-    split_line(poly, axis, *it, &lo, &hi);
-    if (lo.size() >= 3) part(lo);
-    poly.swap(hi);
-    if (poly.size() < 3) return;
+// Scratch buffers of split_by_grid, one set per thread: the region clip's, and a lo/hi pair
+// per depth of the k-d tree.
+struct SplitScratch {
+  std::vector<Vec2> a, b;
+  std::vector<std::array<std::vector<Vec2>, 2>> level;
+};
+
+// The piece `p` of cell c, with the hanging points of each of c's sides inserted into the
+// piece's edges along that side (in the edge's direction), appended to `pieces`.
+void emit_piece(const LensGrid::Cell& c, const std::vector<Vec2>& p, std::vector<Vec2>& pieces,
+                std::vector<int>& sizes) {
+  const std::size_t first = pieces.size(), n = p.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec2& a = p[i];
+    const Vec2& b = p[(i + 1) % n];
+    pieces.push_back(a);
+    for (int side = 0; side < 4; ++side) {
+      const std::vector<double>& h = c.hanging[static_cast<std::size_t>(side)];
+      if (h.empty()) continue;
+      const int axis = side < 2 ? 0 : 1;  // the coordinate that is constant along the side
+      const double on = side == 0 ? c.x0 : side == 1 ? c.x1 : side == 2 ? c.y0 : c.y1;
+      if (a[axis] != on || b[axis] != on) continue;
+      const int along = 1 - axis;
+      const double from = a[along], to = b[along];
+      Vec2 q;
+      q[axis] = on;
+      if (from < to) {
+        for (auto it = std::upper_bound(h.begin(), h.end(), from); it != h.end() && *it < to; ++it)
+          q[along] = *it, pieces.push_back(q);
+      } else {
+        for (auto it = std::lower_bound(h.begin(), h.end(), from); it != h.begin() && *(it - 1) > to;)
+          q[along] = *--it, pieces.push_back(q);
+      }
+      break;  // an edge lies on one side at most
+    }
   }
-  part(poly);
+  sizes.push_back(static_cast<int>(pieces.size() - first));
 }
 
-// Scratch buffers of split_by_grid, one set per thread.
-struct SplitScratch {
-  std::vector<Vec2> a, b, strip, lo, hi, lo2, hi2;
-};
+// Splits `poly` (inside node k's box) down the tree, emitting one piece per cell it covers.
+void descend(const LensGrid& grid, int k, const std::vector<Vec2>& poly, std::size_t depth,
+             SplitScratch& s, std::vector<Vec2>& pieces, std::vector<int>& sizes) {
+  const LensGrid::Node& node = grid.nodes[static_cast<std::size_t>(k)];
+  if (node.axis < 0) {
+    emit_piece(grid.cells[static_cast<std::size_t>(node.cell)], poly, pieces, sizes);
+    return;
+  }
+  double mn = std::numeric_limits<double>::infinity(), mx = -mn;
+  for (const Vec2& v : poly) mn = std::min(mn, v[node.axis]), mx = std::max(mx, v[node.axis]);
+  // Split only a polygon the line crosses; one touching it from a side stays whole.
+  if (mx <= node.value) return descend(grid, node.child[0], poly, depth + 1, s, pieces, sizes);
+  if (mn >= node.value) return descend(grid, node.child[1], poly, depth + 1, s, pieces, sizes);
+  std::vector<Vec2>& lo = s.level[depth][0];
+  std::vector<Vec2>& hi = s.level[depth][1];
+  split_line(poly, node.axis, node.value, &lo, &hi);
+  if (lo.size() >= 3) descend(grid, node.child[0], lo, depth + 1, s, pieces, sizes);
+  if (hi.size() >= 3) descend(grid, node.child[1], hi, depth + 1, s, pieces, sizes);
+}
+
+// The cells' hanging points: for each side of each cell, the corners of the other cells that
+// lie strictly inside it. (Coordinates are compared exactly: a child's box repeats its
+// parent's split values bit for bit.) Quadratic in the number of cells, a few hundred.
+void find_hanging_points(std::vector<LensGrid::Cell>& cells) {
+  for (LensGrid::Cell& c : cells) {
+    for (const LensGrid::Cell& o : cells) {
+      if (&o == &c) continue;
+      for (const double x : {o.x0, o.x1}) {
+        for (const double y : {o.y0, o.y1}) {
+          if (c.y0 < y && y < c.y1) {
+            if (x == c.x0) c.hanging[0].push_back(y);
+            if (x == c.x1) c.hanging[1].push_back(y);
+          }
+          if (c.x0 < x && x < c.x1) {
+            if (y == c.y0) c.hanging[2].push_back(x);
+            if (y == c.y1) c.hanging[3].push_back(x);
+          }
+        }
+      }
+    }
+    for (std::vector<double>& h : c.hanging) {
+      std::sort(h.begin(), h.end());
+      h.erase(std::unique(h.begin(), h.end()), h.end());
+    }
+  }
+}
+
+// The k-d tree over g's region: a box that does not fit (`fits`: its cells' segments meet the
+// bound) is halved across its longer side in pixels (x lengths count x_to_y_pixels = fx / fy
+// times y lengths), and its halves are built likewise; cells are numbered low side first.
+// (Planning the splits instead, halves or thirds across either axis to least total side
+// length, gave more triangles on the test shelf's frames, not fewer.)
+template <class Fits>
+void build_kd_cells(LensGrid& g, Fits&& fits, double x_to_y_pixels) {
+  g.nodes.assign(1, LensGrid::Node{});
+  g.cells.clear();
+  struct Box {
+    double x0, x1, y0, y1;
+  };
+  std::vector<std::pair<int, Box>> todo{{0, {g.x_min, g.x_max, g.y_min, g.y_max}}};
+  while (!todo.empty()) {
+    const auto [k, b] = todo.back();
+    todo.pop_back();
+    if (fits(b.x0, b.x1, b.y0, b.y1)) {
+      g.nodes[static_cast<std::size_t>(k)].cell = static_cast<int>(g.cells.size());
+      g.cells.push_back({b.x0, b.x1, b.y0, b.y1, {}});
+      continue;
+    }
+    const int axis = (b.x1 - b.x0) * x_to_y_pixels >= (b.y1 - b.y0) ? 0 : 1;
+    const double value = axis == 0 ? 0.5 * (b.x0 + b.x1) : 0.5 * (b.y0 + b.y1);
+    Box lo = b, hi = b;
+    (axis == 0 ? lo.x1 : lo.y1) = value;
+    (axis == 0 ? hi.x0 : hi.y0) = value;
+    const int c0 = static_cast<int>(g.nodes.size());
+    g.nodes.emplace_back();
+    g.nodes.emplace_back();
+    LensGrid::Node& node = g.nodes[static_cast<std::size_t>(k)];
+    node.axis = axis;
+    node.value = value;
+    node.child[0] = c0;
+    node.child[1] = c0 + 1;
+    todo.push_back({c0 + 1, hi});
+    todo.push_back({c0, lo});
+  }
+  find_hanging_points(g.cells);
+}
 
 }  // namespace
 
@@ -122,7 +225,6 @@ LensGrids make_lens_grids(const CameraIntrinsics& K, double tolerance_px, double
     void merge(const Stats& o) { Mf = std::max(Mf, o.Mf), Mp = std::max(Mp, o.Mp), Jmin = std::min(Jmin, o.Jmin); }
   };
   std::vector<Stats> lattice(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny));
-  std::vector<Stats> col(static_cast<std::size_t>(nx)), row(static_cast<std::size_t>(ny));
   LensGrids grids;
   for (int j = 0; j < ny; ++j) {
     for (int i = 0; i < nx; ++i) {
@@ -151,19 +253,9 @@ LensGrids make_lens_grids(const CameraIntrinsics& K, double tolerance_px, double
       // The direction samples are 5 degrees apart: a 2 % allowance for the maxima between them.
       st.Mf *= 1.02, st.Mp *= 1.02;
       lattice[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(i)] = st;
-      col[static_cast<std::size_t>(i)].merge(st);
-      row[static_cast<std::size_t>(j)].merge(st);
       grids.max_second_derivative_px = std::max(grids.max_second_derivative_px, st.Mf);
     }
   }
-  // Stats over the lattice points bracketing [a, b] (one pitch beyond each end).
-  auto over = [&](const std::vector<Stats>& m, double origin, double a, double b) {
-    const int i0 = std::max(0, static_cast<int>(std::floor((a - origin) / step)) - 1);
-    const int i1 = std::min(static_cast<int>(m.size()) - 1, static_cast<int>(std::ceil((b - origin) / step)) + 1);
-    Stats r;
-    for (int i = i0; i <= i1; ++i) r.merge(m[static_cast<std::size_t>(i)]);
-    return r;
-  };
   // The deviation bound of a segment of length L inside a region with statistics st:
   //   interior (any component): L^2 / 8 Mf;
   //   edges (across the chord only): L^2 / 8 (Mp + L Mf^2 / Jmin), the second term for the
@@ -171,65 +263,60 @@ LensGrids make_lens_grids(const CameraIntrinsics& K, double tolerance_px, double
   auto deviation = [](bool edges, double L, const Stats& st) {
     return edges ? L * L / 8.0 * (st.Mp + L * st.Mf * st.Mf / st.Jmin) : L * L / 8.0 * st.Mf;
   };
-  // Columns of width w, rows of height h: a cell's diagonal is at most sqrt(2) max(w, h) and
-  // its statistics are bounded by its column's and by its row's, so a cell meets the
-  // tolerance when each column meets deviation(sqrt(2) w, column) <= tol, and each row alike.
-  auto lines = [&](bool edges, double lo, double hi, const std::vector<Stats>& m, double origin) {
-    std::vector<double> out{lo};
-    double a = lo;
-    while (hi - a > 1e-12) {
-      double w = hi - a;
-      while (deviation(edges, std::sqrt(2.0) * w, over(m, origin, a, a + w)) > tolerance_px) w *= 0.97;
-      a = hi - a - w < 1e-12 ? hi : a + w;
-      out.push_back(a);
-    }
-    return out;
+  // Stats over the lattice points bracketing a box (one pitch beyond each side).
+  auto box_stats = [&](double x0, double x1, double y0, double y1) {
+    const int i0 = std::max(0, static_cast<int>(std::floor((x0 - ox) / step)) - 1);
+    const int i1 = std::min(nx - 1, static_cast<int>(std::ceil((x1 - ox) / step)) + 1);
+    const int j0 = std::max(0, static_cast<int>(std::floor((y0 - oy) / step)) - 1);
+    const int j1 = std::min(ny - 1, static_cast<int>(std::ceil((y1 - oy) / step)) + 1);
+    Stats st;
+    for (int j = j0; j <= j1; ++j)
+      for (int i = i0; i <= i1; ++i)
+        st.merge(lattice[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(i)]);
+    return st;
   };
   for (LensGrid* g : {&grids.edges, &grids.interior}) {
     const bool edges = g == &grids.edges;
-    g->x_lines = lines(edges, x_min, x_max, col, ox);
-    g->y_lines = lines(edges, y_min, y_max, row, oy);
-    // The bound achieved, cell by cell, from the lattice.
-    for (std::size_t i = 0; i + 1 < g->x_lines.size(); ++i) {
-      for (std::size_t j = 0; j + 1 < g->y_lines.size(); ++j) {
-        const double w = g->x_lines[i + 1] - g->x_lines[i], hh = g->y_lines[j + 1] - g->y_lines[j];
-        const int i0 = std::max(0, static_cast<int>(std::floor((g->x_lines[i] - ox) / step)) - 1);
-        const int i1 = std::min(nx - 1, static_cast<int>(std::ceil((g->x_lines[i + 1] - ox) / step)) + 1);
-        const int j0 = std::max(0, static_cast<int>(std::floor((g->y_lines[j] - oy) / step)) - 1);
-        const int j1 = std::min(ny - 1, static_cast<int>(std::ceil((g->y_lines[j + 1] - oy) / step)) + 1);
-        Stats st;
-        for (int jj = j0; jj <= j1; ++jj)
-          for (int ii = i0; ii <= i1; ++ii)
-            st.merge(lattice[static_cast<std::size_t>(jj) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(ii)]);
-        g->chord_bound_px = std::max(g->chord_bound_px, deviation(edges, std::hypot(w, hh), st));
-        if (edges)
-          grids.edges_interior_bound_px = std::max(grids.edges_interior_bound_px, deviation(false, std::hypot(w, hh), st));
-      }
+    g->x_min = x_min, g->x_max = x_max, g->y_min = y_min, g->y_max = y_max;
+    // Any segment inside a cell is at most its diagonal long.
+    auto fits = [&](double x0, double x1, double y0, double y1) {
+      return deviation(edges, std::hypot(x1 - x0, y1 - y0), box_stats(x0, x1, y0, y1)) <= tolerance_px;
+    };
+    build_kd_cells(*g, fits, K.fx_px / K.fy_px);
+    // The bounds achieved, cell by cell.
+    for (const LensGrid::Cell& c : g->cells) {
+      const double diagonal = std::hypot(c.x1 - c.x0, c.y1 - c.y0);
+      const Stats st = box_stats(c.x0, c.x1, c.y0, c.y1);
+      g->chord_bound_px = std::max(g->chord_bound_px, deviation(edges, diagonal, st));
+      if (edges) grids.edges_interior_bound_px = std::max(grids.edges_interior_bound_px, deviation(false, diagonal, st));
     }
   }
   return grids;
+}
+
+LensGrid LensGrid::one_cell(double x0, double x1, double y0, double y1) {
+  LensGrid g;
+  g.x_min = x0, g.x_max = x1, g.y_min = y0, g.y_max = y1;
+  g.nodes.emplace_back().cell = 0;
+  g.cells.push_back({x0, x1, y0, y1, {}});
+  return g;
 }
 
 void split_by_grid(const LensGrid& grid, const std::vector<Vec2>& poly, std::vector<Vec2>& pieces,
                    std::vector<int>& sizes) {
   thread_local SplitScratch s;
   // Clip to the region first (cheap rejection of everything outside it).
-  split_line(poly, 0, grid.x_lines.front(), nullptr, &s.a);
+  split_line(poly, 0, grid.x_min, nullptr, &s.a);
   if (s.a.size() < 3) return;
-  split_line(s.a, 0, grid.x_lines.back(), &s.b, nullptr);
+  split_line(s.a, 0, grid.x_max, &s.b, nullptr);
   if (s.b.size() < 3) return;
-  split_line(s.b, 1, grid.y_lines.front(), nullptr, &s.a);
+  split_line(s.b, 1, grid.y_min, nullptr, &s.a);
   if (s.a.size() < 3) return;
-  split_line(s.a, 1, grid.y_lines.back(), &s.b, nullptr);
+  split_line(s.a, 1, grid.y_max, &s.b, nullptr);
   if (s.b.size() < 3) return;
-  // Vertical strips, then cells.
-  split_along(s.b, 0, grid.x_lines, s.lo, s.hi, [&](std::vector<Vec2>& strip) {
-    s.strip = strip;
-    split_along(s.strip, 1, grid.y_lines, s.lo2, s.hi2, [&](const std::vector<Vec2>& cell) {
-      pieces.insert(pieces.end(), cell.begin(), cell.end());
-      sizes.push_back(static_cast<int>(cell.size()));
-    });
-  });
+  // One lo/hi pair per level, allocated before the descent holds references into them.
+  if (s.level.size() < grid.nodes.size()) s.level.resize(grid.nodes.size());
+  descend(grid, 0, s.b, 0, s, pieces, sizes);
 }
 
 LensMesher::LensMesher(const CameraIntrinsics& K, int supersample, double near_m, double far_m,
@@ -311,8 +398,8 @@ void LensMesher::add_face(const Face& f, const Eigen::Isometry3d& X_CW, const Ve
   // Outcodes against the frustum that holds the lens region: a face entirely beyond one plane
   // is dropped before any clipping.
   const LensGrid& grid = textured ? grids_.interior : grids_.edges;
-  const double xl = grid.x_lines.front(), xh = grid.x_lines.back();
-  const double yl = grid.y_lines.front(), yh = grid.y_lines.back();
+  const double xl = grid.x_min, xh = grid.x_max;
+  const double yl = grid.y_min, yh = grid.y_max;
   unsigned all_out = 0x3f;
   bool needs_z_clip = false;
   for (const Vec3& c : m.corners_W_m) {

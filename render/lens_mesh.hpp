@@ -16,21 +16,28 @@
 //   distance across <= L^2 / 8 * (max |n(e) . D''(e, e)| + L max |D''|^2 / min |J e|).   (2)
 // A lens grid cuts the normalised plane into cells whose diagonal d keeps the bound below
 // tolerance_px everywhere in the cell (statistics of D sampled every 4 px, 36 directions);
-// every face is split along the grid lines into convex pieces (each inside one cell, so every
-// edge and fan diagonal of a piece is at most d long) and fan-triangulated. Two grids:
+// every face is split along the cells' sides into convex pieces (each inside one cell, so
+// every edge and fan diagonal of a piece is at most d long) and fan-triangulated. The grid is
+// adaptive, a k-d tree: a box whose own statistics do not meet the bound for its diagonal is
+// halved across its longer side (in pixels), so cells are large where the lens bends little
+// (the centre) and small where it bends most (the corners); a tensor grid's columns and rows
+// instead each take the worst statistics along their whole length. Two grids:
 //   edges     bound (2), for flat faces: every drawn edge within tolerance_px of the true
-//             curve; the interpolated interior (depth) may be off by bound (1), about 0.5 px
+//             curve; the interpolated interior (depth) may be off by bound (1), about 0.7 px
 //             for the default lens, which decals absorb with a depth offset (renderer.cpp);
 //   interior  bound (1), for textured faces: texture coordinates within tolerance_px too.
-// Both are coarse where the lens is nearly linear and fine where it bends most (default lens:
-// edges cells 65 to 130 px, interior cells 40 to 125 px). Vertices themselves are exact: each
-// is a point of the face, projected in double precision with camera_model's formula (the one
-// of cv::projectPoints), handed to GL as clip coordinates (x_ndc Z, y_ndc Z, z_clip, Z) so
-// that GL's perspective-correct interpolation uses the true depth Z.
+// Vertices themselves are exact: each is a point of the face, projected in double precision
+// with camera_model's formula (the one of cv::projectPoints), handed to GL as clip coordinates
+// (x_ndc Z, y_ndc Z, z_clip, Z) so that GL's perspective-correct interpolation uses the true
+// depth Z.
 //
-// No cracks: split vertices on a grid line are computed once and shared by both sides, and
+// No cracks: split vertices on a cell side are computed once and shared by both sides, and
 // every intersection is computed from its segment's end points in a canonical order, so the
-// pieces of a face, and faces sharing an edge (split along the same grid), meet exactly.
+// pieces of a face, and faces sharing an edge (split along the same grid), meet exactly. Where
+// a large cell borders smaller ones (a T-junction), the smaller cells' corners on the large
+// cell's side ("hanging" points) are inserted into the large cell's pieces too: the lens moves
+// such a point off the straight chord of the large side (by up to the tolerance), and without
+// it the two sides' drawn edges would differ and leave a sliver of pixel centres uncovered.
 //
 // Culling: every face is single-sided (drawn only when the camera is strictly on the side
 // its normal points to). The world is made of closed solids, one-sided tags with a backing,
@@ -46,13 +53,34 @@
 
 namespace shelfcross::render {
 
-/// A lens grid over the part of the normalised plane that the image sees.
+/// A lens grid over the part of the normalised plane that the image sees: a k-d tree of
+/// cells over the region.
 struct LensGrid {
-  /// Grid lines in normalised coordinates, ascending; the first and last bound the region:
-  /// the undistorted footprint of the image (pixel areas, plus margin_px) as a box.
-  std::vector<double> x_lines, y_lines;
+  /// The region: the undistorted footprint of the image (pixel areas, plus margin_px) as a box.
+  double x_min = 0.0, x_max = 0.0, y_min = 0.0, y_max = 0.0;
+  /// nodes[0] is the root (the region). An inner node splits its box at coordinate[axis] =
+  /// value into child[0] (the side <= value) and child[1] (>= value); a leaf (axis < 0) is
+  /// the cell cells[cell].
+  struct Node {
+    int axis = -1;
+    double value = 0.0;
+    int child[2] = {-1, -1};
+    int cell = -1;
+  };
+  /// A cell: its box, and on each side (0: x = x0, 1: x = x1, 2: y = y0, 3: y = y1) the
+  /// corners of other cells strictly inside that side (their y for sides 0 and 1, x for 2 and
+  /// 3; ascending), which split_by_grid inserts into the pieces' edges along the side.
+  struct Cell {
+    double x0 = 0.0, x1 = 0.0, y0 = 0.0, y1 = 0.0;
+    std::array<std::vector<double>, 4> hanging;
+  };
+  std::vector<Node> nodes;
+  std::vector<Cell> cells;
   /// Largest deviation bound over the cells' segments, output pixels (<= the tolerance).
   double chord_bound_px = 0.0;
+
+  /// One cell, the box [x0, x1] x [y0, y1]: splitting along it only clips to the box.
+  static LensGrid one_cell(double x0, double x1, double y0, double y1);
 };
 
 /// The two grids of one lens, over the same region:
@@ -75,8 +103,9 @@ struct LensGrids {
 LensGrids make_lens_grids(const CameraIntrinsics& K, double tolerance_px, double margin_px = 2.0);
 
 /// Splits the convex polygon `poly` (normalised coordinates, in order around its edge) along
-/// the grid's lines, dropping what lies outside the region: `pieces` receives the convex
-/// pieces' vertices one piece after the other and `sizes` their vertex counts (appended).
+/// the grid's cells, dropping what lies outside the region: `pieces` receives the convex
+/// pieces' vertices one piece after the other (hanging points included: collinear extra
+/// vertices on a side shared with smaller cells) and `sizes` their vertex counts (appended).
 void split_by_grid(const LensGrid& grid, const std::vector<Eigen::Vector2d>& poly,
                    std::vector<Eigen::Vector2d>& pieces, std::vector<int>& sizes);
 

@@ -238,8 +238,8 @@ struct Renderer::Impl {
         hi_height(k.height_px * o.supersample),
         egl(o.egl_platform) {
     const LensGrid& g = mesher.grids().edges;
-    for (double x : {g.x_lines.front(), g.x_lines.back()})
-      for (double y : {g.y_lines.front(), g.y_lines.back()})
+    for (double x : {g.x_min, g.x_max})
+      for (double y : {g.y_min, g.y_max})
         max_ray_stretch = std::max(max_ray_stretch, std::sqrt(1.0 + x * x + y * y));
   }
 

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <iostream>
+#include <limits>
 #include <random>
 
 #include <opencv2/calib3d.hpp>
@@ -63,17 +64,15 @@ TEST(LensMesh, EveryDrawnEdgeIsWithinAQuarterPixelOfTheTrueCurve) {
   const LensGrids grids = make_lens_grids(K, kLensChordTolerance_px);
   EXPECT_LE(grids.edges.chord_bound_px, kLensChordTolerance_px);
   EXPECT_LE(grids.interior.chord_bound_px, kLensChordTolerance_px);
-  std::cout << "[ lens grid ] edges " << grids.edges.x_lines.size() - 1 << " x "
-            << grids.edges.y_lines.size() - 1 << " cells (bound " << grids.edges.chord_bound_px
-            << " px), interior " << grids.interior.x_lines.size() - 1 << " x "
-            << grids.interior.y_lines.size() - 1 << " (bound " << grids.interior.chord_bound_px
-            << " px)" << std::endl;
+  std::cout << "[ lens grid ] edges " << grids.edges.cells.size() << " cells (bound "
+            << grids.edges.chord_bound_px << " px), interior " << grids.interior.cells.size()
+            << " cells (bound " << grids.interior.chord_bound_px << " px)" << std::endl;
   // Random convex quads (rectangles of random size, aspect and rotation) anywhere over and
   // beyond the region, split along each grid.
   std::mt19937_64 rng(16);
   std::uniform_real_distribution<double> uni(0.0, 1.0);
-  const double x0 = grids.edges.x_lines.front(), x1 = grids.edges.x_lines.back();
-  const double y0 = grids.edges.y_lines.front(), y1 = grids.edges.y_lines.back();
+  const double x0 = grids.edges.x_min, x1 = grids.edges.x_max;
+  const double y0 = grids.edges.y_min, y1 = grids.edges.y_max;
   for (const bool textured : {false, true}) {
     const LensGrid& g = textured ? grids.interior : grids.edges;
     double worst = 0.0, region_area = 0.0, piece_area = 0.0;
@@ -107,9 +106,7 @@ TEST(LensMesh, EveryDrawnEdgeIsWithinAQuarterPixelOfTheTrueCurve) {
       // The pieces tile the quad's part inside the region: areas add up (no overlap, no gap).
       std::vector<Vec2> clipped;
       std::vector<int> one;
-      LensGrid region = g;
-      region.x_lines = {g.x_lines.front(), g.x_lines.back()};
-      region.y_lines = {g.y_lines.front(), g.y_lines.back()};
+      const LensGrid region = LensGrid::one_cell(g.x_min, g.x_max, g.y_min, g.y_max);
       split_by_grid(region, quad, clipped, one);
       if (!one.empty()) region_area += area(clipped, 0, clipped.size());
     }
@@ -118,6 +115,75 @@ TEST(LensMesh, EveryDrawnEdgeIsWithinAQuarterPixelOfTheTrueCurve) {
     EXPECT_LT(worst, 0.25);
     EXPECT_GT(edges, 1000);
     EXPECT_NEAR(piece_area, region_area, 1e-12 * std::max(1.0, region_area));
+  }
+}
+
+// Pixel centres that no drawn triangle covers, when a quad larger than the region is split
+// along `grid` and each piece drawn as its fan of chords (as LensMesher does): a crack between
+// pieces (at a T-junction of a large cell with smaller ones, say) leaves some uncovered.
+long uncovered_pixel_centres(const CameraIntrinsics& K, const LensGrid& grid) {
+  const double mx = 0.1 * (grid.x_max - grid.x_min), my = 0.1 * (grid.y_max - grid.y_min);
+  const std::vector<Vec2> quad = {{grid.x_min - mx, grid.y_min - my}, {grid.x_max + mx, grid.y_min - my},
+                                  {grid.x_max + mx, grid.y_max + my}, {grid.x_min - mx, grid.y_max + my}};
+  std::vector<Vec2> pieces;
+  std::vector<int> sizes;
+  split_by_grid(grid, quad, pieces, sizes);
+  cv::Mat covered(K.height_px, K.width_px, CV_8UC1, cv::Scalar(0));
+  std::size_t first = 0;
+  for (int size : sizes) {
+    for (int v = 1; v + 1 < size; ++v) {
+      const Vec2 p[3] = {pixel(K, pieces[first]), pixel(K, pieces[first + static_cast<std::size_t>(v)]),
+                         pixel(K, pieces[first + static_cast<std::size_t>(v) + 1])};
+      const double area2 = (p[1] - p[0]).x() * (p[2] - p[0]).y() - (p[1] - p[0]).y() * (p[2] - p[0]).x();
+      if (area2 == 0.0) continue;
+      const int u0 = std::max(0, static_cast<int>(std::floor(std::min({p[0].x(), p[1].x(), p[2].x()}))));
+      const int u1 = std::min(K.width_px - 1, static_cast<int>(std::ceil(std::max({p[0].x(), p[1].x(), p[2].x()}))));
+      const int v0 = std::max(0, static_cast<int>(std::floor(std::min({p[0].y(), p[1].y(), p[2].y()}))));
+      const int v1 = std::min(K.height_px - 1, static_cast<int>(std::ceil(std::max({p[0].y(), p[1].y(), p[2].y()}))));
+      for (int y = v0; y <= v1; ++y) {
+        for (int x = u0; x <= u1; ++x) {
+          // Inside or on the boundary: the three edge functions share the triangle's sign.
+          bool inside = true;
+          for (int k = 0; k < 3 && inside; ++k) {
+            const Vec2& a = p[k];
+            const Vec2& b = p[(k + 1) % 3];
+            const double e = (b.x() - a.x()) * (y - a.y()) - (b.y() - a.y()) * (x - a.x());
+            inside = area2 > 0 ? e >= 0.0 : e <= 0.0;
+          }
+          if (inside) covered.at<std::uint8_t>(y, x) = 1;
+        }
+      }
+    }
+    first += static_cast<std::size_t>(size);
+  }
+  return static_cast<long>(covered.total()) - cv::countNonZero(covered);
+}
+
+TEST(LensMesh, AdaptiveCellsLeaveNoCrackAtTJunctions) {
+  const CameraIntrinsics K;
+  const LensGrids grids = make_lens_grids(K, kLensChordTolerance_px);
+  for (const LensGrid* g : {&grids.edges, &grids.interior}) {
+    // The grid is adaptive: cells of several sizes, so T-junctions (hanging points) exist.
+    double smallest = std::numeric_limits<double>::infinity(), largest = 0.0;
+    std::size_t hanging = 0;
+    for (const LensGrid::Cell& c : g->cells) {
+      const double d = std::hypot(K.fx_px * (c.x1 - c.x0), K.fy_px * (c.y1 - c.y0));
+      smallest = std::min(smallest, d), largest = std::max(largest, d);
+      for (const std::vector<double>& h : c.hanging) hanging += h.size();
+    }
+    EXPECT_GT(largest, 1.5 * smallest);
+    EXPECT_GT(hanging, 0u);
+    const long uncovered = uncovered_pixel_centres(K, *g);
+    // The same split without the hanging points: the chords of a large cell's side and of its
+    // smaller neighbours' sides part, and pixel centres fall between them.
+    LensGrid without = *g;
+    for (LensGrid::Cell& c : without.cells)
+      for (std::vector<double>& h : c.hanging) h.clear();
+    std::cout << "[ cracks ] " << g->cells.size() << " cells, diagonals " << smallest << " to " << largest
+              << " px, " << hanging << " hanging points: " << uncovered
+              << " pixel centres uncovered (without the hanging points: " << uncovered_pixel_centres(K, without)
+              << ")" << std::endl;
+    EXPECT_EQ(uncovered, 0);
   }
 }
 
