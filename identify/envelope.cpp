@@ -105,7 +105,12 @@ IdentifyOptions with_scenario(IdentifyOptions o, const verification::Scenario& s
 std::vector<EnvelopeEntry> check_envelope(const Identification& id, const verification::Scenario& s) {
   std::vector<EnvelopeEntry> out;
   for (const Mapped& m : kMapped) {
-    if (const Interval* iv = find(id, m.parameter)) out.push_back(entry(m.parameter, *iv, s, m.dispersion));
+    if (std::string(m.parameter) == "rc_gain_scale") {
+      // Against this scenario's nominal gains (the identification may have used others).
+      if (const auto scale = gain_scale(id, s.autopilot)) out.push_back(entry(m.parameter, *scale, s, m.dispersion));
+    } else if (const Interval* iv = find(id, m.parameter)) {
+      out.push_back(entry(m.parameter, *iv, s, m.dispersion));
+    }
   }
   // Each axis's gain as a scale of the scenario's nominal for that axis.
   const plant::AutopilotParams& ap = s.autopilot;

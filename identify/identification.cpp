@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 
 #include "shelfcross/random.hpp"
@@ -192,6 +193,20 @@ AxisRecord axis_record(const FlightRecord& r, Axis axis, int min_stick, int* win
   return rec;
 }
 
+std::optional<Interval> gain_scale(const Identification& id, const plant::AutopilotParams& nominal) {
+  std::vector<const Interval*> parts;
+  std::vector<double> scales;
+  for (const AxisResult& a : id.axes) {
+    if (!a.identified) continue;
+    const double n = a.axis == Axis::yaw        ? nominal.rc_yaw_radps_at_100
+                     : a.axis == Axis::vertical ? nominal.rc_vertical_mps_at_100
+                                                : nominal.rc_horizontal_mps_at_100;
+    parts.push_back(&a.id.gain);
+    scales.push_back(1.0 / n);
+  }
+  return combine(parts, scales);
+}
+
 Identification identify_flight(const FlightRecord& r, const IdentifyOptions& o) {
   if (!r.takeoff_ok_ns) {
     throw std::invalid_argument(r.source + ": no flight: the log holds no takeoff acknowledged with 'ok'");
@@ -202,11 +217,28 @@ Identification identify_flight(const FlightRecord& r, const IdentifyOptions& o) 
   id.flight_s = ns_to_seconds(r.land_sent_ns.value_or(r.end_ns) - *r.takeoff_ok_ns);
   id.link = link_figures(r);
   int identified = 0;
-  for (size_t i = 0; i < kAxes.size(); ++i) {
+  // The dead time is the link's (the command's way to the drone, the state record's way back;
+  // the onboard lags are the tracking loops'): one for all axes. The velocity axes tell it
+  // apart from the time constant; the integral axes (height, heading) barely, so they are
+  // fitted second, with the velocity axes' dead time and its bootstrap replicates.
+  std::optional<Interval> link_delay;
+  for (size_t i : {0u, 1u, 2u, 3u}) {
     AxisResult& a = id.axes[i];
     a.axis = kAxes[i];
+    if (i == 2 && !link_delay) {
+      std::vector<const Interval*> parts;
+      std::vector<double> ones;
+      for (size_t h : {0u, 1u}) {
+        if (!id.axes[h].identified) continue;
+        parts.push_back(&id.axes[h].id.delay_s);
+        ones.push_back(1.0);
+      }
+      link_delay = combine(parts, ones);
+    }
     a.record = axis_record(r, a.axis, o.min_stick, &a.windows);
     a.record.loop = tracking_loop(a.axis, o.autopilot, o.vehicle);
+    // The SDK's velocities are integer dm/s: coarse against the calibration's 0.2-0.4 m/s.
+    if (a.record.observation == Observation::direct) a.record.quantum = 0.1;
     if (a.windows == 0) {
       a.why_not = "its stick never moved by " + std::to_string(o.min_stick) + " or more while flying";
       continue;
@@ -217,7 +249,13 @@ Identification identify_flight(const FlightRecord& r, const IdentifyOptions& o) 
       continue;
     }
     // Each axis its own resampling stream: the seed mixed with the axis.
-    a.id = identify_axis(a.record, o.bootstrap_replicates, mix64(o.seed + 0x1D0 + i), o.block_s, o.bounds);
+    FitBounds bounds = o.bounds;
+    const std::vector<double>* delays = nullptr;
+    if (a.record.observation == Observation::integral && link_delay) {
+      bounds.delay_min_s = bounds.delay_max_s = link_delay->value;
+      delays = &link_delay->replicates;
+    }
+    a.id = identify_axis(a.record, o.bootstrap_replicates, mix64(o.seed + 0x1D0 + i), o.block_s, bounds, delays);
     a.identified = true;
     ++identified;
   }
@@ -229,8 +267,8 @@ Identification identify_flight(const FlightRecord& r, const IdentifyOptions& o) 
   auto put = [&](const std::string& name, std::vector<const Interval*> parts, std::vector<double> scale) {
     if (auto c = combine(parts, scale)) id.parameters[name] = std::move(*c);
   };
-  std::vector<const Interval*> h_gain, h_tau, scaled, delays;
-  std::vector<double> h_ones, scales, d_ones;
+  std::vector<const Interval*> h_gain, h_tau;
+  std::vector<double> h_ones;
   for (Axis a : {Axis::forward, Axis::lateral}) {
     if (!axis(a).identified) continue;
     h_gain.push_back(&axis(a).id.gain);
@@ -247,18 +285,19 @@ Identification identify_flight(const FlightRecord& r, const IdentifyOptions& o) 
     put("rc_yaw_radps_at_100", {&axis(Axis::yaw).id.gain}, {1.0});
     put("yaw_time_constant_s", {&axis(Axis::yaw).id.tau_s}, {1.0});
   }
-  for (Axis a : kAxes) {
-    if (!axis(a).identified) continue;
-    const double nominal = a == Axis::yaw        ? o.autopilot.rc_yaw_radps_at_100
-                           : a == Axis::vertical ? o.autopilot.rc_vertical_mps_at_100
-                                                 : o.autopilot.rc_horizontal_mps_at_100;
-    scaled.push_back(&axis(a).id.gain);
-    scales.push_back(1.0 / nominal);
-    delays.push_back(&axis(a).id.delay_s);
-    d_ones.push_back(1.0);
+  if (auto scale = gain_scale(id, o.autopilot)) id.parameters["rc_gain_scale"] = std::move(*scale);
+  if (link_delay) {
+    id.parameters["response_delay_s"] = *link_delay;
+  } else {  // no velocity axis: the integral axes' own dead times
+    std::vector<const Interval*> delays;
+    std::vector<double> ones;
+    for (Axis a : kAxes) {
+      if (!axis(a).identified) continue;
+      delays.push_back(&axis(a).id.delay_s);
+      ones.push_back(1.0);
+    }
+    put("response_delay_s", delays, ones);
   }
-  put("rc_gain_scale", scaled, scales);
-  put("response_delay_s", delays, d_ones);
   return id;
 }
 

@@ -20,9 +20,12 @@
 //   rc_vertical_mps_at_100, vertical_time_constant_s, rc_yaw_radps_at_100, yaw_time_constant_s
 //   rc_gain_scale              every identified gain over the scenario's nominal of its axis,
 //                              weighted (the campaign scales all axes by one number)
-//   response_delay_s           the axes' dead times, weighted: stick on the wire to the state
-//                              record showing it (not a scenario parameter: the co-simulation
-//                              builds it from its link latencies and the autopilot's loops)
+//   response_delay_s           the dead time d, one for all axes (the link's: the command's way
+//                              to the drone and the state record's way back; the onboard lags
+//                              are the tracking loops'), from the velocity axes, which tell it
+//                              apart from the time constant; the height and heading axes are
+//                              then fitted with it (and with its bootstrap replicates). Not a
+//                              scenario parameter: the co-simulation builds it from its links.
 // A combination is formed replicate by replicate from the axes' bootstrap replicates (the axes'
 // resamplings are independent), so its interval is again a bootstrap percentile interval.
 
@@ -45,7 +48,7 @@ const char* axis_name(Axis axis);
 const char* axis_gain_unit(Axis axis);
 
 struct IdentifyOptions {
-  int bootstrap_replicates = 400;
+  int bootstrap_replicates = 200;
   std::uint64_t seed = 1;
   double block_s = 1.0;
   int min_stick = 5;      ///< an axis counts as excited from this deflection on
@@ -91,6 +94,10 @@ struct Identification {
 /// Throws std::invalid_argument when the record has no flight (no takeoff acknowledged, or no
 /// state record while flying) or no axis could be identified.
 Identification identify_flight(const FlightRecord& record, const IdentifyOptions& options);
+
+/// rc_gain_scale against the nominal gains of `nominal` (rc_*_at_100): each identified axis's
+/// gain over its nominal, combined as above; nothing when no axis was identified.
+std::optional<Interval> gain_scale(const Identification& id, const plant::AutopilotParams& nominal);
 
 /// The axis records of a flight (exposed for tests and plots), without their tracking loop.
 AxisRecord axis_record(const FlightRecord& record, Axis axis, int min_stick, int* windows);

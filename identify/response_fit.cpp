@@ -9,6 +9,7 @@
 
 #include <Eigen/Dense>
 
+#include "identify/nelder_mead.hpp"
 #include "shelfcross/random.hpp"
 
 namespace shelfcross::identify {
@@ -41,49 +42,6 @@ Projection project(const AxisRecord& r, const std::vector<double>& y, double tau
   return p;
 }
 
-// Nelder-Mead on (log tau, d), the box enforced by clamping; returns the best vertex.
-std::array<double, 2> nelder_mead(const std::function<double(const std::array<double, 2>&)>& f,
-                                  std::array<double, 2> start, std::array<double, 2> step, int iterations) {
-  std::array<std::array<double, 2>, 3> v = {start, start, start};
-  v[1][0] += step[0];
-  v[2][1] += step[1];
-  std::array<double, 3> fv = {f(v[0]), f(v[1]), f(v[2])};
-  for (int it = 0; it < iterations; ++it) {
-    std::array<int, 3> o = {0, 1, 2};
-    std::sort(o.begin(), o.end(), [&](int a, int b) { return fv[a] < fv[b]; });
-    const int best = o[0], mid = o[1], worst = o[2];
-    if (std::abs(fv[worst] - fv[best]) <= 1e-12 * (1.0 + std::abs(fv[best])) &&
-        std::hypot(v[worst][0] - v[best][0], v[worst][1] - v[best][1]) < 1e-6)
-      break;
-    const std::array<double, 2> c = {(v[best][0] + v[mid][0]) / 2.0, (v[best][1] + v[mid][1]) / 2.0};
-    auto along = [&](double a) { return std::array<double, 2>{c[0] + a * (v[worst][0] - c[0]), c[1] + a * (v[worst][1] - c[1])}; };
-    const auto r = along(-1.0);
-    const double fr = f(r);
-    if (fr < fv[best]) {
-      const auto e = along(-2.0);
-      const double fe = f(e);
-      if (fe < fr) { v[worst] = e; fv[worst] = fe; } else { v[worst] = r; fv[worst] = fr; }
-    } else if (fr < fv[mid]) {
-      v[worst] = r;
-      fv[worst] = fr;
-    } else {
-      const auto k = along(fr < fv[worst] ? -0.5 : 0.5);
-      const double fk = f(k);
-      if (fk < std::min(fr, fv[worst])) {
-        v[worst] = k;
-        fv[worst] = fk;
-      } else {  // shrink toward the best
-        for (int i : {mid, worst}) {
-          v[i] = {(v[i][0] + v[best][0]) / 2.0, (v[i][1] + v[best][1]) / 2.0};
-          fv[i] = f(v[i]);
-        }
-      }
-    }
-  }
-  const int best = static_cast<int>(std::min_element(fv.begin(), fv.end()) - fv.begin());
-  return v[best];
-}
-
 struct Solution {
   double log_tau, delay;
   Projection projection;
@@ -94,7 +52,8 @@ Solution solve(const AxisRecord& r, const std::vector<double>& y, const FitBound
   auto clamp = [&](const std::array<double, 2>& p) {
     return std::array<double, 2>{std::clamp(p[0], lt_lo, lt_hi), std::clamp(p[1], b.delay_min_s, b.delay_max_s)};
   };
-  auto cost = [&](const std::array<double, 2>& p) {
+  auto cost = [&](const std::vector<double>& v) {
+    const std::array<double, 2> p = {v[0], v[1]};
     const auto q = clamp(p);
     // Outside the box: the boundary's cost plus a slope back in, so the simplex returns.
     const double outside = std::abs(p[0] - q[0]) + std::abs(p[1] - q[1]);
@@ -105,10 +64,10 @@ Solution solve(const AxisRecord& r, const std::vector<double>& y, const FitBound
     // Coarse grid: 24 time constants (log-spaced) x 21 dead times.
     double best_cost = std::numeric_limits<double>::infinity();
     for (int i = 0; i < kGridTau; ++i) {
-      for (int j = 0; j < kGridDelay; ++j) {
+      for (int j = 0; j < (b.delay_max_s > b.delay_min_s ? kGridDelay : 1); ++j) {
         const std::array<double, 2> p = {lt_lo + (lt_hi - lt_lo) * i / (kGridTau - 1.0),
                                          b.delay_min_s + (b.delay_max_s - b.delay_min_s) * j / (kGridDelay - 1.0)};
-        const double c = cost(p);
+        const double c = cost({p[0], p[1]});
         if (c < best_cost) {
           best_cost = c;
           best = p;
@@ -116,8 +75,9 @@ Solution solve(const AxisRecord& r, const std::vector<double>& y, const FitBound
       }
     }
   }
-  const std::array<double, 2> step = {(lt_hi - lt_lo) / (kGridTau - 1.0), (b.delay_max_s - b.delay_min_s) / (kGridDelay - 1.0)};
-  const auto p = clamp(nelder_mead(cost, best, step, 200));
+  const std::vector<double> step = {(lt_hi - lt_lo) / (kGridTau - 1.0), (b.delay_max_s - b.delay_min_s) / (kGridDelay - 1.0)};
+  const std::vector<double> found = nelder_mead(cost, {best[0], best[1]}, step, 200);
+  const auto p = clamp({found[0], found[1]});
   return {p[0], p[1], project(r, y, std::exp(p[0]), p[1])};
 }
 
@@ -214,6 +174,57 @@ std::vector<double> unit_response(const PiecewiseInput& input, double tau_s, dou
   return out;
 }
 
+namespace {
+
+constexpr double kSigmaFloorQuanta = 0.28867513459481287;  // 1 / sqrt(12)
+
+// log(Phi(b) - Phi(a)) for a < b, accurate in either tail.
+double log_normal_mass(double a, double b) {
+  constexpr double kRoot2 = 1.4142135623730951;
+  double mass = 0.0;
+  if (a > 0.0) {
+    mass = 0.5 * (std::erfc(a / kRoot2) - std::erfc(b / kRoot2));
+  } else if (b < 0.0) {
+    mass = 0.5 * (std::erfc(-b / kRoot2) - std::erfc(-a / kRoot2));
+  } else {
+    mass = 1.0 - 0.5 * (std::erfc(-a / kRoot2) + std::erfc(b / kRoot2));
+  }
+  return std::log(std::max(mass, 1e-300));
+}
+
+// The negative log-likelihood of rounded samples y at theta = (K, log tau, d, log(sigma -
+// sigma_floor)); outside the search box the bound's value plus a slope back in.
+double quantised_nll(const AxisRecord& r, const std::vector<double>& y, const std::vector<double>& theta,
+                     const FitBounds& b) {
+  const double log_tau = std::clamp(theta[1], std::log(b.tau_min_s), std::log(b.tau_max_s));
+  const double delay = std::clamp(theta[2], b.delay_min_s, b.delay_max_s);
+  const double outside = std::abs(theta[1] - log_tau) + std::abs(theta[2] - delay);
+  const double q = r.quantum;
+  const double sigma = kSigmaFloorQuanta * q + std::exp(std::min(theta[3], 5.0));
+  const std::vector<double> unit = unit_response(r.input, std::exp(log_tau), delay, r.t_s, r.observation, r.loop);
+  double nll = 0.0;
+  for (size_t k = 0; k < y.size(); ++k) {
+    const double f = theta[0] * unit[k];
+    nll -= log_normal_mass((y[k] - q / 2 - f) / sigma, (y[k] + q / 2 - f) / sigma);
+  }
+  return nll * (1.0 + outside);
+}
+
+std::vector<double> fit_quantised(const AxisRecord& r, const std::vector<double>& y, std::vector<double> start,
+                                  const std::vector<double>& step, int iterations, const FitBounds& b) {
+  std::vector<double> theta =
+      nelder_mead([&](const std::vector<double>& t) { return quantised_nll(r, y, t, b); }, std::move(start), step, iterations);
+  theta[1] = std::clamp(theta[1], std::log(b.tau_min_s), std::log(b.tau_max_s));
+  theta[2] = std::clamp(theta[2], b.delay_min_s, b.delay_max_s);
+  return theta;
+}
+
+double sigma_of(const AxisRecord& r, double log_excess) {
+  return kSigmaFloorQuanta * r.quantum + std::exp(std::min(log_excess, 5.0));
+}
+
+}  // namespace
+
 AxisFit fit_axis(const AxisRecord& r, const FitBounds& b) {
   assert(r.t_s.size() == r.y.size() && r.y.size() >= 4);
   const Solution s = solve(r, r.y, b);
@@ -221,11 +232,22 @@ AxisFit fit_axis(const AxisRecord& r, const FitBounds& b) {
   f.tau_s = std::exp(s.log_tau);
   f.delay_s = s.delay;
   f.gain = s.projection.coefficients(0);
+  if (r.quantum > 0.0 && r.observation == Observation::direct) {
+    // From the least-squares fit, noise at the floor.
+    const std::vector<double> theta = fit_quantised(r, r.y, {f.gain, s.log_tau, s.delay, std::log(0.05 * r.quantum)},
+                                                    {0.05 * std::max(std::abs(f.gain), 0.1), 0.1, 0.02, 1.0}, 300, b);
+    f.gain = theta[0];
+    f.tau_s = std::exp(theta[1]);
+    f.delay_s = theta[2];
+    f.sigma = sigma_of(r, theta[3]);
+  }
   for (int i = 1; i < s.projection.coefficients.size(); ++i) f.offsets.push_back(s.projection.coefficients(i));
   const std::vector<double> unit = unit_response(r.input, f.tau_s, f.delay_s, r.t_s, r.observation, r.loop);
   f.fitted.resize(unit.size());
   for (size_t k = 0; k < unit.size(); ++k) f.fitted[k] = f.gain * unit[k] + (f.offsets.empty() ? 0.0 : f.offsets[r.segment[k]]);
-  f.rms = std::sqrt(s.projection.sse / static_cast<double>(r.y.size()));
+  double sse = 0.0;
+  for (size_t k = 0; k < unit.size(); ++k) sse += (r.y[k] - f.fitted[k]) * (r.y[k] - f.fitted[k]);
+  f.rms = std::sqrt(sse / static_cast<double>(r.y.size()));
   const double tol = 1e-3;
   f.at_bound = f.tau_s < b.tau_min_s * (1 + tol) || f.tau_s > b.tau_max_s * (1 - tol) ||
                f.delay_s < b.delay_min_s + tol || f.delay_s > b.delay_max_s - tol;
@@ -301,7 +323,7 @@ Eigen::VectorXd gauss_newton_step(const AxisRecord& r, const Eigen::VectorXd& y,
 }  // namespace
 
 AxisIdentification identify_axis(const AxisRecord& r, int replicates, std::uint64_t seed, double block_s,
-                                 const FitBounds& b) {
+                                 const FitBounds& b, const std::vector<double>* delay_replicates) {
   AxisIdentification id;
   id.fit = fit_axis(r, b);
   const size_t n = r.y.size();
@@ -323,6 +345,23 @@ AxisIdentification identify_axis(const AxisRecord& r, int replicates, std::uint6
   theta_hat << id.fit.gain, id.fit.tau_s, id.fit.delay_s,
       Eigen::Map<const Eigen::VectorXd>(id.fit.offsets.data(), static_cast<Eigen::Index>(id.fit.offsets.size()));
   std::vector<double> gains, taus, delays;
+  if (r.quantum > 0.0 && r.observation == Observation::direct) {
+    const double q = r.quantum;
+    const std::vector<double> start = {id.fit.gain, std::log(id.fit.tau_s), id.fit.delay_s,
+                                       std::log(std::max(id.fit.sigma - kSigmaFloorQuanta * q, 1e-6))};
+    std::vector<double> y(n);
+    for (int rep = 0; rep < replicates; ++rep) {
+      for (size_t k = 0; k < n; ++k) y[k] = q * std::round((id.fit.fitted[k] + id.fit.sigma * stream.normal()) / q);
+      const std::vector<double> theta = fit_quantised(r, y, start, {0.02 * std::max(std::abs(id.fit.gain), 0.1), 0.05, 0.01, 0.5}, 100, b);
+      gains.push_back(theta[0]);
+      taus.push_back(std::exp(theta[1]));
+      delays.push_back(theta[2]);
+    }
+    id.gain = interval_of(id.fit.gain, std::move(gains));
+    id.tau_s = interval_of(id.fit.tau_s, std::move(taus));
+    id.delay_s = interval_of(id.fit.delay_s, std::move(delays));
+    return id;
+  }
   Eigen::VectorXd y(static_cast<Eigen::Index>(n));
   for (int rep = 0; rep < replicates; ++rep) {
     for (size_t k = 0; k < n;) {
@@ -332,9 +371,15 @@ AxisIdentification identify_axis(const AxisRecord& r, int replicates, std::uint6
       }
     }
     // The refit: two Gauss-Newton steps from the estimate (the resampled record differs from
-    // the fitted one by residual-sized amounts, so the estimate is a close start).
-    Eigen::VectorXd theta = gauss_newton_step(r, y, theta_hat, b);
-    theta = gauss_newton_step(r, y, theta, b);
+    // the fitted one by residual-sized amounts, so the estimate is a close start). A dead time
+    // given per replicate is held at that replicate's value.
+    FitBounds rb = b;
+    Eigen::VectorXd theta = theta_hat;
+    if (delay_replicates && !delay_replicates->empty()) {
+      rb.delay_min_s = rb.delay_max_s = theta(2) = (*delay_replicates)[static_cast<size_t>(rep) % delay_replicates->size()];
+    }
+    theta = gauss_newton_step(r, y, theta, rb);
+    theta = gauss_newton_step(r, y, theta, rb);
     gains.push_back(theta(0));
     taus.push_back(theta(1));
     delays.push_back(theta(2));

@@ -68,6 +68,9 @@ struct AxisRecord {
   int segments = 1;
   Observation observation = Observation::direct;
   TrackingLoop loop;
+  /// The resolution y arrives in, when it is coarse against the response (the SDK's velocities
+  /// in integer dm/s: 0.1); 0: fine enough for least squares (see fit_axis).
+  double quantum = 0.0;
 };
 
 /// The vehicle's response to the input at unit gain (at rest before the first input), at the
@@ -79,7 +82,7 @@ std::vector<double> unit_response(const PiecewiseInput& input, double tau_s, dou
 
 struct FitBounds {
   double tau_min_s = 0.03, tau_max_s = 3.0;
-  double delay_min_s = 0.0, delay_max_s = 1.0;
+  double delay_min_s = -0.2, delay_max_s = 1.0;  ///< below 0: the stamps of a command and of a state record are taken at different points of the loop
 };
 
 struct AxisFit {
@@ -89,10 +92,19 @@ struct AxisFit {
   std::vector<double> offsets;   ///< integral observation: one per segment
   std::vector<double> fitted;    ///< the model at the samples
   double rms = 0.0;              ///< residual root mean square
+  double sigma = 0.0;            ///< quantised records: the noise's standard deviation (ML)
   bool at_bound = false;         ///< tau or d ended on a bound of the search
 };
 
 /// Least-squares fit (see the file comment). Precondition: at least 4 samples.
+/// A record with a quantum (direct observations only) is then refined by maximum likelihood
+/// of its rounded samples: y_k = q round((f_k + e_k) / q), e_k ~ N(0, sigma^2) independent, so
+/// P(y_k) = Phi((y_k + q/2 - f_k) / sigma) - Phi((y_k - q/2 - f_k) / sigma), over (K, tau, d,
+/// sigma), sigma at least q / 4. Least squares on such samples is biased: a plateau of 0.247
+/// m/s read as 0.2 for two seconds pulls the fit by 0.047 m/s, which the likelihood knows to be
+/// within the reading's rounding. The floor on sigma stands for what blurs a reading's last
+/// digit besides noise (the drone's sampling instant, unknown within a record's period); without
+/// it a noise-free record's likelihood would be a hard set membership.
 AxisFit fit_axis(const AxisRecord& record, const FitBounds& bounds = {});
 
 /// A value with its 95 % bootstrap interval and the replicates it came from.
@@ -104,13 +116,18 @@ struct Interval {
 };
 
 /// The fit and its moving-block residual bootstrap (`replicates` refits, blocks of block_s,
-/// resampling drawn from a RandomStream seeded from `seed`).
+/// resampling drawn from a RandomStream seeded from `seed`). Quantised records: a parametric
+/// bootstrap instead, records drawn from the fitted likelihood (the fitted response plus
+/// N(0, sigma^2) noise, rounded to the quantum) and refitted by maximum likelihood.
 struct AxisIdentification {
   AxisFit fit;
   Interval gain, tau_s, delay_s;
 };
+/// A dead time known from elsewhere is given by bounds with delay_min_s == delay_max_s, and
+/// its bootstrap replicates by `delay_replicates` (replicate i refits with the i-th, so that
+/// its uncertainty passes on).
 AxisIdentification identify_axis(const AxisRecord& record, int replicates, std::uint64_t seed, double block_s = 1.0,
-                                 const FitBounds& bounds = {});
+                                 const FitBounds& bounds = {}, const std::vector<double>* delay_replicates = nullptr);
 
 /// The 2.5 and 97.5 % percentiles, the mean and standard deviation of `replicates` around
 /// `value`; the replicates are kept in their order.
