@@ -69,7 +69,9 @@ FlightRecord read_flight_record(const std::string& path) {
 FlightRecord parse_flight_record(std::istream& in, const std::string& name) {
   FlightRecord r;
   r.source = name;
-  OrderCheck lines_order{"this line"}, rc_order{"rc datagram"}, state_order{"state record"};
+  OrderCheck rc_order{"rc datagram"}, state_order{"state record"};
+  TimeNs latest_ns = 0;  // the latest stamp so far, and its line
+  int latest_line = 0;
   std::string text;
   bool ended = false;
   int n = 0;
@@ -92,11 +94,16 @@ FlightRecord parse_flight_record(std::istream& in, const std::string& name) {
     const std::string type = j["type"].get<std::string>();
     if (n == 1 && type != "start") fail(name, n, "the first line is '" + type + "', not 'start': not a tello_pilot flight log");
     if (n > 1 && type == "start") fail(name, n, "a second 'start' line: two logs in one file?");
-    // Lines are written as the loop handles them; a frame may be stamped a little before the
-    // driver events logged with it, never by a second.
-    if (lines_order.last_line > 0 && t + kNsPerSecond < lines_order.last_ns) lines_order.check(name, n, t);
-    lines_order.last_ns = std::max(lines_order.last_ns, t);
-    lines_order.last_line = n;
+    // Lines are written as the loop handles them: a driver event may be stamped a little before
+    // a frame logged ahead of it, never by a second.
+    if (latest_line > 0 && t + kNsPerSecond < latest_ns) {
+      fail(name, n, "t = " + seconds_text(t) + " is more than a second before line " + std::to_string(latest_line) +
+                        " (t = " + seconds_text(latest_ns) + "): the log is out of order");
+    }
+    if (t >= latest_ns) {
+      latest_ns = t;
+      latest_line = n;
+    }
     if (type == "start") {
       r.start_ns = t;
       r.mode = string_field(j, "mode");
@@ -133,7 +140,7 @@ FlightRecord parse_flight_record(std::istream& in, const std::string& name) {
   r.lines = n;
   if (n == 0) throw FlightLogFormatError(name + ": empty: not a tello_pilot flight log");
   if (!ended) {
-    fail(name, n, "no 'end' line after the last line (t = " + seconds_text(lines_order.last_ns) +
+    fail(name, n, "no 'end' line after the last line (t = " + seconds_text(latest_ns) +
                       "): the log is truncated (the program was killed or the file cut)");
   }
   return r;
