@@ -57,6 +57,7 @@ class PilotLoop::Impl {
                 {"state_port", driver_->local_state_port()},
                 {"video_port", video_->local_port()},
                 {"dry_run", o_.driver.dry_run},
+                {"mode", o_.mode},
                 {"flight_config", o_.flight_config_path},
                 {"calibration", o_.calibration_path}});
     submit_fsw(fsw_.start(start_ns_));
@@ -140,11 +141,55 @@ class PilotLoop::Impl {
       last_fed_ns_ = stamp(in);
       submit_fsw(fsw_.step(in));
       log_telemetry();
+      start_stick_program();
       if (const auto* frame = std::get_if<CameraFrame>(&in)) {
         log_approach_view();
         if (o_.on_frame) o_.on_frame(*frame, fsw_);
       }
     }
+  }
+
+  // The stick program starts when the flight software has the drone airborne (FindShelf:
+  // its takeoff acknowledged, or the height saying so when the reply was lost).
+  void start_stick_program() {
+    if (!o_.stick_program || program_start_ns_ || program_done_ || fsw_.phase() != flight_sw::Phase::FindShelf) return;
+    program_start_ns_ = clock_.now_ns();
+    log_.write(*program_start_ns_, "stick_program", {{"event", "started"}, {"mode", o_.mode}});
+    if (o_.console) *o_.console << "tello_pilot: " << o_.mode << " started" << std::endl;
+  }
+
+  // One pass of the stick program while airborne; true when it ended the flight (landing).
+  bool fly_stick_program(TimeNs now) {
+    if (!program_start_ns_) return false;
+    const flight_sw::Phase phase = fsw_.phase();
+    if (phase == flight_sw::Phase::Land || phase == flight_sw::Phase::Done) {
+      // The flight software's own failsafe is landing the drone: the program stops.
+      stop_stick_program(now, "stopped: the flight software lands (" + fsw_.telemetry().event + ")");
+      return false;
+    }
+    if (!fsw_.telemetry().tags.empty()) {
+      stop_stick_program(now, "stopped: shelf tags in view");
+      begin_land(o_.mode + " stopped: shelf tags in view (an obstacle near: fly it in open space)", 1);
+      return true;
+    }
+    const std::optional<std::string> rc = o_.stick_program(now - *program_start_ns_);
+    if (!rc) {
+      stop_stick_program(now, "complete");
+      begin_land(o_.mode + " complete", 0);
+      return true;
+    }
+    if (!hover_override_) {
+      CommandOptions opt;
+      opt.tag = kTagPilot;
+      driver_->submit(*rc, opt);
+    }
+    return false;
+  }
+
+  void stop_stick_program(TimeNs now, const std::string& event) {
+    program_start_ns_.reset();
+    program_done_ = true;
+    log_.write(now, "stick_program", {{"event", event}});
   }
 
   void record(const VideoFrame& f) {
@@ -164,6 +209,7 @@ class PilotLoop::Impl {
       const bool blind_takeoff =
           c.text == "takeoff" &&
           (!last_state_ns_ || now - *last_state_ns_ > seconds_to_ns(o_.failsafes.state_timeout_s));
+      if (rc && program_start_ns_) continue;  // the stick program flies (its rc lines say what)
       if (landing_ || (rc && hover_override_) || blind_takeoff) {
         log_.write(now, "fsw_command_ignored",
                    {{"text", c.text},
@@ -320,6 +366,7 @@ class PilotLoop::Impl {
         opt.tag = kTagPilot;
         driver_->submit("rc 0 0 0 0", opt);
       }
+      if (fly_stick_program(now)) return std::nullopt;
     }
     if (fsw_.finished()) {
       const int code = fsw_.result().outcome == flight_sw::Outcome::Aborted ? 1 : 0;
@@ -390,6 +437,8 @@ class PilotLoop::Impl {
   bool airborne_ = false;
   TimeNs airborne_since_ns_ = 0;
   bool hover_override_ = false;
+  std::optional<TimeNs> program_start_ns_;  ///< the stick program flies since
+  bool program_done_ = false;
   bool landing_ = false;
   bool land_done_ = false;
   bool land_ok_ = false;

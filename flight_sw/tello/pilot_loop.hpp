@@ -55,6 +55,15 @@ struct PilotLoopConfig {
   std::ostream* console = nullptr;  ///< phase changes and failsafe messages for people; null: silent
   /// Called with each frame right after the flight software stepped on it (replay videos).
   std::function<void(const CameraFrame&, const flight_sw::FlightSoftware&)> on_frame;
+  /// A stick program flown instead of the mission once the flight software reports the drone
+  /// airborne (tello_pilot --fly-calibration): called on every pass with the time since then,
+  /// it returns the rc text to hold, or nothing once it is over; the loop then lands (exit 0).
+  /// The flight software keeps running beside it as the mission's watchman: its pre-flight
+  /// checks (state, video, battery) gate the takeoff, its failsafes' `land`s pass, only its
+  /// sticks are dropped; and the program stops and lands (exit 1) as soon as its perception
+  /// sees shelf tags, the one obstacle a Tello's camera can recognise. Empty: the mission flies.
+  std::function<std::optional<std::string>(TimeNs since_airborne_ns)> stick_program;
+  std::string mode = "mission";  ///< the start line's `mode` (what the loop flies)
 };
 
 /// In-memory channels for the driver (commands and replies, state) and the video receiver;

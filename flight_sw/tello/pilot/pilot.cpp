@@ -2,12 +2,37 @@
 
 #include <poll.h>
 
+#include <algorithm>
 #include <fstream>
+#include <memory>
 #include <iostream>
 
+#include "flight_sw/tello/calibration_manoeuvre.hpp"
 #include "flight_sw/tello/pilot_loop.hpp"
+#include "sdk/command.hpp"
 
 namespace shelfcross::tello::pilot {
+namespace {
+
+// --fly-calibration: the calibration manoeuvre replaces the mission's sticks once airborne
+// (PilotLoopConfig::stick_program). The flight software's shelf search must outlast it: its
+// find_shelf_s timeout would otherwise land the drone halfway.
+void fly_calibration_instead(PilotLoopConfig& config) {
+  auto manoeuvre = std::make_shared<const CalibrationManoeuvre>();
+  config.mode = "calibration_flight";
+  config.flight.timeouts.find_shelf_s = std::max(config.flight.timeouts.find_shelf_s, manoeuvre->duration_s() + 15.0);
+  config.stick_program = [manoeuvre](TimeNs since_ns) -> std::optional<std::string> {
+    const ManoeuvreStep* step = manoeuvre->step_at(ns_to_seconds(since_ns));
+    if (!step) return std::nullopt;
+    return sdk::rc_text(step->sticks[0], step->sticks[1], step->sticks[2], step->sticks[3]);
+  };
+  std::cout << "tello_pilot: calibration flight: " << manoeuvre->steps().size() << " steps, "
+            << manoeuvre->duration_s() << " s after the takeoff, then land. Open space only: about 1 m clear "
+            << "around the take-off point and 0.6 m above the take-off height; it stops and lands if shelf tags come into view."
+            << std::endl;
+}
+
+}  // namespace
 
 int run_pilot(const PilotOptions& o, const Clock& clock, const std::atomic<int>& signals) {
   PilotLoopConfig config;
@@ -22,6 +47,7 @@ int run_pilot(const PilotOptions& o, const Clock& clock, const std::atomic<int>&
   config.flight_config_path = o.flight_config_path;
   config.calibration_path = o.calibration_path;
   config.console = &std::cout;
+  if (o.fly_calibration) fly_calibration_instead(config);
   std::optional<PilotLoop> loop;
   try {
     loop.emplace(config, clock);

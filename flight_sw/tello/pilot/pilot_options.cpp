@@ -158,6 +158,9 @@ std::optional<PilotOptions> parse_options(int argc, char** argv) {
   app.add_option("--record-frames", o.record_dir,
                  "write every frame handed to the flight software to this folder as frame_INDEX[_damaged].png (costs time)");
   auto* o_dry = app.add_flag("--dry-run", o.dry_run, "connect, stream and run perception; never send a motion command");
+  app.add_flag("--fly-calibration", o.fly_calibration,
+               "fly the calibration manoeuvre (steps of each stick, about 45 s, in open space) instead of the mission, "
+               "then land: its --log is for `shelfcross identify`");
   auto* o_st = app.add_option("--state-timeout", fs.state_timeout_s, "airborne without state this long (s): land")->check(CLI::PositiveNumber);
   auto* o_sst = app.add_option("--state-start-timeout", fs.state_start_timeout_s, "no state at all this long after start (s): give up")->check(CLI::PositiveNumber);
   auto* o_vh = app.add_option("--video-hover", fs.video_hover_s, "airborne without frames this long (s): hover")->check(CLI::PositiveNumber);
@@ -260,6 +263,9 @@ std::optional<PilotOptions> parse_options(int argc, char** argv) {
     } catch (const std::exception& e) {
       throw UsageError(o.calibration_path + ": " + e.what());
     }
+  }
+  if (o.fly_calibration && !o.calibrate_path.empty()) {
+    throw UsageError("--fly-calibration and --calibrate: one at a time (the camera's calibration never flies)");
   }
   o.driver.dry_run = o.dry_run || !o.calibrate_path.empty();  // calibrating never flies
   return o;

@@ -24,6 +24,9 @@ struct PilotOptions {
   std::string inventory_path = "tello_inventory.json";
   bool dry_run = false;
   std::string record_dir;           ///< --record-frames: every frame handed over, as PNG (debugging)
+  /// --fly-calibration: fly the calibration manoeuvre (calibration_manoeuvre.hpp) instead of
+  /// the mission, for `shelfcross identify`.
+  bool fly_calibration = false;
   // Calibration mode (--calibrate OUT): record chessboard views, write the intrinsics, exit.
   std::string calibrate_path;
   int board_columns = 9;            ///< inner corners per row

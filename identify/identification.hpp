@@ -1,0 +1,107 @@
+#pragma once
+// The simulated Tello's autopilot parameters (plant/params.hpp AutopilotParams, the ones a
+// campaign disperses: verification/dispersion.hpp) identified from one flight record.
+//
+// Axes (sticks as the SDK names them; the state record in this project's frames):
+//   forward  stick b -> vx_H (state vgx), observed directly
+//   lateral  stick a -> vy_H = -a (right stick, left positive), observed directly
+//   vertical stick c -> height h, observed through the integral (cm resolution)
+//   yaw      stick d -> yaw rate = -d (clockwise stick, counter-clockwise positive),
+//            observed through the unwrapped heading (degree resolution)
+// Each axis is fitted (response_fit.hpp) on the windows where its stick moved: from 1 s before
+// the first deflection to 3 s after the last, windows closer than 3 s merged; only while
+// flying free (after the takeoff's `ok`, before the first `land`). An axis whose stick never
+// moved by at least min_stick, or with fewer than min_samples state records in its windows,
+// is not identified (and says why).
+//
+// The scenario's parameters follow from the axes:
+//   rc_horizontal_mps_at_100   forward and lateral gains, inverse-variance weighted
+//   velocity_time_constant_s   forward and lateral time constants, likewise
+//   rc_vertical_mps_at_100, vertical_time_constant_s, rc_yaw_radps_at_100, yaw_time_constant_s
+//   rc_gain_scale              every identified gain over the scenario's nominal of its axis,
+//                              weighted (the campaign scales all axes by one number)
+//   response_delay_s           the dead time d, one for all axes (the link's: the command's way
+//                              to the drone and the state record's way back; the onboard lags
+//                              are the tracking loops'), from the velocity axes, which tell it
+//                              apart from the time constant; the height and heading axes are
+//                              then fitted with it (and with its bootstrap replicates). Not a
+//                              scenario parameter: the co-simulation builds it from its links.
+// A combination is formed replicate by replicate from the axes' bootstrap replicates (the axes'
+// resamplings are independent), so its interval is again a bootstrap percentile interval.
+
+#include <array>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "identify/flight_record.hpp"
+#include "identify/response_fit.hpp"
+#include "plant/params.hpp"
+
+namespace shelfcross::identify {
+
+enum class Axis { forward, lateral, vertical, yaw };
+inline constexpr std::array<Axis, 4> kAxes = {Axis::forward, Axis::lateral, Axis::vertical, Axis::yaw};
+const char* axis_name(Axis axis);
+/// The stick's name and unit of the axis's gain, for people ("m/s at full stick", ...).
+const char* axis_gain_unit(Axis axis);
+
+struct IdentifyOptions {
+  int bootstrap_replicates = 200;
+  std::uint64_t seed = 1;
+  double block_s = 1.0;
+  int min_stick = 5;      ///< an axis counts as excited from this deflection on
+  int min_samples = 30;   ///< state records in its windows
+  /// The simulated Tello whose parameters are identified: its loops' gains (the tracking
+  /// loops of the fit) and the nominal gains rc_gain_scale multiplies (rc_*_at_100): the
+  /// scenario's (plant defaults without one).
+  plant::AutopilotParams autopilot;
+  plant::VehicleParams vehicle;
+  FitBounds bounds;
+};
+
+struct AxisResult {
+  Axis axis = Axis::forward;
+  bool identified = false;
+  std::string why_not;         ///< when not identified
+  AxisRecord record;           ///< what was fitted (times from the takeoff's `ok`)
+  AxisIdentification id;
+  int windows = 0;
+};
+
+/// Figures the log's stamps give directly (program clock): the state records' arrival, and
+/// the video's stages after its last datagram. The capture-to-receive latency of the video is
+/// not among them: a Tello stamps neither its frames nor its state records.
+struct LinkFigures {
+  int state_records = 0, bad_states = 0;
+  double state_period_p50_s = 0, state_period_p95_s = 0, state_gap_max_s = 0;
+  int frames = 0, damaged_frames = 0;
+  double frame_period_p50_s = 0, frame_period_p95_s = 0;
+  double rx_to_handed_p50_s = 0, rx_to_handed_p95_s = 0;    ///< last datagram -> decoded
+  double handed_to_taken_p50_s = 0, handed_to_taken_p95_s = 0;
+};
+
+struct Identification {
+  std::string source;
+  double flight_s = 0.0;                  ///< takeoff `ok` to first `land`
+  std::array<AxisResult, 4> axes;
+  std::map<std::string, Interval> parameters;  ///< names above; only those identified
+  LinkFigures link;
+  IdentifyOptions options;
+};
+
+/// Throws std::invalid_argument when the record has no flight (no takeoff acknowledged, or no
+/// state record while flying) or no axis could be identified.
+Identification identify_flight(const FlightRecord& record, const IdentifyOptions& options);
+
+/// rc_gain_scale against the nominal gains of `nominal` (rc_*_at_100): each identified axis's
+/// gain over its nominal, combined as above; nothing when no axis was identified.
+std::optional<Interval> gain_scale(const Identification& id, const plant::AutopilotParams& nominal);
+
+/// The axis records of a flight (exposed for tests and plots), without their tracking loop.
+AxisRecord axis_record(const FlightRecord& record, Axis axis, int min_stick, int* windows);
+/// The simulated autopilot's loop that tracks the axis's reference (response_fit.hpp).
+TrackingLoop tracking_loop(Axis axis, const plant::AutopilotParams& autopilot, const plant::VehicleParams& vehicle);
+
+}  // namespace shelfcross::identify
