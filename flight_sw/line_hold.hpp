@@ -44,6 +44,7 @@
 #include <Eigen/Core>
 
 #include "flight_sw/config.hpp"
+#include "flight_sw/navigation.hpp"
 #include "flight_sw/odometry.hpp"
 #include "shelfcross/sdk_messages.hpp"
 
@@ -118,6 +119,10 @@ struct LineRoom {
   double offset_y_m() const;
   double offset_z_m() const;
 };
+
+/// The room the crossing line from `pose_K` through `target` leaves (the line: crossing_direction_K,
+/// target_tracker.hpp).
+LineRoom line_room(const FlightConfig& config, CellIndex target, const PoseEstimate& pose_K);
 
 /// Where the crossing may still be stopped and what it must keep clear of, fixed at its start.
 struct CrossingWatchPlan {

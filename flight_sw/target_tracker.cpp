@@ -226,24 +226,6 @@ Eigen::Vector3d crossing_direction_K(const KnownShelf& shelf, const PoseEstimate
   return (aim - pose.p_FB_m()).normalized();
 }
 
-LineRoom line_room(const FlightConfig& config, CellIndex target, const PoseEstimate& pose) {
-  const MissionParams& m = config.mission;
-  const Eigen::Vector2d opening = cell_opening_m(config.shelf, target);
-  const double psi = std::abs(pose.yaw_rad);
-  // Footprint across the opening of a vehicle turned by psi (its heading is held).
-  const double footprint = m.vehicle_size_m.y() * std::cos(psi) + m.vehicle_size_m.x() * std::sin(psi);
-  LineRoom room;
-  room.tol_y_m = 0.5 * (opening.x() - footprint) - m.crossing_margin_m;
-  room.tol_z_m = 0.5 * (opening.y() - m.vehicle_size_m.z()) - m.crossing_margin_m;
-  const Eigen::Vector3d p = pose.p_FB_m();
-  const Eigen::Vector3d d = crossing_direction_K(config.shelf, pose);
-  // Where the crossing line meets the front and back faces.
-  const auto at = [&](double x) -> Eigen::Vector3d { return p + d * ((x - p.x()) / d.x()); };
-  room.front_K_m = at(0.0);
-  room.back_K_m = at(config.shelf.depth_m);
-  return room;
-}
-
 namespace {
 std::string cm(double v_m) {
   char b[32];

@@ -108,8 +108,6 @@ struct CrossingGateInput {
   LineHoldForecast line_hold;
 };
 
-/// The room the crossing line from `pose_K` through `target` leaves (line_hold.hpp, LineRoom).
-LineRoom line_room(const FlightConfig& config, CellIndex target, const PoseEstimate& pose_K);
 
 /// The crossing gate (flight_sw/README.md): empty when the crossing of `target` from `pose_K`
 /// may start, otherwise why not. Refused unless the cell's identity is confirmed; then on the
