@@ -214,6 +214,11 @@ void read_mission(const Map& m, MissionParams& p) {
   opt(m, "identity_confirm_s", p.identity_confirm_s, kPositive);
   opt(m, "identity_rereads", p.identity_rereads, within(0, 100));
   opt(m, "vertical_lag_s", p.vertical_lag_s, kNonNegative);
+  opt(m, "line_hold_window_s", p.line_hold_window_s, within(0.1, 10.0));
+  opt(m, "line_hold_min_span_s", p.line_hold_min_span_s, within(0.05, 10.0));
+  opt(m, "calm_wait_s", p.calm_wait_s, kNonNegative);
+  opt(m, "give_up_clearance_m", p.give_up_clearance_m, kNonNegative);
+  if (p.line_hold_min_span_s > p.line_hold_window_s) m.fail("line_hold_min_span_s", "must not exceed line_hold_window_s");
   m.finish();
 }
 
@@ -329,6 +334,11 @@ void validate_flight_config(const FlightConfig& c) {
   require(c.control.crossing_speed_mps > 0.0 && c.control.forward_speed_mps > 0.0,
           "forward and crossing speeds must be positive");
   require(c.mission.vehicle_size_m.minCoeff() > 0.0, "vehicle size must be positive");
+  const MissionParams& mp = c.mission;
+  require(mp.line_hold_min_span_s >= 0.05 && mp.line_hold_min_span_s <= mp.line_hold_window_s &&
+              mp.line_hold_window_s <= 10.0 && mp.calm_wait_s >= 0.0 && mp.give_up_clearance_m >= 0.0,
+          "mission: 0.05 <= line_hold_min_span_s <= line_hold_window_s <= 10, calm_wait_s and "
+          "give_up_clearance_m >= 0");
   require(c.layout.shelf_count >= 1 && c.layout.shelf_count <= 64, "layout.shelf_count must be 1..64");
   require(c.layout.shelf_count == 1 || c.layout.shelf_spacing_m > s.depth_m + c.mission.vehicle_size_m.x(),
           "layout.shelf_spacing_m must exceed the shelf depth plus the vehicle length");

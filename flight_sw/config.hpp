@@ -35,7 +35,8 @@
 //               beyond_distance_m edge_margin_px settle_s settle_z_m settle_psi_rad
 //               settle_hold_s pose_fresh_s pose_jump_m pose_jump_rad pose_jump_window_s
 //               identity_continuity_s identity_confirm_s identity_rereads stop_distance_m
-//               min_beyond_distance_m level_check vertical_lag_s
+//               min_beyond_distance_m level_check vertical_lag_s line_hold_window_s
+//               line_hold_min_span_s calm_wait_s give_up_clearance_m
 //   layout:     shelf_count shelf_spacing_m (required when shelf_count > 1)
 //   strategy:   mode (through_cells | over_tops | around_ends) top_clearance_m end_clearance_m
 //               transfer_speed_mps transfer_kp transfer_yaw_kp waypoint_tolerance_m transfer_leg_s
@@ -235,6 +236,17 @@ struct MissionParams {
   /// gate adds it to the state height; the approach's height samples wait this long after the
   /// state last showed vertical motion (the picture is a video latency older than the record).
   double vertical_lag_s = 0.5;
+  /// The line-hold gate (line_hold.hpp, docs/method.md section 7): the wander of the quiet
+  /// stretch before the crossing is judged over at most line_hold_window_s, and only over a
+  /// stretch of line_hold_min_span_s or more; a forecast that leaves no room holds the vehicle
+  /// short of the cell, for up to calm_wait_s (then, as after crossing_attempts refusals of
+  /// the gate for it, the crossing is declined: the vehicle backs out to give_up_clearance_m
+  /// in front of the shelf by the last pose and lands there). calm_wait_s below settle_hold_s:
+  /// the hold for the air is given up with the settling's, and the gate then decides.
+  double line_hold_window_s = 2.5;
+  double line_hold_min_span_s = 0.5;
+  double calm_wait_s = 8.0;
+  double give_up_clearance_m = 1.0;
 };
 
 /// The warehouse as the operator describes it: shelf_count shelves of the known geometry in a

@@ -147,11 +147,13 @@ void FlightSoftware::on_state(const StateRecord& s) {
   telemetry_.battery_pct = s.battery_pct;
   telemetry_.height_m = s.height_m;
   cell_height_.on_state(s);
+  if (phase_ == Phase::Approach) line_hold_.on_state(s, quiet_at(s.t_ns));
   if (phase_ == Phase::Transfer) transfer();
   // The crossing holds the cell centre's height by the state height (no picture shows the cell
   // in there): a drift or a sink the open-loop command would carry into a beam is turned back.
   if (phase_ == Phase::Cross && crossing_height_m_) {
     velocity_.vz_mps = crossing_vz_mps(config_.control, *crossing_height_m_, s.height_m);
+    watch_crossing(s);
   }
 }
 
@@ -292,6 +294,11 @@ void FlightSoftware::supervise() {
       if (timed_out(to.take_inventory_s)) return land(Outcome::Aborted, "inventory not completed");
       break;
     case Phase::Approach:
+      if (retreat_until_ns_) {  // a declined crossing: back out, then land clear of the shelf
+        if (now_ns_ >= *retreat_until_ns_) return land(Outcome::Aborted, retreat_reason_);
+        set_velocity(back_off_velocity(config_.control));
+        break;
+      }
       if (timed_out(to.approach_s)) return land(Outcome::Aborted, "approach timed out");
       if (lost_since_ns_ && ns_to_seconds(now_ns_ - *lost_since_ns_) > to.target_lost_s) {
         // The shelf's grid still in nearly whole pictures, only the target not found again
@@ -383,6 +390,8 @@ void FlightSoftware::enter(Phase p, const std::string& event) {
   settled_frames_ = 0;
   lost_since_ns_.reset();
   back_off_since_ns_.reset();
+  rough_since_ns_.reset();
+  retreat_until_ns_.reset();
   pi_z_.reset();
   pi_psi_.reset();
 }
@@ -611,6 +620,7 @@ bool FlightSoftware::select_target(const cv::Mat& bgr) {
   telemetry_.target = best;
   telemetry_.tracked_box_px = tracker_.box_px();
   cell_height_.clear();
+  line_hold_.clear();
   forward_gain_.restart();
   telemetry_.target_identity = tracker_.identity();
   return true;
@@ -687,7 +697,10 @@ void FlightSoftware::estimate_forward_gain(const Picture& pic, const PoseEstimat
 void FlightSoftware::reread_shelf(const std::string& why, const std::optional<std::string>& give_up_reason) {
   ++telemetry_.shelf_rereads;
   if (++rereads_ > config_.mission.identity_rereads) {
-    land(Outcome::Aborted, give_up_reason.value_or("target cell not identified: " + why));
+    const std::string reason = give_up_reason.value_or("target cell not identified: " + why);
+    // Close to the shelf: back out and land clear of it; elsewhere land where it hovers.
+    if (phase_ == Phase::Approach) return back_out_and_land(reason);
+    land(Outcome::Aborted, reason);
     return;
   }
   // Closer than the viewpoint, the shelf may not fit the view or show a single tag (an
@@ -704,6 +717,7 @@ void FlightSoftware::reread_shelf(const std::string& why, const std::optional<st
   crossing_refusals_ = 0;  // off-centre arrivals count per approach
   telemetry_.target.reset();
   cell_height_.clear();
+  line_hold_.clear();
   telemetry_.target_identity = tracker_.identity();
   hold_since_ns_.reset();
   hover();
@@ -715,6 +729,7 @@ void FlightSoftware::reread_shelf(const std::string& why, const std::optional<st
 
 void FlightSoftware::approach(const Picture& pic) {
   const ControlGains& g = config_.control;
+  if (retreat_until_ns_) return set_velocity(back_off_velocity(g));  // declined: backing out (supervise)
   forward_gain_.on_command_held(now_ns_, velocity_.vx_B_mps);
   const TargetTracker::Prediction predicted = tracker_.predict(pic);
   telemetry_.tracker_ok = predicted.tracker_ok;
@@ -733,6 +748,7 @@ void FlightSoftware::approach(const Picture& pic) {
     // Whole pictures only: a guessed band can put a tag beyond the grid's edge or hide one.
     if (tracker_.identity() != CellIdentity::Confirmed && pic.whole() && !check_identity(pic, pose)) return;
     // The laws of eq. 10-15 and Fig. 19 (guidance.hpp); the PI states and the timers here.
+    if (pic.decides) line_hold_.on_pose(now_ns_, pose.p_FB_m(), pose.yaw_rad, quiet_at(now_ns_));
     const ApproachErrors e = approach_errors(config_.camera, tracker_.box_centre_px(), pose);
     VelocityCommand v;
     v.vz_mps = pi_z_.update(e.e_z_m, dt);              // eq. 12
@@ -741,12 +757,17 @@ void FlightSoftware::approach(const Picture& pic) {
     if (v.vy_B_mps != 0.0) lateral_active_ns_ = now_ns_;
     // Held short inside commit_range_m until settled; settling is given up after
     // settle_hold_s (the crossing gate then decides).
+    // Also held short while the air leaves the line no room (too_rough_to_cross: declined
+    // after calm_wait_s).
     const ApproachHold h = approach_hold(config_, e, ns_to_seconds(now_ns_ - lateral_active_ns_), -pose.p_FB_m().x());
-    if (!h.settling) hold_since_ns_.reset();
-    if (h.settling && !hold_since_ns_) hold_since_ns_ = now_ns_;
+    const bool rough = too_rough_to_cross(pose);
+    if (retreat_until_ns_) return;  // declined just now
+    const bool settling = h.settling || rough;
+    if (!settling) hold_since_ns_.reset();
+    if (settling && !hold_since_ns_) hold_since_ns_ = now_ns_;
     const bool settle_given_up =
         hold_since_ns_ && ns_to_seconds(now_ns_ - *hold_since_ns_) > config_.mission.settle_hold_s;
-    const bool hold = !h.in_cone || (h.settling && !settle_given_up);
+    const bool hold = !h.in_cone || (settling && !settle_given_up);
     v.vx_B_mps = approach_forward_mps(g, hold, tracker_.identity() == CellIdentity::Confirmed, -pose.p_FB_m().x(),
                                       -viewpoint_G_m_.x());  // eq. 10
     // About to lose the tags: the crossing will be judged on the last nearly whole picture,
@@ -786,6 +807,7 @@ void FlightSoftware::approach(const Picture& pic) {
       gate.height_above_cell_m = state_->height_m - *cell_centre_h_m;
       gate.vz_mps = state_->vz_H_mps;
     }
+    gate.line_hold = line_hold_forecast(pose);
     const std::optional<std::string> refusal = crossing_refusal(config_, *tracker_.target(), pose, gate);
     const std::string why = refusal.value_or("");
     if (!refusal) {
@@ -803,9 +825,13 @@ void FlightSoftware::approach(const Picture& pic) {
       const CrossingPlan plan =
           plan_crossing(config_, pose, beyond_m, forward_gain_.gain(), odometry_.p_O_m().head<2>(), yaw_O);
       crossing_end_ = plan.end;
+      watch_ = plan_crossing_watch(config_, line_room(config_, *tracker_.target(), pose), pose.p_FB_m(),
+                                   crossing_direction_K(config_.shelf, pose));
       enter(Phase::Cross, "corner tags left the view: crossing " + cell_text(*tracker_.target()) + " (" + format_m(beyond_m) +
                               " m past the back face; speed gain " + format_m(forward_gain_.gain()) + "; " +
-                              format_m(*gate.height_above_cell_m) + " m above the cell centre by the state height" +
+                              format_m(*gate.height_above_cell_m) + " m above the cell centre by the state height; " +
+                              "line-hold forecast " + format_m(gate.line_hold.y_m) + " m across, " +
+                              format_m(gate.line_hold.z_m) + " m up" +
                               (behind_m ? "; tags " + format_m(*behind_m) + " m behind)" : ")"));
       // Horizontally along the line; vertically the cell centre's height held by the state
       // height (on_state), not the line's slope: that slope came from a pose a video latency
@@ -816,6 +842,10 @@ void FlightSoftware::approach(const Picture& pic) {
     }
     if (!back_off_since_ns_) {
       if (++crossing_refusals_ >= config_.mission.crossing_attempts) {
+        // The air, not the view, keeps the line from being held: a re-read would not help.
+        if (why.rfind(kLineHoldNotMeasured, 0) == 0 || why.rfind(kLineCannotBeHeld, 0) == 0) {
+          return back_out_and_land(kCrossingDeclined + why);
+        }
         reread_shelf(kCouldNotCentre, kCouldNotCentre);
         return;
       }

@@ -51,6 +51,13 @@
 // unanswered: retried command_retries times; refused in the air (already landing, `Not
 // joystick`): asked again every 0.5 s until the state height says down, for up to land_reply_s.
 // A re-read that starts closer than the viewpoint and sees no tag backs straight out first.
+// The line's hold (line_hold.hpp): inside commit_range_m the vehicle holds short while the
+// wander of its quiet hover forecasts no room for the blind crossing; after calm_wait_s of
+// that, or at the crossing_attempts-th refusal of the gate for the line's hold, the crossing
+// is declined: it backs out to give_up_clearance_m and lands there ("crossing declined: ...");
+// every other give-up of the approach (the re-reads spent) backs out and lands there too.
+// In the crossing, while the vehicle can still stop short of the front face, a drift the state
+// record shows leaving the opening stops it and backs it out (a refusal, as above).
 //
 // Lateral law sign (paper Fig. 19): the yaw loop keeps the target cell centred in the image,
 // so the camera looks at the cell centre. A vehicle displaced to the left of the cell normal
@@ -96,6 +103,7 @@
 #include "flight_sw/config.hpp"
 #include "flight_sw/control.hpp"
 #include "flight_sw/inventory.hpp"
+#include "flight_sw/line_hold.hpp"
 #include "flight_sw/navigation.hpp"
 #include "flight_sw/odometry.hpp"
 #include "flight_sw/perception.hpp"
@@ -193,6 +201,8 @@ struct Telemetry {
   int identity_contradictions = 0;  ///< of which disagreed with the target (re-read from the viewpoint)
   int shelf_rereads = 0;       ///< shelf re-read from the viewpoint because the target was in doubt
   double forward_gain = 1.0;   ///< measured forward speed per commanded (crossing timing)
+  LineHoldForecast line_hold;  ///< what the blind crossing may add to the line's offsets (line_hold.hpp)
+  int crossings_backed_out = 0;  ///< crossings stopped by the in-crossing watch before the cell
   int behind_tags_dropped = 0; ///< tags in the target's window too small for the front shelf (eq. 1 against the tracked tags)
   Eigen::Vector3d e1_G_m = Eigen::Vector3d::Zero();  ///< to the optimal viewpoint
   VelocityCommand velocity;    ///< last commanded
@@ -260,6 +270,17 @@ class FlightSoftware {
   /// (default: "target cell not identified: " + why).
   void reread_shelf(const std::string& why, const std::optional<std::string>& give_up_reason = std::nullopt);
   void estimate_forward_gain(const Picture& pic, const PoseEstimate& pose_K);
+  // The line-hold gate and the in-crossing watch (line_hold.hpp)
+  bool quiet_at(TimeNs t_ns) const;
+  LineHoldForecast line_hold_forecast(const PoseEstimate& pose_K);
+  /// Inside commit_range_m: true while the forecast is not yet measured or leaves no room
+  /// (hold short); declines the crossing after calm_wait_s of no room.
+  bool too_rough_to_cross(const PoseEstimate& pose_K);
+  /// Gives the approach up for good: backs out to give_up_clearance_m in front of the shelf (by
+  /// the last pose, plus `flown_in_m` flown toward it since), then lands there (supervise),
+  /// the mission aborted with `reason`.
+  void back_out_and_land(const std::string& reason, double flown_in_m = 0.0);
+  void watch_crossing(const StateRecord& s);
   // Actions
   void enter(Phase phase, const std::string& event);
   void command_takeoff_if_ready();
@@ -327,6 +348,12 @@ class FlightSoftware {
   ForwardGainEstimator forward_gain_;
   // The target cell centre's height in the frame of the state height h (sample_cell_height).
   CellHeightEstimator cell_height_;
+  // The line-hold gate and the in-crossing watch (line_hold.hpp)
+  LineHoldMonitor line_hold_;
+  std::optional<TimeNs> rough_since_ns_;     ///< held short since then: the forecast left no room
+  std::optional<TimeNs> retreat_until_ns_;   ///< a declined crossing backs out until then, then lands
+  std::string retreat_reason_;
+  CrossingWatchPlan watch_;
   // Crossing
   CrossingEnd crossing_end_;  ///< crossing_flown (odometry.hpp)
   std::optional<double> crossing_height_m_;   ///< the height the crossing holds, h's frame

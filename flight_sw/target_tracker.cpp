@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 
 #include <opencv2/calib3d.hpp>
@@ -225,20 +226,21 @@ Eigen::Vector3d crossing_direction_K(const KnownShelf& shelf, const PoseEstimate
   return (aim - pose.p_FB_m()).normalized();
 }
 
+namespace {
+std::string cm(double v_m) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.1f cm", 100.0 * v_m);
+  return b;
+}
+}  // namespace
+
 std::optional<std::string> crossing_refusal(const FlightConfig& config, CellIndex target, const PoseEstimate& pose,
                                             const CrossingGateInput& input) {
   const MissionParams& m = config.mission;
-  const Eigen::Vector2d opening = cell_opening_m(config.shelf, target);
   const double psi = std::abs(pose.yaw_rad);
-  // Footprint across the opening of a vehicle turned by psi (its heading is held).
-  const double footprint = m.vehicle_size_m.y() * std::cos(psi) + m.vehicle_size_m.x() * std::sin(psi);
-  const double tol_y = 0.5 * (opening.x() - footprint) - m.crossing_margin_m;
-  const double tol_z = 0.5 * (opening.y() - m.vehicle_size_m.z()) - m.crossing_margin_m;
-  const Eigen::Vector3d p = pose.p_FB_m();
+  const LineRoom room = line_room(config, target, pose);
+  const double tol_y = room.tol_y_m, tol_z = room.tol_z_m;
   const Eigen::Vector3d d = crossing_direction_K(config.shelf, pose);
-  // Where the crossing line meets the front and back faces.
-  const auto at = [&](double x) -> Eigen::Vector3d { return p + d * ((x - p.x()) / d.x()); };
-  const Eigen::Vector3d front = at(0.0), back = at(config.shelf.depth_m);
   // Identity first: a well centred crossing of the wrong cell is a collision.
   if (input.identity != CellIdentity::Confirmed) return std::string("target cell not identified (") + cell_identity_name(input.identity) + ")";
   // The pose is honest only if it is recent (frames may drop) and the vehicle was not moving
@@ -246,8 +248,8 @@ std::optional<std::string> crossing_refusal(const FlightConfig& config, CellInde
   if (input.pose_age_s > m.pose_fresh_s) return "last pose too old";
   if (input.still_for_s < m.settle_s) return "still moving sideways";
   if (psi > m.crossing_yaw_tolerance_rad) return "heading off the cell normal";
-  if (d.x() <= 0.0 || std::abs(front.y()) > tol_y || std::abs(back.y()) > tol_y) return "off-centre laterally";
-  if (std::abs(front.z()) > tol_z || std::abs(back.z()) > tol_z) return "off-centre vertically";
+  if (d.x() <= 0.0 || room.offset_y_m() > tol_y) return "off-centre laterally";
+  if (room.offset_z_m() > tol_z) return "off-centre vertically";
   // The height now, by the state record: the pose shows the vehicle a video latency ago
   // (0.1-0.35 s), and in that time a vehicle still settling vertically moves centimetres. The
   // crossing holds the cell centre's height by the state height from where the vehicle is now;
@@ -256,6 +258,17 @@ std::optional<std::string> crossing_refusal(const FlightConfig& config, CellInde
   if (!input.height_above_cell_m) return std::string("cell height not measured against the state height");
   const double z_now = *input.height_above_cell_m, z_carried = z_now + input.vz_mps * m.vertical_lag_s;
   if (std::abs(z_now) > tol_z || std::abs(z_carried) > tol_z) return "off the cell's height by the state height";
+  // The blind crossing: what the hover before it says the vehicle may wander (line_hold.hpp).
+  const LineHoldForecast& f = input.line_hold;
+  if (!f.measured) return std::string(kLineHoldNotMeasured);
+  if (room.offset_y_m() + f.y_m > tol_y) {
+    return std::string(kLineCannotBeHeld) + " across (offset " + cm(room.offset_y_m()) + " + wander " + cm(f.y_m) +
+           " > " + cm(tol_y) + ")";
+  }
+  if (std::max(room.offset_z_m(), std::abs(z_now)) + f.z_m > tol_z) {
+    return std::string(kLineCannotBeHeld) + " vertically (offset " + cm(std::max(room.offset_z_m(), std::abs(z_now))) +
+           " + wander " + cm(f.z_m) + " > " + cm(tol_z) + ")";
+  }
   return std::nullopt;
 }
 

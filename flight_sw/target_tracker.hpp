@@ -43,6 +43,7 @@
 
 #include "flight_sw/config.hpp"
 #include "flight_sw/inventory.hpp"
+#include "flight_sw/line_hold.hpp"
 #include "flight_sw/navigation.hpp"
 #include "flight_sw/perception.hpp"
 #include "shelfcross/sdk_messages.hpp"
@@ -102,7 +103,11 @@ struct CrossingGateInput {
   /// that was never measured (never crossed then).
   std::optional<double> height_above_cell_m;
   double vz_mps = 0.0;            ///< the state record's vertical speed (vgz), m/s, up positive
+  /// What the blind crossing may add to the line's offsets (line_hold.hpp); not measured: the
+  /// crossing is refused.
+  LineHoldForecast line_hold;
 };
+
 
 /// The crossing gate (flight_sw/README.md): empty when the crossing of `target` from `pose_K`
 /// may start, otherwise why not. Refused unless the cell's identity is confirmed; then on the
@@ -110,7 +115,9 @@ struct CrossingGateInput {
 /// faces (the footprint crossing_margin_m inside the clear opening); then on the height the
 /// state record gives now and where the vertical speed carries it (vz * vertical_lag_s): both
 /// must leave the vehicle's height crossing_margin_m inside the opening between the beams,
-/// since the pose is a video latency old and the crossing holds the height by the state.
+/// since the pose is a video latency old and the crossing holds the height by the state; last
+/// on the line-hold forecast: the line's offsets plus what the blind crossing may add to them
+/// must leave the same margin (line_hold.hpp).
 std::optional<std::string> crossing_refusal(const FlightConfig& config, CellIndex target,
                                             const PoseEstimate& pose_K, const CrossingGateInput& input);
 

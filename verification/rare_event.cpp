@@ -62,6 +62,34 @@ double mixture_log_weight(const ParameterDistributions& nominal, const std::vect
   return log_density(nominal, x) - (top + std::log(sum));
 }
 
+double zero_failure_upper_bound(const std::vector<CeRound>& rounds, const std::vector<std::int64_t>& runs_per_round,
+                                double confidence) {
+  assert(rounds.size() == runs_per_round.size());
+  // c_k = prod_j s_kj: the least ratio q_k / f anywhere (file comment).
+  std::vector<std::pair<double, double>> c_n;  // (c_k, n_k)
+  for (size_t k = 0; k < rounds.size(); ++k) {
+    double c = 1.0;
+    for (const auto& [name, q] : rounds[k].proposal) c *= std::min(1.0, q.nominal_share);
+    if (runs_per_round[k] > 0 && c > 0.0) c_n.emplace_back(c, static_cast<double>(runs_per_round[k]));
+  }
+  if (c_n.empty()) return 1.0;
+  // log P(no failure | p) <= sum_k n_k log(1 - c_k p), decreasing in p; equal to log(alpha) at
+  // the bound. Bisection on p in [0, 1].
+  const double log_alpha = std::log(1.0 - confidence);
+  const auto log_none = [&](double p) {
+    double l = 0.0;
+    for (const auto& [c, n] : c_n) l += n * std::log1p(-c * p);
+    return l;
+  };
+  if (log_none(1.0) > log_alpha) return 1.0;
+  double lo = 0.0, hi = 1.0;
+  for (int i = 0; i < 100; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (log_none(mid) > log_alpha ? lo : hi) = mid;
+  }
+  return hi;
+}
+
 CeFit ce_refit(const ParameterDistributions& nominal, const ParameterProposals& current,
                const std::vector<CeSample>& samples, const CeSettings& settings) {
   assert(!samples.empty());

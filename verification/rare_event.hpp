@@ -51,7 +51,23 @@
 // z se at the small run counts a simulation allows; like every CLT interval it is only as good
 // as s_y, which under-reports the variance when the few failures sampled all carry small
 // weights (check the failures' effective sample size). With no failure sampled there is no
-// estimate (p_hat = 0, no interval).
+// estimate (p_hat = 0, no interval), but there is a bound (zero_failure_upper_bound).
+//
+// The zero-failure bound: the search's round k drew its n_k runs from q_k = prod_j q_kj, each
+// q_kj = (1 - s_kj) fit_kj + s_kj f_j (s_kj = 1 for a parameter kept at its nominal). So
+// q_k(x) >= c_k f(x) with c_k = prod_j s_kj for every x, and a failure region F of nominal
+// probability p = P_f(F) has P_qk(F) >= c_k p, wherever F lies. Each proposal is fixed before its
+// round's runs are drawn, and runs draw independently given it, so by the chain rule
+//   P(no run fails | p) <= prod_k (1 - c_k p)^n_k  (<= exp(-p sum_k c_k n_k)).
+// The one-sided upper confidence bound at level 1 - alpha is the p at which the right side
+// equals alpha (found by bisection; the side is decreasing in p): a class probability above it
+// would have shown a failure with probability at least 1 - alpha. For a plain campaign (every
+// c_k = 1) it is the exact binomial bound 1 - alpha^(1/n) (about 3 / n at 95 %, the "rule of
+// three"). sum_k c_k n_k is the search's worth in nominal runs: the defensive share that keeps
+// the weights bounded is also what lets a search that finds nothing speak of the nominal.
+// Assumptions: the runs' outcomes are what the simulation says (the bound is about the model
+// under the scenario's dispersions, not the world), a run's failure depends only on its draws
+// and its seed, and the rounds' run counts were not chosen after seeing their outcomes.
 
 #include <cstdint>
 #include <map>
@@ -169,6 +185,12 @@ std::string estimate_doubts(const IsEstimate& e);
 /// the estimate (its stored runs).
 double mixture_log_weight(const ParameterDistributions& nominal, const std::vector<CeRound>& rounds,
                           const std::vector<std::int64_t>& runs_per_round, const DrawnValues& x);
+
+/// The zero-failure upper bound on a class probability under the nominal (file comment) from
+/// `rounds` with `runs_per_round[k]` runs each (stored runs with a result), at one-sided
+/// `confidence`: 1 when no run was made.
+double zero_failure_upper_bound(const std::vector<CeRound>& rounds, const std::vector<std::int64_t>& runs_per_round,
+                                double confidence = 0.95);
 
 /// The estimate from i.i.d. draws of one proposal: log_weight_i = log f(x_i) - log q(x_i),
 /// failed_i = g(x_i) < 0. See the file comment for the interval.

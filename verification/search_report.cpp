@@ -63,6 +63,8 @@ struct ClassEstimate {
   IsEstimate is;
   int round = -1;  ///< the round whose runs it uses
   IsEstimate every_round;  ///< from every stored run, weighted by mixture_log_weight
+  /// Upper 95 % bounds on p from the same runs, used when none failed (zero_failure_upper_bound).
+  double bound_round = 1.0, bound_every_round = 1.0;
 };
 
 nlohmann::json estimate_json(const IsEstimate& e) {
@@ -127,12 +129,20 @@ nlohmann::json write_search_report(const std::filesystem::path& dir, const std::
   for (const Row& row : rows) {
     if (!std::isnan(row.log_nominal)) mixture_log_w.push_back(mixture_log_weight(f, rounds, stored_per_round, row.drawn));
   }
+  // The zero-failure bounds: the estimation round alone, and every round.
+  const double bound_every_round = zero_failure_upper_bound(rounds, stored_per_round);
+  const double bound_round =
+      estimate_round < 0 ? 1.0
+                         : zero_failure_upper_bound({rounds[static_cast<size_t>(estimate_round)]},
+                                                    {stored_per_round[static_cast<size_t>(estimate_round)]});
   for (FailureClass c : kFailureClasses) {
     std::vector<bool> failed;
     for (const Row& row : rows) {
       if (!std::isnan(row.log_nominal)) failed.push_back(row.margins.failed(c));
     }
     estimates[c].every_round = importance_estimate(mixture_log_w, failed);
+    estimates[c].bound_round = bound_round;
+    estimates[c].bound_every_round = bound_every_round;
   }
 
   // Plain Monte Carlo from a campaign of the same scenario.
@@ -260,6 +270,8 @@ nlohmann::json write_search_report(const std::filesystem::path& dir, const std::
     json j = estimate_json(e.is);
     j["round"] = e.round;
     j["every_round"] = estimate_json(e.every_round);
+    if (e.is.failures == 0) j["zero_failure_upper_95"] = e.bound_round;
+    if (e.every_round.failures == 0) j["every_round"]["zero_failure_upper_95"] = e.bound_every_round;
     if (plain.count(c)) {
       const auto& p = plain.at(c);
       j["plain_monte_carlo"] = {{"runs", p.runs}, {"failures", p.failures}, {"lower_95", p.lower},
@@ -315,7 +327,11 @@ nlohmann::json write_search_report(const std::filesystem::path& dir, const std::
   md << " The row \"every round\" weighs every stored run of the search as a draw of the mixture of all "
         "the rounds' proposals (multiple importance sampling, balance heuristic: w = f(x) / sum_k (n_k / N) q_k(x); "
         "rare_event.hpp): bounded weights (round 0 is the nominal), and the early rounds cover the edge of a soft "
-        "failure region that the final proposal leaves out.";
+        "failure region that the final proposal leaves out. Where no run failed, the interval is the one-sided 95 % "
+        "zero-failure bound: each round k's proposal is at least c_k = prod_j s_kj (the nominal's defensive shares) "
+        "times the nominal everywhere, so a class of nominal probability p fails a run of round k with probability at "
+        "least c_k p; the bound is the p at which prod_k (1 - c_k p)^n_k = 0.05 (rare_event.hpp; for plain Monte "
+        "Carlo 1 - 0.05^(1/n), about 3 / n).";
   md << "\n\n| class | from | runs | failures | p_hat | 95 % interval | CLT interval | ESS | mean weight |"
      << (campaign_dir ? " plain Monte Carlo | its 95 % interval | its first failure |" : "") << "\n|---|---|---|---|---|---|---|---|---|"
      << (campaign_dir ? "---|---|---|" : "") << "\n";
@@ -330,9 +346,10 @@ nlohmann::json write_search_report(const std::filesystem::path& dir, const std::
     return text;
   };
   for (const auto& [c, e] : estimates) {
-    auto row = [&](const IsEstimate& is, const std::string& from) {
+    auto row = [&](const IsEstimate& is, const std::string& from, double bound) {
       md << "| " << failure_class_name(c) << " | " << from << " | " << is.runs << " | " << is.failures << " | " << fmt(is.p_hat) << " | "
-         << (is.failures ? interval(is.lower, is.upper) : std::string("no failure sampled"))
+         << (is.failures ? interval(is.lower, is.upper)
+                         : "none sampled: p <= " + fmt(bound) + " (zero-failure bound)")
          << " | " << (is.failures ? interval(is.clt_lower, is.clt_upper) : std::string("-"))
          << " | " << fmt(is.failure_ess, "%.1f") << " | " << fmt(is.mean_weight, "%.3g");
       if (const std::string doubts = estimate_doubts(is); !doubts.empty()) md << " (" << doubts << ")";
@@ -344,8 +361,8 @@ nlohmann::json write_search_report(const std::filesystem::path& dir, const std::
       }
       md << "\n";
     };
-    row(e.is, "round " + std::to_string(e.round));
-    row(e.every_round, "every round");
+    row(e.is, "round " + std::to_string(e.round), e.bound_round);
+    row(e.every_round, "every round", e.bound_every_round);
   }
   md << "\n## Failures found (" << failure_class_name(target) << ")\n\n";
   if (failures.empty()) {

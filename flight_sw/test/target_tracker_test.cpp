@@ -74,6 +74,7 @@ Outcome judge(const testing::Scene& scene, CellIndex seen, CellIndex believed, d
   Outcome out;
   out.check = check_cell_identity(believed, *pose, tags, markers, inventory_of(shelf.boxes), config);
   CrossingGateInput gate;
+  gate.line_hold = {true, 0.0, 0.0};  // a calm hover measured
   gate.pose_age_s = 0.0;
   gate.still_for_s = 10.0;
   gate.identity = out.check.verdict;
@@ -192,6 +193,7 @@ TEST(CellIdentity, UniformGridWithoutMarkersIsNeverConfirmedWrongly) {
       EXPECT_EQ(check.verdict, CellIdentity::Contradicted) << check.why;
     }
     CrossingGateInput gate;
+    gate.line_hold = {true, 0.0, 0.0};  // a calm hover measured
     gate.still_for_s = 10.0;
     gate.identity = check.verdict;
     gate.height_above_cell_m = pose->p_FB_m().z();
@@ -222,6 +224,7 @@ TEST(CrossingGate, RefusesAnUnidentifiedCellEvenPerfectlyCentred) {
   pose.X_FB.translation() = Eigen::Vector3d(-0.6, 0.0, 0.0);
   pose.X_FC.translation() = Eigen::Vector3d(-0.555, 0.0, 0.0);
   CrossingGateInput gate;
+  gate.line_hold = {true, 0.0, 0.0};  // a calm hover measured
   gate.still_for_s = 10.0;
   gate.height_above_cell_m = 0.0;
   for (CellIdentity id : {CellIdentity::Unknown, CellIdentity::Contradicted}) {
@@ -254,6 +257,7 @@ TEST(CrossingGate, JudgesTheHeightByTheStateRecordNotOnlyByTheStalePose) {
   pose.X_FB.translation() = Eigen::Vector3d(-0.83, 0.0, 0.13);
   pose.X_FC.translation() = Eigen::Vector3d(-0.785, 0.0, 0.13);
   CrossingGateInput gate;
+  gate.line_hold = {true, 0.0, 0.0};  // a calm hover measured
   gate.still_for_s = 10.0;
   gate.identity = CellIdentity::Confirmed;
   const double tol_z = 0.5 * (0.34 - 0.02 - config.mission.vehicle_size_m.z()) - config.mission.crossing_margin_m;

@@ -1,5 +1,7 @@
 #include "verification/dispersion.hpp"
 
+#include <algorithm>
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -109,6 +111,52 @@ TEST(Dispersion, ScenarioRoundTripsAndRefusesUnsafeSupports) {
   }
   EXPECT_THROW(with_dispersions("dispersions:\n  start_distance_m: {uniform: {min: 0.1, max: 3}}\n"),
                config::ConfigError);
+}
+
+}  // namespace
+}  // namespace shelfcross::verification
+
+namespace shelfcross::verification {
+namespace {
+
+// The beyond-envelope family (scenarios/README.md): each file loads, keeps the default
+// scenario's dispersions except its own family, and widens that family past the certified
+// range as documented.
+TEST(Dispersion, BeyondEnvelopeScenariosWidenTheirFamilyOnly) {
+  const std::string dir = std::string(SHELFCROSS_SOURCE_DIR) + "/scenarios/";
+  const Scenario nominal = load_scenario(dir + "paper_test_shelf.yaml");
+  struct Widened {
+    const char* file;
+    std::vector<std::pair<const char*, std::pair<double, double>>> ranges;  // name: (lowest, highest)
+  };
+  const std::vector<Widened> family = {
+      {"beyond_gusts.yaml", {{"gust_stddev_mps", {0.5, 1.5}}}},
+      {"beyond_drafts.yaml", {{"wind_speed_mps", {0.5, 1.2}}}},
+      {"beyond_autopilot.yaml",
+       {{"rc_gain_scale", {0.5, 2.0}}, {"velocity_time_constant_s", {0.15, 1.4}},
+        {"vertical_time_constant_s", {0.15, 1.2}}, {"yaw_time_constant_s", {0.1, 0.9}}}},
+      {"beyond_calibration.yaml",
+       {{"camera_focal_error_rel", {-0.09, 0.09}}, {"camera_cx_error_px", {-27.0, 27.0}},
+        {"camera_cy_error_px", {-27.0, 27.0}}}},
+      {"beyond_link.yaml",
+       {{"video_latency_mean_s", {0.12, 0.6}}, {"video_datagram_loss", {0.0, 0.1}}, {"state_loss", {0.0, 0.1}},
+        {"reply_loss", {0.0, 0.1}}}},
+  };
+  for (const Widened& w : family) {
+    const Scenario s = load_scenario(dir + "stress/" + w.file);
+    for (const auto& [name, range] : w.ranges) {
+      ASSERT_TRUE(s.dispersions.count(name)) << w.file << ": " << name;
+      EXPECT_NEAR(s.dispersions.at(name).lowest(), range.first, 1e-12) << w.file << ": " << name;
+      EXPECT_NEAR(s.dispersions.at(name).highest(), range.second, 1e-12) << w.file << ": " << name;
+    }
+    for (const auto& [name, d] : nominal.dispersions) {
+      const bool own = std::any_of(w.ranges.begin(), w.ranges.end(), [&](const auto& r) { return name == r.first; });
+      if (!own) {
+        EXPECT_EQ(s.dispersions.at(name), d) << w.file << ": " << name << " changed";
+      }
+    }
+    EXPECT_EQ(s.cosim.link.model, nominal.cosim.link.model) << w.file;
+  }
 }
 
 }  // namespace

@@ -1,0 +1,167 @@
+// The line-hold gate and the in-crossing watch (line_hold.hpp) on synthetic hovers: a calm one
+// is allowed, a gusty one and a drifting one refused; the watch backs out of a drift it sees
+// before the cell and flies on once the vehicle could no longer stop short of it.
+
+#include <cmath>
+#include <numbers>
+
+#include <gtest/gtest.h>
+
+#include "flight_sw/line_hold.hpp"
+#include "flight_sw/target_tracker.hpp"
+
+namespace shelfcross::flight_sw {
+namespace {
+
+constexpr double kFrameHz = 30.0;
+
+// A pose of the body at (x, y, z) in the cell frame K, level, facing the cell (camera 4.5 cm
+// ahead of the body, the default mount).
+PoseEstimate pose_at(double x, double y, double z) {
+  PoseEstimate p;
+  p.X_FB.translation() = Eigen::Vector3d(x, y, z);
+  p.X_FC.translation() = Eigen::Vector3d(x + 0.045, y, z);
+  return p;
+}
+
+TimeNs at_s(double t) { return seconds_to_ns(t); }
+
+// Feeds `seconds` of quiet hover at 30 frames/s and 10 state records/s: y(t), z(t) of the
+// poses, the state's across-line speed quantised to the SDK's 0.1 m/s.
+template <typename Y, typename Vy>
+LineWander hover(LineHoldMonitor& m, double seconds, Y y_of_t, Vy vy_of_t) {
+  const int frames = static_cast<int>(seconds * kFrameHz);
+  for (int k = 0; k <= frames; ++k) {
+    const double t = k / kFrameHz;
+    m.on_pose(at_s(t), Eigen::Vector3d(-0.6, y_of_t(t), 0.0), 0.0, true);
+    if (k % 3 == 0) {
+      StateRecord s;
+      s.t_ns = at_s(t);
+      s.vy_H_mps = std::round(vy_of_t(t) * 10.0) / 10.0;
+      m.on_state(s, true);
+    }
+  }
+  return m.wander(at_s(seconds), FlightConfig{}.mission.line_hold_window_s);
+}
+
+// The gate on a centred pose 0.6 m in front of L2 C3 (34 cm column: 8.4 cm of tolerance
+// across), everything else passing, with `f` as the forecast.
+std::optional<std::string> gate_with(const LineHoldForecast& f) {
+  CrossingGateInput gate;
+  gate.still_for_s = 10.0;
+  gate.identity = CellIdentity::Confirmed;
+  gate.height_above_cell_m = 0.0;
+  gate.line_hold = f;
+  return crossing_refusal(FlightConfig{}, {2, 3}, pose_at(-0.6, 0.0, 0.0), gate);
+}
+
+double blind_s() { return blind_crossing_s(FlightConfig{}, 0.6); }
+
+// A calm hover: the pose noise of a few millimetres, the state still. The forecast is a
+// centimetre at most and the gate lets the crossing go.
+TEST(LineHold, CalmHoverIsAllowed) {
+  LineHoldMonitor m;
+  const LineWander w = hover(
+      m, 2.0, [](double t) { return 0.002 * std::sin(37.0 * t); }, [](double) { return 0.0; });
+  EXPECT_EQ(w.poses, 61);
+  EXPECT_NEAR(w.span_s, 2.0, 1e-9);
+  const LineHoldForecast f = forecast_line_hold(FlightConfig{}.mission, w, blind_s());
+  ASSERT_TRUE(f.measured);
+  EXPECT_LT(f.y_m, 0.01);
+  EXPECT_FALSE(gate_with(f).has_value()) << *gate_with(f);
+}
+
+// A strong gust: the hover sways 4 cm at 0.5 Hz (peak speed 0.13 m/s: the state reads 0.1).
+// The blind crossing of 3.6 s from 0.6 m may carry it further than the 8.4 cm the opening
+// leaves: refused, named.
+TEST(LineHold, StrongGustIsRefused) {
+  LineHoldMonitor m;
+  const double w_radps = std::numbers::pi;  // 0.5 Hz
+  const LineWander w = hover(
+      m, 2.5, [&](double t) { return 0.04 * std::sin(w_radps * t); },
+      [&](double t) { return 0.04 * w_radps * std::cos(w_radps * t); });
+  EXPECT_GT(w.half_spread_y_m, 0.03);  // about the fitted line of a sway 1.25 periods long
+  EXPECT_NEAR(w.across_speed_mps, 0.1, 1e-9);
+  const LineHoldForecast f = forecast_line_hold(FlightConfig{}.mission, w, blind_s());
+  ASSERT_TRUE(f.measured);
+  EXPECT_GT(f.y_m, 0.084);
+  const auto refusal = gate_with(f);
+  ASSERT_TRUE(refusal.has_value());
+  EXPECT_EQ(refusal->rfind(kLineCannotBeHeld, 0), 0u) << *refusal;
+}
+
+// A drifting hover: 3 cm/s sideways nobody commanded, below the state's 0.05 m/s rounding (it
+// reads 0): only the poses show it, as the slope of their across-line position. It goes on
+// through the 3.5 s blind crossing, 10 cm: more than the 8.4 cm the opening leaves. Refused,
+// though the 1.5 s of hover moved it only 4.5 cm and the state showed nothing.
+TEST(LineHold, DriftingHoverIsRefused) {
+  LineHoldMonitor m;
+  const LineWander w = hover(
+      m, 1.5, [](double t) { return 0.03 * t; }, [](double) { return 0.03; });
+  EXPECT_EQ(w.across_speed_mps, 0.0);
+  EXPECT_NEAR(w.drift_y_mps, 0.03, 1e-9);
+  EXPECT_NEAR(w.half_spread_y_m, 0.0, 1e-9);
+  const LineHoldForecast f = forecast_line_hold(FlightConfig{}.mission, w, blind_s());
+  ASSERT_TRUE(f.measured);
+  EXPECT_NEAR(f.y_m, 0.03 * blind_s(), 1e-9);
+  const auto refusal = gate_with(f);
+  ASSERT_TRUE(refusal.has_value());
+  EXPECT_EQ(refusal->rfind(kLineCannotBeHeld, 0), 0u) << *refusal;
+}
+
+// The approach's forward creep on a heading 0.1 rad off the cell normal moves y_K by 2.5 cm/s:
+// across the heading it moves nothing, and no drift is forecast.
+TEST(LineHold, ForwardCreepOnATurnedHeadingIsNoDrift) {
+  LineHoldMonitor m;
+  const double yaw = 0.1;
+  for (int k = 0; k <= 45; ++k) {
+    const double t = k / kFrameHz, s = 0.25 * t;  // along the heading
+    m.on_pose(at_s(t), Eigen::Vector3d(-0.9 + s * std::cos(yaw), 0.02 + s * std::sin(yaw), 0.0), yaw, true);
+  }
+  const LineWander w = m.wander(at_s(1.5), 2.5);
+  EXPECT_NEAR(w.drift_y_mps, 0.0, 1e-9);
+  EXPECT_NEAR(w.half_spread_y_m, 0.0, 1e-9);
+}
+
+// A lateral command ends the quiet stretch; too short a stretch measures nothing, and the gate
+// refuses to cross on it ("line hold not measured").
+TEST(LineHold, AShortOrLoudStretchMeasuresNothing) {
+  LineHoldMonitor m;
+  hover(m, 2.0, [](double) { return 0.0; }, [](double) { return 0.0; });
+  m.on_pose(at_s(2.1), Eigen::Vector3d(-0.6, 0.0, 0.0), 0.0, false);  // the lateral law moved it
+  for (int k = 0; k < 6; ++k) m.on_pose(at_s(2.2 + k / kFrameHz), Eigen::Vector3d(-0.6, 0.0, 0.0), 0.0, true);
+  const LineWander w = m.wander(at_s(2.4), 2.5);
+  EXPECT_EQ(w.poses, 6);
+  const LineHoldForecast f = forecast_line_hold(FlightConfig{}.mission, w, blind_s());
+  EXPECT_FALSE(f.measured);
+  EXPECT_EQ(gate_with(f).value_or(""), kLineHoldNotMeasured);
+}
+
+// The watch on a crossing from 0.6 m in front of L2 C3, straight along x_O at 0.3 m/s. The
+// vehicle's front meets the frame (the tags 1 cm in front of the bars) after 0.6 - 0.01 - 0.049
+// = 0.541 m; with 0.3 m/s carried 0.15 m after a stop, it can be stopped short until 0.391 m.
+TEST(CrossingWatch, BacksOutOfADriftSeenBeforeTheCellOnly) {
+  const FlightConfig config;
+  const PoseEstimate pose = pose_at(-0.6, 0.0, 0.0);
+  const LineRoom room = line_room(config, {2, 3}, pose);
+  const CrossingWatchPlan plan = plan_crossing_watch(config, room, pose.p_FB_m(), crossing_direction_K(config.shelf, pose));
+  EXPECT_NEAR(plan.stop_before_m, 0.6 - 0.01 - 0.049, 1e-9);
+  EXPECT_NEAR(plan.slack_y_m, 0.5 * (0.32 - 0.0925) - 0.015, 1e-9);
+  CrossingEnd end;  // start at the origin of O, along x_O
+  const MissionParams& m = config.mission;
+  const Eigen::Vector2d v_calm(0.3, 0.0), v_pushed(0.3, 0.2);
+  // Calm, on the line: on.
+  EXPECT_FALSE(crossing_watch(end, plan, m, {0.1, 0.0, 0.0}, v_calm, 0.0, 0.0).back_out);
+  // Pushed sideways at 0.2 m/s, 3 cm off already: 13 cm forecast, out of 9.9 cm: back out.
+  const CrossingWatchVerdict pushed = crossing_watch(end, plan, m, {0.1, 0.03, 0.0}, v_pushed, 0.0, 0.0);
+  EXPECT_TRUE(pushed.back_out);
+  EXPECT_NEAR(pushed.across_m, 0.03 + 0.2 * kVelocityLag_s, 1e-9);
+  // The same push seen later, when stopping would leave the vehicle in the frame: flies on.
+  EXPECT_FALSE(crossing_watch(end, plan, m, {0.4, 0.03, 0.0}, v_pushed, 0.0, 0.0).back_out);
+  // Sinking toward the beam below before the cell: back out.
+  EXPECT_TRUE(crossing_watch(end, plan, m, {0.1, 0.0, 0.0}, v_calm, -0.08, -0.1).back_out);
+  EXPECT_FALSE(crossing_watch(end, plan, m, {0.1, 0.0, 0.0}, v_calm, -0.02, -0.1).back_out);
+}
+
+}  // namespace
+}  // namespace shelfcross::flight_sw
