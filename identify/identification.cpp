@@ -124,6 +124,7 @@ TrackingLoop tracking_loop(Axis axis, const plant::AutopilotParams& P, const pla
       L.kind = TrackingLoop::Kind::rate;
       L.pos_gain_per_s = P.yaw_gain_per_s;
       L.rate_gain_per_s = P.yaw_rate_gain_per_s;
+      L.rate_integral_gain_per_s2 = P.rate_integral_gain_per_s2;
       break;
   }
   return L;

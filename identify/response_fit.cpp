@@ -116,8 +116,11 @@ class Response {
     p_ref_ += v_ref_ * h;
     const TrackingLoop& L = loop_;
     if (L.kind == TrackingLoop::Kind::rate) {
+      // The rate loop is a PI on the rate error; its output is the angular acceleration.
       const double w_d = v_ref_ + L.pos_gain_per_s * (p_ref_ - p_);
-      v_ += (w_d - v_) * -std::expm1(-h * L.rate_gain_per_s);
+      const double alpha = L.rate_gain_per_s * (w_d - v_) + integral_;
+      integral_ += L.rate_integral_gain_per_s2 * (w_d - v_) * h;
+      v_ += alpha * h;
       p_ += v_ * h;
       return;
     }

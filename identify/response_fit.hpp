@@ -44,8 +44,8 @@ enum class Observation { direct, integral };
 ///     follows a_cmd through the attitude loops (tilt = a / g: angle gain k_att, rate gain
 ///     k_rate, a critically damped second order) or, when those are 0, through the motors'
 ///     first-order lag; v' = a - drag v.
-///   rate (yaw): w_d = v_ref + k_p (p_ref - p); the rate loop (gain k_rate) makes
-///     v' = k_rate (w_d - v).
+///   rate (yaw): w_d = v_ref + k_p (p_ref - p); the rate loop, a PI (gains k_rate, k_rate_i),
+///     gives the angular acceleration: v' = k_rate (w_d - v) + I_r, I_r' = k_rate_i (w_d - v).
 struct TrackingLoop {
   enum class Kind { none, acceleration, rate };
   Kind kind = Kind::none;
@@ -54,6 +54,7 @@ struct TrackingLoop {
   double vel_integral_gain_per_s2 = 0.0;
   double att_gain_per_s = 0.0;
   double rate_gain_per_s = 0.0;
+  double rate_integral_gain_per_s2 = 0.0;  ///< rate kind: the rate loop's integral
   double lag_s = 0.0;        ///< acceleration's first-order lag when att_gain_per_s is 0
   double drag_per_s = 0.0;
   double step_s = 0.002;     ///< integration step (the autopilot's 500 Hz tick)

@@ -2,15 +2,16 @@
 """Summary of identify's validation flights (validate_tello_sim.sh): for every parameter with a
 true value, in how many seeds the true value lies in identify's 95 % interval, and the widest
 interval against a quarter of the scenario's range.
-   summarize_validation.py OUT_DIR SCENARIO"""
+   summarize_validation.py OUT_DIR SCENARIO [REPORT_FOLDER]   (default: identify)"""
 import glob
 import json
 import os
 import sys
 
 out, scenario = sys.argv[1], sys.argv[2]
+folder = sys.argv[3] if len(sys.argv) > 3 else "identify"
 runs = []
-for path in sorted(glob.glob(os.path.join(out, "seed_*", "identify", "identify.json")),
+for path in sorted(glob.glob(os.path.join(out, "seed_*", folder, "identify.json")),
                    key=lambda p: int(p.split("seed_")[1].split(os.sep)[0])):
     with open(path) as f:
         runs.append((path.split("seed_")[1].split(os.sep)[0], json.load(f)))
