@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 #include "flight_sw/target_tracker.hpp"
@@ -168,6 +169,12 @@ CrossingWatchVerdict crossing_watch(const CrossingEnd& end, const CrossingWatchP
   if (stops_at >= plan.stop_before_m) return v;  // committed: stopping would leave it in the frame
   v.back_out = std::abs(v.across_m) > plan.slack_y_m || std::abs(v.height_m) > plan.slack_z_m;
   return v;
+}
+
+std::string centimetres_text(double length_m) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f cm", 100.0 * length_m);
+  return text;
 }
 
 }  // namespace shelfcross::flight_sw

@@ -40,6 +40,7 @@
 
 #include <deque>
 #include <optional>
+#include <string>
 
 #include <Eigen/Core>
 
@@ -151,5 +152,8 @@ struct CrossingWatchVerdict {
 CrossingWatchVerdict crossing_watch(const CrossingEnd& end, const CrossingWatchPlan& plan, const MissionParams& m,
                                     const Eigen::Vector3d& p_O_m, const Eigen::Vector2d& v_O_mps,
                                     double height_above_cell_m, double vz_mps);
+
+/// A length for the reasons the gate and the watch give: "4.2 cm" (one decimal).
+std::string centimetres_text(double length_m);
 
 }  // namespace shelfcross::flight_sw

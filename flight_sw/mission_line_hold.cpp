@@ -13,13 +13,6 @@
 
 namespace shelfcross::flight_sw {
 
-namespace {
-std::string cm(double v_m) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.1f cm", 100.0 * v_m);
-  return b;
-}
-}  // namespace
 
 // Quiet: no lateral command has acted for settle_s (more than the video latency plus the
 // autopilot's velocity lag), so what moves the vehicle sideways now nobody commanded.
@@ -53,11 +46,11 @@ bool FlightSoftware::too_rough_to_cross(const PoseEstimate& pose_K) {
   }
   if (!rough_since_ns_) {
     rough_since_ns_ = now_ns_;
-    telemetry_.event = "holding short: the hover's wander (" + cm(f.y_m) + " across, " + cm(f.z_m) +
+    telemetry_.event = "holding short: the hover's wander (" + centimetres_text(f.y_m) + " across, " + centimetres_text(f.z_m) +
                        " up) leaves the line no room";
   }
   if (ns_to_seconds(now_ns_ - *rough_since_ns_) > m.calm_wait_s) {
-    back_out_and_land(std::string(kCrossingDeclined) + kLineCannotBeHeld + " (wander " + cm(f.y_m) + " across, " + cm(f.z_m) + " up, for " +
+    back_out_and_land(std::string(kCrossingDeclined) + kLineCannotBeHeld + " (wander " + centimetres_text(f.y_m) + " across, " + centimetres_text(f.z_m) + " up, for " +
                      std::to_string(static_cast<int>(m.calm_wait_s)) + " s)");
   }
   return true;
@@ -86,7 +79,7 @@ void FlightSoftware::watch_crossing(const StateRecord& s) {
                                                 s.height_m - *crossing_height_m_, s.vz_H_mps);
   if (!v.back_out) return;
   ++telemetry_.crossings_backed_out;
-  const std::string why = "drift seen before the cell (" + cm(v.across_m) + " across, " + cm(v.height_m) + " up)";
+  const std::string why = "drift seen before the cell (" + centimetres_text(v.across_m) + " across, " + centimetres_text(v.height_m) + " up)";
   enter(Phase::Approach, "crossing stopped: " + why + ": backing out");
   crossing_height_m_.reset();
   line_hold_.clear();

@@ -226,13 +226,6 @@ Eigen::Vector3d crossing_direction_K(const KnownShelf& shelf, const PoseEstimate
   return (aim - pose.p_FB_m()).normalized();
 }
 
-namespace {
-std::string cm(double v_m) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.1f cm", 100.0 * v_m);
-  return b;
-}
-}  // namespace
 
 std::optional<std::string> crossing_refusal(const FlightConfig& config, CellIndex target, const PoseEstimate& pose,
                                             const CrossingGateInput& input) {
@@ -262,12 +255,12 @@ std::optional<std::string> crossing_refusal(const FlightConfig& config, CellInde
   const LineHoldForecast& f = input.line_hold;
   if (!f.measured) return std::string(kLineHoldNotMeasured);
   if (room.offset_y_m() + f.y_m > tol_y) {
-    return std::string(kLineCannotBeHeld) + " across (offset " + cm(room.offset_y_m()) + " + wander " + cm(f.y_m) +
-           " > " + cm(tol_y) + ")";
+    return std::string(kLineCannotBeHeld) + " across (offset " + centimetres_text(room.offset_y_m()) + " + wander " + centimetres_text(f.y_m) +
+           " > " + centimetres_text(tol_y) + ")";
   }
   if (std::max(room.offset_z_m(), std::abs(z_now)) + f.z_m > tol_z) {
-    return std::string(kLineCannotBeHeld) + " vertically (offset " + cm(std::max(room.offset_z_m(), std::abs(z_now))) +
-           " + wander " + cm(f.z_m) + " > " + cm(tol_z) + ")";
+    return std::string(kLineCannotBeHeld) + " vertically (offset " + centimetres_text(std::max(room.offset_z_m(), std::abs(z_now))) +
+           " + wander " + centimetres_text(f.z_m) + " > " + centimetres_text(tol_z) + ")";
   }
   return std::nullopt;
 }
