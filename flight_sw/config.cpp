@@ -118,6 +118,7 @@ void read_perception(const Map& m, PerceptionParams& p) {
   if (p.steer_max_damage_events < p.decide_max_damage_events) {
     m.fail("steer_max_damage_events", "must be >= decide_max_damage_events");
   }
+  opt(m, "band_margin_px", p.band_margin_px, within(-1.0, 1000.0));
   opt(m, "roi_expand", p.roi_expand, within(0.0, 5.0));
   opt(m, "corner_gate", p.corner_gate, {.min = 0.0, .max = 1.0, .min_exclusive = true, .max_exclusive = false});
   if (p.inventory_frames < p.marker_min_agreeing_frames) {

@@ -113,6 +113,13 @@ struct PerceptionParams {
   /// steer_max_damage_events it only steers the loops; beyond, the vehicle hovers on it.
   int decide_max_damage_events = 1;
   int steer_max_damage_events = 8;
+  /// A picture with more damage still decides (and steers) when the receiver placed its
+  /// damage (CameraFrame::damaged_rows) and no damaged row lies within band_margin_px of the
+  /// rows the decision rests on: the front shelf's tags while reaching the viewpoint and
+  /// reading it, the target's tracked box during the approach. Its damaged rows are blanked
+  /// first, so nothing is detected in them; only whole pictures still vouch for an empty
+  /// cell. Negative: off.
+  double band_margin_px = 32.0;
   double roi_expand = 0.6;   ///< approach search window: box grown by this fraction per side
   double corner_gate = 0.35;  ///< corner tag must lie within this fraction of the box size
 };

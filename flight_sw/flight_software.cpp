@@ -176,8 +176,18 @@ void FlightSoftware::on_frame(const CameraFrame& f) {
   // picture steers the loops; beyond, it is video but not a view: the vehicle hovers on it.
   const int damage = f.damaged || f.damage_events > 0 ? std::max(1, f.damage_events) : 0;
   if (damage > 0) ++telemetry_.damaged_frames;
-  const Picture pic{f.bgr, now_ns_, damage, damage <= config_.perception.decide_max_damage_events};
-  if (damage > config_.perception.steer_max_damage_events) {
+  bool decides = damage <= config_.perception.decide_max_damage_events;
+  const cv::Mat* image = &f.bgr;
+  if (!decides && damage_clear_of_decision(f)) {
+    // The damage lies away from what the decisions need: decide on the rest, with the
+    // guessed rows blanked so that nothing is detected in them.
+    decides = true;
+    blank_rows(f, masked_bgr_);
+    image = &masked_bgr_;
+    ++telemetry_.band_decided_frames;
+  }
+  const Picture pic{*image, now_ns_, damage, decides};
+  if (!decides && damage > config_.perception.steer_max_damage_events) {
     ++telemetry_.unflown_frames;
     if (airborne_phase() && phase_ != Phase::Cross && phase_ != Phase::Transfer) {
       velocity_ = {};  // hover; the PI states are kept for the next usable frame
@@ -198,6 +208,50 @@ void FlightSoftware::on_frame(const CameraFrame& f) {
   }
   last_control_ns_ = now_ns_;
   emit_rc(false);
+}
+
+// The picture rows the current phase's decisions rest on, from the last analysis: the front
+// shelf's tags (finding it, reaching the viewpoint, reading it), the target's tracked box (the
+// approach). Nothing where no such rows are known.
+std::optional<cv::Rect2d> FlightSoftware::decision_region_px() const {
+  switch (phase_) {
+    case Phase::FindShelf:
+    case Phase::GoToViewpoint:
+    case Phase::TakeInventory: {
+      if (!view_.full || view_.tags.empty()) return std::nullopt;
+      cv::Rect region = view_.tags.front().bbox_px;
+      for (const TagBlob& t : view_.tags) region |= t.bbox_px;
+      return cv::Rect2d(region);
+    }
+    case Phase::Approach:
+      if (!tracker_.target() || tracker_.box_px().area() <= 0.0) return std::nullopt;
+      return tracker_.box_px();
+    default:
+      return std::nullopt;
+  }
+}
+
+// True when the frame's damage is placed and lies perception.band_margin_px clear of the
+// decision region's rows (config.hpp).
+bool FlightSoftware::damage_clear_of_decision(const CameraFrame& f) const {
+  const double margin = config_.perception.band_margin_px;
+  if (margin < 0.0) return false;
+  if (f.damaged_rows.empty()) return true;  // the damage has left the picture
+  const std::optional<cv::Rect2d> region = decision_region_px();
+  if (!region) return false;
+  const double top = region->y - margin, bottom = region->y + region->height + margin;
+  return std::none_of(f.damaged_rows.begin(), f.damaged_rows.end(), [&](const RowSpan& r) {
+    return r.v_begin_px < bottom && r.v_end_px > top;
+  });
+}
+
+// `out` = the frame's picture with its damaged rows mid-grey (no tag colour, no marker).
+void FlightSoftware::blank_rows(const CameraFrame& f, cv::Mat& out) {
+  f.bgr.copyTo(out);
+  for (const RowSpan& r : f.damaged_rows) {
+    const int b = std::clamp(r.v_begin_px, 0, out.rows), e = std::clamp(r.v_end_px, 0, out.rows);
+    if (e > b) out.rowRange(b, e).setTo(cv::Scalar(128, 128, 128));
+  }
 }
 
 // ---- SDK command results ----

@@ -36,8 +36,10 @@
 // Damaged pictures (CameraFrame::damaged): decisions (the phase changes above, the inventory,
 // the target's re-acquisition, the crossing and the last centimetres before it) only on
 // pictures with at most perception.decide_max_damage_events lost bands since their key frame;
-// steering on up to steer_max_damage_events; hover on worse. Only whole pictures count
-// toward an empty cell.
+// steering on up to steer_max_damage_events; hover on worse. A picture with more damage
+// decides and steers after all when its damaged rows (CameraFrame::damaged_rows) lie
+// band_margin_px clear of the rows the decision rests on; those rows are blanked first. Only
+// whole pictures count toward an empty cell.
 // Failsafes: no frame for video_hover_s: hover (rc 0 0 0 0); for video_land_s: land (not while
 // crossing: the crossing is open loop and stopping inside the shelf is worse). Target lost:
 // hover and re-acquire from the tags; after target_lost_s re-read the shelf from the viewpoint
@@ -214,6 +216,7 @@ struct Telemetry {
   int stale_replies = 0;
   int bad_frames = 0;  ///< frames of the wrong size or type, ignored
   int damaged_frames = 0;  ///< error-concealed pictures received (CameraFrame::damaged)
+  int band_decided_frames = 0;  ///< damaged pictures that decided on rows clear of their damage (perception.band_margin_px)
   int unflown_frames = 0;  ///< of which too damaged to steer on (perception.steer_max_damage_events): hovered
 };
 
@@ -260,6 +263,9 @@ class FlightSoftware {
   void after_measurement();
   void sample_cell_height(const Picture& pic, const PoseEstimate& pose);
   bool state_fresh() const;
+  std::optional<cv::Rect2d> decision_region_px() const;
+  bool damage_clear_of_decision(const CameraFrame& f) const;
+  static void blank_rows(const CameraFrame& f, cv::Mat& out);
   void start_losing_target();
   /// The target's identity on a picture where it is not confirmed (target_tracker.hpp):
   /// confirmed, kept unknown, or the shelf re-read (returns false: the approach is over).
@@ -308,6 +314,7 @@ class FlightSoftware {
   FlightConfig config_;
   SdkLink link_;
   TagDetector tag_detector_;
+  cv::Mat masked_bgr_;  ///< a damaged picture with its damaged rows blanked (on_frame)
   MarkerDetector marker_detector_;
   Inventory inventory_;
   PiController pi_z_, pi_psi_;

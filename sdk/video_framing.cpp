@@ -1,6 +1,8 @@
 #include "sdk/video_framing.hpp"
 
 #include <cassert>
+#include <cstdint>
+#include <optional>
 
 namespace shelfcross::sdk {
 namespace {
@@ -23,7 +25,62 @@ std::vector<Nal> find_nals(std::string_view s) {
   return nals;
 }
 
+// Reads an unsigned Exp-Golomb code (ue(v), H.264 9.1) from the RBSP of `nal` starting at
+// `byte` (emulation-prevention bytes 00 00 03 skipped). Nothing when the bytes run out first
+// or the code is longer than 31 bits.
+std::optional<int> read_ue(std::string_view nal, std::size_t byte) {
+  int zeros_seen = 0;  // consecutive zero bytes, for the emulation-prevention rule
+  std::uint32_t bits = 0;
+  int nbits = 0;
+  auto next_bit = [&]() -> std::optional<int> {
+    if (nbits == 0) {
+      for (;;) {
+        if (byte >= nal.size()) return std::nullopt;
+        const auto b = static_cast<unsigned char>(nal[byte++]);
+        if (zeros_seen >= 2 && b == 3) {  // 00 00 03: the 03 is not data
+          zeros_seen = 0;
+          continue;
+        }
+        zeros_seen = b == 0 ? zeros_seen + 1 : 0;
+        bits = b;
+        nbits = 8;
+        break;
+      }
+    }
+    --nbits;
+    return static_cast<int>((bits >> nbits) & 1u);
+  };
+  int leading = 0;
+  for (;;) {
+    const std::optional<int> b = next_bit();
+    if (!b) return std::nullopt;
+    if (*b == 1) break;
+    if (++leading > 30) return std::nullopt;
+  }
+  std::uint32_t value = 0;
+  for (int i = 0; i < leading; ++i) {
+    const std::optional<int> b = next_bit();
+    if (!b) return std::nullopt;
+    value = (value << 1) | static_cast<std::uint32_t>(*b);
+  }
+  return static_cast<int>((1u << leading) - 1u + value);
+}
+
 }  // namespace
+
+std::vector<SliceSpan> slice_spans(std::string_view s) {
+  std::vector<SliceSpan> out;
+  const std::vector<Nal> nals = find_nals(s);
+  for (std::size_t i = 0; i < nals.size(); ++i) {
+    if (nals[i].payload >= s.size()) continue;
+    const int type = static_cast<unsigned char>(s[nals[i].payload]) & 0x1f;
+    if (type != 1 && type != 5) continue;
+    const std::size_t end = i + 1 < nals.size() ? nals[i + 1].code_begin : s.size();
+    const std::optional<int> first_mb = read_ue(s.substr(0, end), nals[i].payload + 1);
+    if (first_mb) out.push_back({*first_mb, nals[i].code_begin, end});
+  }
+  return out;
+}
 
 std::vector<int> nal_unit_types(std::string_view s) {
   std::vector<int> types;

@@ -33,6 +33,20 @@ bool only_parameter_sets(std::string_view bytes);
 /// own, and within a frame only its first slice begins at macroblock 0.
 bool begins_access_unit(std::string_view datagram);
 
+/// One coded slice of an access unit: where its NAL unit lies and where it begins in the
+/// picture. A slice covers the macroblocks from first_mb (raster order) up to the next slice's.
+struct SliceSpan {
+  int first_mb = 0;         ///< first_mb_in_slice, the macroblock the slice begins at
+  std::size_t begin = 0;    ///< offset of its start code in the access unit
+  std::size_t end = 0;      ///< offset of the next NAL unit's start code, or the string's end
+};
+
+/// The coded slices (NAL types 1 and 5) of an Annex-B byte string, in byte order, with their
+/// first_mb_in_slice (the slice header's first field, ue(v), read past emulation-prevention
+/// bytes). A slice whose header is cut off before first_mb_in_slice ends is left out. Bytes
+/// before the first start code (a frame that lost its first datagram) belong to no slice.
+std::vector<SliceSpan> slice_spans(std::string_view annex_b);
+
 /// The Tello's datagrams for one access unit: leading parameter sets (SPS, PPS, AUD) one per
 /// datagram, then the rest cut into `datagram_size` pieces with a shorter last piece (when
 /// the rest is an exact multiple, an empty datagram follows it), so a receiver finds the

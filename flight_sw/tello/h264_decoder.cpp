@@ -1,5 +1,6 @@
 #include "flight_sw/tello/h264_decoder.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -13,6 +14,7 @@ extern "C" {
 #include <libavutil/frame.h>
 #include <libavutil/imgutils.h>
 #include <libavutil/log.h>
+#include <libavutil/motion_vector.h>
 #include <libswscale/swscale.h>
 }
 
@@ -71,6 +73,17 @@ struct H264Decoder::Impl {
       r.clean = !damaged;
       r.concealed = damaged;
       r.key_frame = frame->key_frame || frame->pict_type == AV_PICTURE_TYPE_I;
+      r.refs = std::max(1, ctx->refs);
+      r.motion.clear();
+      if (const AVFrameSideData* sd = av_frame_get_side_data(frame, AV_FRAME_DATA_MOTION_VECTORS)) {
+        const auto* mv = reinterpret_cast<const AVMotionVector*>(sd->data);
+        const std::size_t n = sd->size / sizeof(AVMotionVector);
+        r.motion.reserve(n);
+        for (std::size_t i = 0; i < n; ++i) {
+          r.motion.push_back({mv[i].w, mv[i].h, mv[i].dst_x, mv[i].dst_y, mv[i].motion_y,
+                              mv[i].motion_scale > 0 ? static_cast<int>(mv[i].motion_scale) : 1});
+        }
+      }
       av_frame_unref(latest);
       av_frame_move_ref(latest, frame);
       have_latest = true;
@@ -101,6 +114,8 @@ H264Decoder::H264Decoder() : impl_(std::make_unique<Impl>()) {
   // Damaged pictures: concealed from the previous picture (see the header) and output.
   c->flags |= AV_CODEC_FLAG_OUTPUT_CORRUPT;
   c->error_concealment = FF_EC_GUESS_MVS | FF_EC_DEBLOCK | FF_EC_FAVOR_INTER;
+  // Each picture's motion vectors as side data: where its damage came from (picture_damage.hpp).
+  c->export_side_data |= AV_CODEC_EXPORT_DATA_MVS;
   if (avcodec_open2(c, codec, nullptr) < 0) throw std::runtime_error("cannot open the H.264 decoder");
 }
 
@@ -137,6 +152,13 @@ DecodeResult H264Decoder::decode(std::string_view au) {
     if (used == 0 && out_size == 0) break;  // no progress
   }
   return r;
+}
+
+bool H264Decoder::latest_size(int& width_px, int& height_px) const {
+  if (!impl_->have_latest) return false;
+  width_px = impl_->latest->width;
+  height_px = impl_->latest->height;
+  return true;
 }
 
 bool H264Decoder::latest_bgr(cv::Mat& bgr) {

@@ -7,8 +7,11 @@
 #include <cstdint>
 #include <memory>
 #include <string_view>
+#include <vector>
 
 #include <opencv2/core/mat.hpp>
+
+#include "flight_sw/tello/picture_damage.hpp"
 
 namespace shelfcross::tello {
 
@@ -19,6 +22,10 @@ struct DecodeResult {
   bool key_frame = false; ///< the last picture is an intra (IDR/I) picture
   bool clean = false;     ///< the last picture was decoded without reported damage
   bool concealed = false; ///< the last picture has macroblocks filled in by error concealment
+  /// The last picture's inter blocks, from libavcodec's exported motion vectors
+  /// (AV_CODEC_EXPORT_DATA_MVS): where each lands and where it comes from (picture_damage.hpp).
+  std::vector<BlockMotion> motion;
+  int refs = 1;           ///< reference pictures the stream's SPS allows (at least 1)
 };
 
 /// av_parser_parse2 with the h264 parser over access units (the receiver hands one
@@ -44,6 +51,8 @@ class H264Decoder {
   DecodeResult decode(std::string_view access_unit);
   /// The last decoded picture as BGR (CV_8UC3) through libswscale; false when none.
   bool latest_bgr(cv::Mat& bgr);
+  /// The last decoded picture's size in pixels; false when none.
+  bool latest_size(int& width_px, int& height_px) const;
 
  private:
   struct Impl;

@@ -22,6 +22,13 @@ const char* origin_name(int tag) {
   }
 }
 
+// Picture rows a frame's damage may cover (the log's measure of how much is guesswork).
+int damaged_row_count(const VideoFrame& f) {
+  int rows = 0;
+  for (const RowSpan& r : f.damaged_rows) rows += r.v_end_px - r.v_begin_px;
+  return rows;
+}
+
 DriverConfig driver_config(const PilotLoopConfig& c) {
   DriverConfig dc = c.driver;
   // Keep a stick setpoint alive at least as long as the flight software may go without
@@ -109,7 +116,7 @@ class PilotLoop::Impl {
       const TimeNs taken = clock_.now_ns();
       log_.write(taken, "frame", {{"index", f->index}, {"rx_ns", f->t_ns}, {"handed_ns", f->handed_ns},
                                   {"damaged", f->damaged}, {"key_group", f->key_group},
-                                  {"damage_events", f->damage_events},
+                                  {"damage_events", f->damage_events}, {"damaged_rows", damaged_row_count(*f)},
                                   {"rows", f->bgr.rows}, {"cols", f->bgr.cols}});
       last_frame_ns_ = f->handed_ns;
       if (!o_.record_dir.empty()) record(*f);
@@ -119,7 +126,8 @@ class PilotLoop::Impl {
       }
       // Damaged (error-concealed) pictures go through, marked: the flight software knows
       // how far to trust them (perception.decide_/steer_max_damage_events).
-      inputs.emplace_back(CameraFrame{f->handed_ns, f->index, std::move(f->bgr), f->damaged, f->damage_events});
+      inputs.emplace_back(CameraFrame{f->handed_ns, f->index, std::move(f->bgr), f->damaged, f->damage_events,
+                                      std::move(f->damaged_rows)});
     }
     // The flight computer's timer: with nothing else to hand over, a tick every 50 ms lets
     // the flight software's timeouts and retries fire (a lost first "command" is resent).
@@ -268,7 +276,8 @@ class PilotLoop::Impl {
     nlohmann::json j = {{"tracker_ok", tm.tracker_ok}, {"e_z_m", tm.e_z_m}, {"e_psi_rad", tm.e_psi_rad},
                         {"settled", tm.settled}, {"holding_short", tm.holding_short},
                         {"rejected_poses", tm.rejected_poses}, {"wrong_level_poses", tm.wrong_level_poses},
-                        {"damaged_frames", tm.damaged_frames}, {"unflown_frames", tm.unflown_frames}};
+                        {"damaged_frames", tm.damaged_frames}, {"band_decided_frames", tm.band_decided_frames},
+                        {"unflown_frames", tm.unflown_frames}};
     if (tm.pose && tm.pose_in_cell_frame) {
       const Eigen::Vector3d p = tm.pose->p_FB_m();
       j["p_KB_m"] = {p.x(), p.y(), p.z()};
@@ -395,6 +404,7 @@ class PilotLoop::Impl {
                             {"driver", driver_counters},
                             {"video", video_counters},
                             {"fsw_damaged_frames", tm.damaged_frames},
+                            {"fsw_band_decided_frames", tm.band_decided_frames},
                             {"fsw_unflown_frames", tm.unflown_frames},
                             {"fsw_rejected_poses", tm.rejected_poses},
                             {"fsw_wrong_level_poses", tm.wrong_level_poses},
@@ -403,7 +413,8 @@ class PilotLoop::Impl {
     std::ostringstream summary;
     summary << flight_sw::outcome_name(r.outcome) << (r.reason.empty() ? "" : ": ") << r.reason
             << "\n  driver: " << driver_counters << "\n  video: " << video_counters
-            << "\n  flight software: damaged_frames=" << tm.damaged_frames << " unflown_frames=" << tm.unflown_frames
+            << "\n  flight software: damaged_frames=" << tm.damaged_frames
+            << " band_decided_frames=" << tm.band_decided_frames << " unflown_frames=" << tm.unflown_frames
             << " rejected_poses=" << tm.rejected_poses << " wrong_level_poses=" << tm.wrong_level_poses;
     return summary.str();
   }

@@ -121,8 +121,10 @@ void VideoReceiver::on_datagram(const Datagram& d) {
     if (frame_bytes_.size() + d.bytes.size() > config_.max_frame_bytes) {
       frame_overflow_ = true;
       frame_bytes_.clear();
+      datagram_ends_.clear();
     } else {
       frame_bytes_ += d.bytes;
+      datagram_ends_.push_back(frame_bytes_.size());
     }
   }
   if (d.bytes.size() < config_.datagram_size && (frame_overflow_ || !only_parameter_sets(frame_bytes_))) {
@@ -134,6 +136,7 @@ void VideoReceiver::finish_frame(TimeNs t_ns, bool lost_end) {
   bool damaged = lost_end;
   bool oversize = false;
   DecodeResult r;
+  PictureEvidence evidence;
   if (frame_overflow_) {
     oversize = damaged = true;
   } else {
@@ -142,8 +145,11 @@ void VideoReceiver::finish_frame(TimeNs t_ns, bool lost_end) {
     r = thread_state_->decoder.decode(frame_bytes_);
     if (r.error) damaged = true;
     if (r.pictures == 0) damaged = true;  // a frame's worth of bytes and no picture
+    evidence.slices = sdk::slice_spans(frame_bytes_);
+    evidence.datagram_ends = std::move(datagram_ends_);
   }
   frame_bytes_.clear();
+  datagram_ends_.clear();
   frame_overflow_ = false;
 
   if (r.pictures > 0 && r.key_frame) {
@@ -166,6 +172,20 @@ void VideoReceiver::finish_frame(TimeNs t_ns, bool lost_end) {
   const bool hand_over = synced_ && r.pictures > 0 &&
                          (config_.damaged == DamagedFrames::conceal || !damaged_since_key_);
 
+  // Where the damage lies: followed over every decoded picture, handed over or not.
+  std::vector<RowSpan> damaged_rows;
+  if (r.pictures > 0 && thread_state_->decoder.latest_size(picture_width_px_, picture_height_px_)) {
+    if (!picture_damage_) picture_damage_ = std::make_unique<PictureDamage>(picture_width_px_, picture_height_px_);
+    evidence.lost = damaged;
+    evidence.unplaced = picture_lost_ && !(key && !damaged);  // a whole key frame refers to nothing
+    evidence.motion = std::move(r.motion);
+    evidence.refs = r.refs;
+    picture_lost_ = false;
+    damaged_rows = picture_damage_->update(evidence);
+  } else if (damaged) {
+    picture_lost_ = true;  // a picture the next ones may refer to is missing
+  }
+
   VideoFrame frame;
   if (hand_over && !thread_state_->decoder.latest_bgr(frame.bgr)) frame.bgr.release();
   std::lock_guard lock(mutex_);
@@ -183,6 +203,7 @@ void VideoReceiver::finish_frame(TimeNs t_ns, bool lost_end) {
   frame.damaged = damaged_since_key_;
   frame.key_group = key_frames_;
   frame.damage_events = damage_events_;
+  if (frame.damaged) frame.damaged_rows = std::move(damaged_rows);
   frame.handed_ns = clock_.now_ns();
   if (mailbox_) ++stats_.replaced;
   mailbox_ = std::move(frame);

@@ -34,10 +34,12 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <opencv2/core/mat.hpp>
 
 #include "flight_sw/tello/clock.hpp"
+#include "flight_sw/tello/picture_damage.hpp"
 #include "flight_sw/tello/udp_socket.hpp"
 #include "sdk/video_framing.hpp"
 
@@ -74,6 +76,9 @@ struct VideoFrame {
   /// slices or so) concealed from the previous picture, and the bands add up until the next
   /// key frame. A measure of how much of the picture is guesswork.
   int damage_events = 0;
+  /// Where the damage may lie (CameraFrame::damaged_rows; picture_damage.hpp): empty for a
+  /// clean frame of a clean group, and for a damaged one whose damage has left the picture.
+  std::vector<RowSpan> damaged_rows;
   cv::Mat bgr;              ///< CV_8UC3
 };
 
@@ -141,6 +146,10 @@ class VideoReceiver {
   bool damaged_since_key_ = false;  ///< a sign of damage since the last clean key frame
   std::int64_t key_frames_ = 0;     ///< key frames decoded (damaged or not)
   int damage_events_ = 0;           ///< damaged frames since the last key frame (see VideoFrame)
+  std::vector<std::size_t> datagram_ends_;  ///< where each datagram of the frame gathered ended
+  std::unique_ptr<PictureDamage> picture_damage_;  ///< sized by the first picture
+  int picture_width_px_ = 0, picture_height_px_ = 0;
+  bool picture_lost_ = false;  ///< an access unit gave no picture: the next one's damage is unplaced
   struct ThreadState;
   std::unique_ptr<ThreadState> thread_state_;
 

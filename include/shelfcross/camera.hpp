@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <vector>
 
 #include <Eigen/Geometry>
 #include <opencv2/core/mat.hpp>
@@ -51,20 +52,32 @@ inline Eigen::Matrix3d rotation_body_from_camera(double mount_pitch_rad) {
   return Eigen::AngleAxisd(mount_pitch_rad, Eigen::Vector3d::UnitY()).toRotationMatrix() * R_BC0;
 }
 
+/// A band of picture rows, [v_begin_px, v_end_px), top to bottom.
+struct RowSpan {
+  int v_begin_px = 0;
+  int v_end_px = 0;
+  bool operator==(const RowSpan&) const = default;
+};
+
 /// One decoded camera frame as the flight software receives it.
 ///
 /// Damage: a lost video datagram loses a band of the picture; the decoder fills it in from
 /// the previous picture (error concealment) and, through prediction, the damage lasts until
 /// the next key frame. `damage_events` counts the damaged pictures since the last key frame
 /// (this one included): 0 for a whole picture, and each lost datagram adds a band of
-/// guesswork. The co-simulation's frames are whole (its link drops frames, it does not damage
-/// them); tello_pilot copies both fields from its video receiver.
+/// guesswork. `damaged_rows` says where: the rows that may differ from what the camera saw
+/// (the concealed bands of this picture and of the pictures it was predicted from, moved
+/// along the stream's motion vectors), the rest of the picture decoded from data that
+/// arrived. It is empty when `damaged` is false or when the damage has left the picture
+/// (the receiver followed it out), and the whole height when the receiver cannot tell. The co-simulation's ideal link hands whole frames (it drops frames, it does
+/// not damage them); the sdk link and tello_pilot copy all three from the video receiver.
 struct CameraFrame {
   TimeNs t_ns = 0;           ///< receive time (after the video link's latency)
   std::int64_t index = 0;    ///< frame counter of the source; gaps mean dropped frames
   cv::Mat bgr;               ///< CV_8UC3, width x height of the intrinsics
   bool damaged = false;      ///< error-concealed: part of the picture is guessed
   int damage_events = 0;     ///< damaged pictures since the last key frame (0 when whole)
+  std::vector<RowSpan> damaged_rows = {};  ///< where the guessed part may lie, disjoint, top down
 };
 
 }  // namespace shelfcross

@@ -4,6 +4,9 @@
 
 #include "sdk/video_framing.hpp"
 
+#include <cstdint>
+#include <vector>
+
 #include <gtest/gtest.h>
 
 namespace shelfcross::sdk {
@@ -48,6 +51,60 @@ TEST(SdkVideoFraming, FrameBoundaryRules) {
   EXPECT_FALSE(begins_access_unit(nal(1, "")));                       // header only
   EXPECT_FALSE(begins_access_unit(nal(2, slice_payload(true, 8))));   // data partition
   EXPECT_FALSE(begins_access_unit(slice_payload(true, 8)));           // the middle of a frame
+}
+
+// The RBSP bytes of ue(v) `value` followed by '1' bits, with emulation-prevention bytes.
+std::string ue_payload(std::uint32_t value, std::size_t size) {
+  std::vector<int> bits;
+  const std::uint64_t code = static_cast<std::uint64_t>(value) + 1;
+  int len = 0;
+  while ((code >> (len + 1)) != 0) ++len;
+  for (int i = 0; i < len; ++i) bits.push_back(0);
+  for (int i = len; i >= 0; --i) bits.push_back(static_cast<int>((code >> i) & 1));
+  while (bits.size() < size * 8) bits.push_back(1);
+  std::string rbsp;
+  for (std::size_t i = 0; i + 8 <= bits.size(); i += 8) {
+    int b = 0;
+    for (int k = 0; k < 8; ++k) b = (b << 1) | bits[i + k];
+    rbsp += static_cast<char>(b);
+  }
+  std::string out;
+  int zeros = 0;
+  for (char c : rbsp) {
+    const auto b = static_cast<unsigned char>(c);
+    if (zeros >= 2 && b <= 3) {
+      out += '\x03';
+      zeros = 0;
+    }
+    out += c;
+    zeros = b == 0 ? zeros + 1 : 0;
+  }
+  return out;
+}
+
+TEST(SdkVideoFraming, SliceSpansReadFirstMacroblock) {
+  const std::string sps = nal(7, "\x42\xc0\x1f");
+  const std::string s0 = nal(5, ue_payload(0, 30)), s1 = nal(5, ue_payload(60, 30)),
+                    s2 = nal(5, ue_payload(3599, 30));
+  const std::string au = sps + s0 + s1 + s2;
+  const std::vector<SliceSpan> spans = slice_spans(au);
+  ASSERT_EQ(spans.size(), 3u);
+  EXPECT_EQ(spans[0].first_mb, 0);
+  EXPECT_EQ(spans[1].first_mb, 60);
+  EXPECT_EQ(spans[2].first_mb, 3599);
+  EXPECT_EQ(spans[0].begin, sps.size());
+  EXPECT_EQ(spans[0].end, sps.size() + s0.size());
+  EXPECT_EQ(spans[2].end, au.size());
+  // 23 leading zero bits put 00 00 01 in the RBSP: the writer inserts 03, the reader skips it.
+  const std::uint32_t big = (1u << 23) + 12345u;
+  const std::string escaped = nal(1, ue_payload(big, 12));
+  ASSERT_NE(escaped.find(std::string("\0\0\3", 3), 5), std::string::npos);
+  ASSERT_EQ(slice_spans(escaped).size(), 1u);
+  EXPECT_EQ(slice_spans(escaped)[0].first_mb, static_cast<int>(big));
+  // Bytes before the first start code (a lost first datagram) and a header cut short.
+  EXPECT_EQ(slice_spans(ue_payload(5, 20) + s1).size(), 1u);
+  EXPECT_TRUE(slice_spans(nal(1, std::string(2, '\0'))).empty());
+  EXPECT_TRUE(slice_spans(sps).empty());
 }
 
 TEST(SdkVideoFraming, TelloDatagramsCutAsTheTelloDoes) {
