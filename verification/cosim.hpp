@@ -35,6 +35,7 @@
 #include "flight_sw/flight_software.hpp"
 #include "plant/collision.hpp"
 #include "render/renderer.hpp"
+#include "shelfcross/cell_index.hpp"
 #include "verification/dispersion.hpp"
 #include "verification/metrics.hpp"
 #include "verification/scenario.hpp"
@@ -93,8 +94,8 @@ struct RunMetrics {
   int shelves_crossed = 0;                      ///< shelves crossed face to face through a cell
   int shelves_crossed_target = 0;               ///< ... through the cell the flight software chose there
   // Crossing, in shelf 0's frame S
-  std::optional<flight_sw::CellIndex> target;   ///< the flight software's chosen cell
-  std::optional<flight_sw::CellIndex> crossed;  ///< the cell entered and left face to face
+  std::optional<CellIndex> target;   ///< the flight software's chosen cell
+  std::optional<CellIndex> crossed;  ///< the cell entered and left face to face
   bool crossed_target = false;
   std::optional<double> entry_offset_y_m;       ///< body origin - cell centre, at the front face
   std::optional<double> entry_offset_z_m;

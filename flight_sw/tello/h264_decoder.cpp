@@ -17,7 +17,6 @@ extern "C" {
 }
 
 namespace shelfcross::tello {
-namespace {
 
 // FFmpeg's decoders print every damaged macroblock; the receiver counts errors itself.
 void quiet_ffmpeg() {
@@ -27,8 +26,6 @@ void quiet_ffmpeg() {
   }();
   (void)once;
 }
-
-}  // namespace
 
 // ---- Decoder ----
 
