@@ -145,13 +145,17 @@ double mission_shelf_spacing_m(const Scenario& scenario);
 /// The flight software's configuration for a scenario: the known geometry of shelf 0, the
 /// layout (mission_shelf_count shelves at their spacing), the strategy (cosim.strategy), the
 /// camera it believes (calibration error included), the mount; tunables at their defaults.
+/// Requires at least one shelf; throws std::invalid_argument for an unknown cosim.strategy.
 flight_sw::FlightConfig flight_config_for(const Scenario& scenario, const CameraIntrinsics& believed_camera);
 
 /// The true box list of the mission's shelves as the flight software should report it.
 std::set<InventoryEntry> true_inventory(const Scenario& scenario);
 
 /// Runs one dispersed run. `renderer` must have been made for (or re-targeted at) the run's
-/// warehouse and camera; the harness uses it only from the calling thread.
+/// warehouse and camera; the harness uses it only from the calling thread. Throws
+/// std::invalid_argument for a scenario it cannot fly (a start not landed, an unknown
+/// strategy); what goes wrong during the run (a contact, a timeout, an exception of the
+/// flight software) is the run's outcome, not an exception.
 RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer,
                            const FrameObserver& observer = {});
 

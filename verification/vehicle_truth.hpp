@@ -26,7 +26,8 @@ plant::AutopilotParams autopilot_params_for(const Scenario& scenario);
 /// X_WB of a plant state.
 Eigen::Isometry3d body_pose(const plant::RigidBodyState& s);
 
-/// The cell of shelf `s` whose opening contains (y_S, z_S), if any (levels and columns from 1).
+/// The cell of shelf `s` whose opening contains (y_S, z_S), if any (levels and columns from 1);
+/// nothing outside the grid or for NaN coordinates. Does not throw.
 std::optional<CellIndex> cell_at(const ShelfSpec& s, double y_S, double z_S);
 
 /// The Tello's state record from the plant's truth, before the SDK's quantisation (which
@@ -45,6 +46,7 @@ class ShelfCrossingMonitor {
     bool front = false;  ///< this update crossed the front face forward
     bool back = false;   ///< ... the back face
   };
+  /// Keeps a reference to `shelf`, which must outlive the monitor.
   ShelfCrossingMonitor(const ShelfSpec& shelf, const Eigen::Vector3d& p_WB_m);
   /// The body origin's next position; returns the faces crossed since the previous one.
   Faces update(const Eigen::Vector3d& p_WB_m);
