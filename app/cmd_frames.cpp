@@ -1,11 +1,12 @@
 // shelfcross frames --scenario FILE --out DIR [--condition NAME] [--check]: renders the
-// perception benchmark's frame set (bench/frame_set.hpp) into DIR, and with --check
+// perception benchmark's frame set (verification/frames/frame_set.hpp) into DIR, and with --check
 // flies the flight software over each sequence of the set and prints what it decided.
 #include <iostream>
 
-#include "bench/frame_set.hpp"
-#include "bench/pipeline_check.hpp"
 #include "command_registry.hpp"
+#include "verification/cosim.hpp"
+#include "verification/frames/frame_set.hpp"
+#include "verification/frames/pipeline_check.hpp"
 
 namespace shelfcross::app {
 namespace {
@@ -30,23 +31,23 @@ const CommandRegistration kFrames{
       return [o]() -> int {
         if (!o->condition.empty()) {
           bool known = false;
-          for (const bench::Condition& c : bench::frame_conditions()) known = known || o->condition == c.name;
+          for (const frames::Condition& c : frames::frame_conditions()) known = known || o->condition == c.name;
           if (!known) throw UsageError("--condition: unknown condition '" + o->condition + "'");
         }
         const verification::Scenario sc = verification::load_scenario(o->scenario);
         if (sc.warehouse.shelves.empty()) throw UsageError(o->scenario + ": the frame set needs a shelf");
-        const int n = bench::generate_frame_set(sc, o->out, o->condition);
+        const int n = frames::generate_frame_set(sc, o->out, o->condition);
         std::cout << "wrote " << n << " frames and manifest.csv to " << o->out << " (frame set version "
-                  << bench::kFrameSetVersion << ")\n";
+                  << frames::kFrameSetVersion << ")\n";
         if (!o->check) return 0;
-        const bench::FrameSet set = bench::load_frame_set(o->out, sc);
+        const frames::FrameSet set = frames::load_frame_set(o->out, sc);
         const flight_sw::FlightConfig config = verification::flight_config_for(sc, sc.camera);
-        const bench::TagComparison tags = bench::compare_tag_detection(set, config);
+        const frames::TagComparison tags = frames::compare_tag_detection(set, config);
         std::cout << tags.summary;
         bool all_same = tags.same;
-        for (const bench::Condition& c : bench::frame_conditions()) {
+        for (const frames::Condition& c : frames::frame_conditions()) {
           if (set.sequence(c.name).empty()) continue;
-          const bench::PipelineComparison cmp = bench::compare_pipelines(set, c.name, config);
+          const frames::PipelineComparison cmp = frames::compare_pipelines(set, c.name, config);
           std::cout << cmp.summary;
           all_same = all_same && cmp.same;
         }

@@ -18,6 +18,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/videoio.hpp>
 
+#include "shelfcross/cell_index.hpp"
 #include "verification/cosim.hpp"
 
 namespace shelfcross::app {
@@ -44,7 +45,7 @@ struct FrameAnnotations {
   TimeNs t_ns = 0;         ///< this picture's receive time
   bool damaged = false;
   std::string phase;
-  std::optional<flight_sw::CellIndex> target;
+  std::optional<CellIndex> target;
 
   // Computed from this picture (or from a picture identical to it, pixel for pixel).
   std::vector<flight_sw::TagTelemetry> tags;

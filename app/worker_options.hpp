@@ -8,6 +8,8 @@
 
 namespace shelfcross::app {
 
+/// Adds the three options to `sub`, writing into `limits` (which must outlive parsing); values
+/// outside their ranges are usage errors reported by CLI11 (exit code 2 in the program).
 inline void add_worker_limit_options(CLI::App& sub, verification::WorkerLimits& limits) {
   sub.add_option("--run-wall-factor", limits.wall_factor,
                  "a run whose worker process gives no result within max(--run-wall-floor, this x the scenario's "

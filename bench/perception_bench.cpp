@@ -33,10 +33,12 @@
 #include <opencv2/tracking.hpp>
 #include <opencv2/tracking/tracking_legacy.hpp>
 
-#include "bench/frame_set.hpp"
 #include "flight_sw/control.hpp"
+#include "verification/cosim.hpp"
+#include "verification/frames/frame_set.hpp"
 
 namespace shelfcross::bench {
+using namespace shelfcross::frames;  // the frame set this benchmark reads
 namespace {
 
 /// The calling thread's CPU time: on an idle core the same as wall time (everything runs on

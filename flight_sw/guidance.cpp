@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 
 #include "flight_sw/target_tracker.hpp"
+#include "shelfcross/rotation.hpp"
 
 namespace shelfcross::flight_sw {
 
@@ -158,7 +159,7 @@ VelocityCommand transfer_velocity(const FlightConfig& config, const Eigen::Vecto
   const StrategyParams& st = config.strategy;
   return velocity_in_body(
       capped(st.transfer_kp * e_O_m, st.transfer_speed_mps), yaw_O_rad,
-      std::clamp(st.transfer_yaw_kp * std::remainder(hold_yaw_O_rad - yaw_O_rad, 2.0 * std::numbers::pi),
+      std::clamp(st.transfer_yaw_kp * wrap_pi(hold_yaw_O_rad - yaw_O_rad),
                  -config.control.yaw_rate_max_radps, config.control.yaw_rate_max_radps));
 }
 

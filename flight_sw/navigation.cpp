@@ -6,6 +6,8 @@
 
 #include <opencv2/calib3d.hpp>
 
+#include "shelfcross/rotation.hpp"
+
 namespace shelfcross::flight_sw {
 
 std::optional<PoseEstimate> estimate_pose(const std::vector<cv::Point3d>& points_F_m,
@@ -40,10 +42,10 @@ std::optional<PoseEstimate> estimate_pose(const std::vector<cv::Point3d>& points
   const Eigen::Matrix3d R_FB = R_FC * rotation_body_from_camera(mount.pitch_rad).transpose();
   e.X_FB.linear() = R_FB;
   e.X_FB.translation() = e.X_FC.translation() - R_FB * mount.p_BC_B_m;
-  // ZYX Euler angles of R_FB.
-  e.yaw_rad = std::atan2(R_FB(1, 0), R_FB(0, 0));
-  e.pitch_rad = std::asin(std::clamp(-R_FB(2, 0), -1.0, 1.0));
-  e.roll_rad = std::atan2(R_FB(2, 1), R_FB(2, 2));
+  const Eigen::Vector3d rpy_FB = euler_zyx(R_FB);  // ZYX Euler angles of R_FB
+  e.roll_rad = rpy_FB.x();
+  e.pitch_rad = rpy_FB.y();
+  e.yaw_rad = rpy_FB.z();
   std::vector<cv::Point2d> reproj;
   cv::projectPoints(points_F_m, rvec, tvec, K, dist, reproj);
   double sq = 0.0;

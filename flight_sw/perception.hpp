@@ -20,6 +20,7 @@
 #include <opencv2/core.hpp>
 
 #include "flight_sw/config.hpp"
+#include "shelfcross/cell_index.hpp"
 #include "shelfcross/time.hpp"
 
 namespace shelfcross::flight_sw {
@@ -188,13 +189,6 @@ class BoxTracker {
   std::optional<cv::Rect2d> box_;
   TimeNs t_ns_ = 0;
   cv::Vec4d rate_per_s_{0, 0, 0, 0};  ///< d/dt of (centre x, centre y, width, height)
-};
-
-/// A cell by its shelf numbering: level from the floor, column from the left, both from 1.
-struct CellIndex {
-  int level = 0;
-  int column = 0;
-  bool operator==(const CellIndex&) const = default;
 };
 
 /// One picture as the phases see it: the image and what it is worth, decided once when it

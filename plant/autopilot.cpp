@@ -5,13 +5,13 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "shelfcross/rotation.hpp"
+
 namespace shelfcross::plant {
 namespace {
 
 constexpr double kDegPerRad = 57.29577951308232;
 constexpr double kOnGroundTolerance_m = 0.003;  // the plant holds a resting vehicle exactly at z_rest
-
-double wrap_pi(double a) { return std::remainder(a, 2.0 * 3.14159265358979323846); }
 
 Eigen::Vector3d heading_to_world(double yaw, const Eigen::Vector3d& v_H) {
   const double c = std::cos(yaw), s = std::sin(yaw);

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "shelfcross/rotation.hpp"
+
 namespace shelfcross::plant {
 
 Eigen::Matrix4d mixer_matrix(const VehicleParams& vehicle) {
@@ -127,11 +129,7 @@ std::array<double, kStateSize> rigid_body_rhs(const VehicleParams& vehicle, cons
 }
 
 Eigen::Vector3d euler_zyx_from_quaternion(const Eigen::Quaterniond& q_WB) {
-  const Eigen::Matrix3d R = q_WB.normalized().toRotationMatrix();
-  const double roll = std::atan2(R(2, 1), R(2, 2));
-  const double pitch = -std::asin(std::clamp(R(2, 0), -1.0, 1.0));
-  const double yaw = std::atan2(R(1, 0), R(0, 0));
-  return {roll, pitch, yaw};
+  return euler_zyx(q_WB.normalized().toRotationMatrix());
 }
 
 Eigen::Quaterniond quaternion_from_euler_zyx(double roll_rad, double pitch_rad, double yaw_rad) {

@@ -73,7 +73,8 @@ double net_rotor_speed_radps(const Eigen::Vector4d& rotor_speed_radps);
 
 /// Time derivative of the flat state y (kStateSize) given the held rotor command (already
 /// clamped to the motor's range) and the wind velocity in W. Allocation-free; uses the
-/// normalised quaternion for R_WB. Terms follow vehicle.switches.
+/// normalised quaternion for R_WB. Terms follow vehicle.switches. Requires `y` and `ydot` to
+/// point at kStateSize doubles each and a non-zero quaternion in y; does not throw.
 void rigid_body_rhs(const VehicleParams& vehicle, const double* y, const Eigen::Vector4d& rotor_cmd_radps,
                     const Eigen::Vector3d& wind_W_mps, double* ydot);
 
@@ -86,11 +87,13 @@ void pack_state(const RigidBodyState& x, double* y);
 RigidBodyState unpack_state(const double* y);
 
 /// ZYX Euler angles (roll, pitch, yaw) of R_WB = Rz(yaw) Ry(pitch) Rx(roll); pitch in
-/// [-pi/2, pi/2], roll and yaw in (-pi, pi].
+/// [-pi/2, pi/2], roll and yaw in (-pi, pi]: shelfcross::euler_zyx (shelfcross/rotation.hpp)
+/// of the normalised quaternion's matrix. Requires a non-zero quaternion (a zero one gives NaN).
 Eigen::Vector3d euler_zyx_from_quaternion(const Eigen::Quaterniond& q_WB);
+/// The unit quaternion of Rz(yaw) Ry(pitch) Rx(roll); any finite angles.
 Eigen::Quaterniond quaternion_from_euler_zyx(double roll_rad, double pitch_rad, double yaw_rad);
 
-/// Tilt: the angle between z_B and z_W (rad).
+/// Tilt: the angle between z_B and z_W (rad), in [0, pi]. Requires a non-zero quaternion.
 double tilt_rad(const Eigen::Quaterniond& q_WB);
 
 }  // namespace shelfcross::plant

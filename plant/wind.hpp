@@ -20,9 +20,12 @@ namespace shelfcross::plant {
 
 class WindModel {
  public:
+  /// Throws std::invalid_argument unless gust_sample_period_s > 0 (at least 1 ns),
+  /// gust_time_constant_s > 0 and gust_stddev_mps >= 0. Any seed.
   WindModel(const WindParams& params, std::uint64_t seed);
-  /// Wind velocity in W at t_ns >= 0. Queries may go in any order (going back replays the
-  /// stream from the seed).
+  /// Wind velocity in W at t_ns; requires t_ns >= 0 (asserted). Queries may go in any order
+  /// (going back replays the stream from the seed). With gust_stddev_mps 0 the steady wind,
+  /// drawing nothing.
   Eigen::Vector3d wind_W_mps(TimeNs t_ns);
   const WindParams& params() const { return params_; }
 

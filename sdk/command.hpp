@@ -50,7 +50,8 @@ struct ParseError {
 };
 
 /// Parses one command datagram. Leading/trailing whitespace and a trailing "\r\n" are ignored;
-/// verbs are case-sensitive lower case, as the firmware expects.
+/// verbs are case-sensitive lower case, as the firmware expects. Any bytes; never throws: a
+/// datagram that is not a command gives a ParseError saying why.
 std::variant<Command, ParseError> parse(std::string_view text);
 
 /// The verb as spelled on the wire ("takeoff", "battery?", ...).
@@ -92,6 +93,7 @@ struct ReplyTimeouts {
   TimeNs default_ns = 7 * kNsPerSecond;
   TimeNs takeoff_ns = 20 * kNsPerSecond;
   TimeNs land_ns = 7 * kNsPerSecond;
+  /// takeoff_ns for exactly "takeoff", land_ns for exactly "land", default_ns for any other text.
   TimeNs timeout_for(std::string_view text) const;
 };
 

@@ -16,7 +16,8 @@ namespace shelfcross::sdk {
 /// The Tello's video datagram size: every datagram of a frame but the last has this size.
 inline constexpr std::size_t kVideoDatagramBytes = 1460;
 
-/// The NAL unit types (nal_unit_type, 5 bits) of an Annex-B byte string, in order.
+/// The NAL unit types (nal_unit_type, 5 bits) of an Annex-B byte string, in order. Any bytes:
+/// none without a start code, and a start code at the very end adds nothing.
 std::vector<int> nal_unit_types(std::string_view annex_b);
 
 /// True when `bytes` begins with an Annex-B start code (00 00 01 or 00 00 00 01).

@@ -46,16 +46,20 @@ struct StrategyRow {
   double paper_time_s = 0.0;
 };
 
-/// The row of one strategy's campaign (runs 0..runs_requested-1).
+/// The row of one strategy's campaign (runs 0..runs_requested-1; other indices are ignored).
+/// Throws std::invalid_argument for a strategy not in compared_strategies() or a run whose
+/// stored metrics do not read (stored_metrics.hpp's rules).
 StrategyRow summarize_strategy(const std::string& strategy, const std::vector<RunRecord>& runs,
                                std::int64_t runs_requested);
 
-/// Table 2's shape in Markdown, the paper's numbers beside the measured ones.
+/// Table 2's shape in Markdown, the paper's numbers beside the measured ones. Throws
+/// std::invalid_argument for a row of an unknown strategy.
 std::string comparison_table_markdown(const std::vector<StrategyRow>& rows);
 
 /// Top (x, y) and side (x, z) views of the mission's shelves with one run's path per strategy:
 /// the lowest run index that succeeded for every strategy, else run 0. Returns that index
-/// (-1 when some strategy has no run 0).
+/// (-1 when some strategy has no run 0). Requires out_dir to exist; throws std::runtime_error
+/// when a PNG cannot be written.
 std::int64_t write_comparison_plots(const Scenario& nominal,
                                     const std::vector<std::vector<RunRecord>>& runs_per_strategy,
                                     const std::filesystem::path& out_dir);
@@ -71,7 +75,9 @@ struct CompareOptions {
 
 /// Runs (or resumes) the three campaigns and writes everything listed above. Returns
 /// compare.json's content: {"scenario", "seed", "runs", "plotted_run", "rows": [...],
-/// "complete": every campaign has all its runs}.
+/// "complete": every campaign has all its runs}. Creates out_dir. Throws what a campaign
+/// throws (campaign.hpp, results_store.hpp) and std::runtime_error when a file cannot be
+/// written; a stop request returns early with "complete": false.
 nlohmann::json run_comparison(const Scenario& nominal, std::int64_t runs, std::uint64_t seed,
                               const std::filesystem::path& out_dir, const CompareOptions& options);
 

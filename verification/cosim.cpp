@@ -17,6 +17,7 @@
 #include "render/ground_truth.hpp"
 #include "sdk/state_record.hpp"
 #include "shelfcross/random.hpp"
+#include "shelfcross/rotation.hpp"
 #include "verification/link_model.hpp"
 #include "verification/run_hash.hpp"
 #include "verification/run_metrics_json.hpp"
@@ -27,14 +28,6 @@
 namespace shelfcross::verification {
 namespace {
 
-using flight_sw::CellIndex;
-
-/// Rates may be non-integer (a scenario's frame rate is a number): event k of a clock of
-/// `mhz` millihertz is at floor(k * 1e12 / mhz) ns, exact in integers for k < 9.2e6.
-std::int64_t millihertz(double hz) { return std::llround(hz * 1000.0); }
-TimeNs event_time(std::int64_t k, std::int64_t mhz) { return k * (kNsPerSecond * 1000) / mhz; }
-
-double wrap_pi(double a) { return std::remainder(a, 2.0 * M_PI); }
 
 /// A message on its way to the flight software: a frame, a state datagram's text (parsed on
 /// arrival by the driver's parser, as tello_pilot does), or a reply.

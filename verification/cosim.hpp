@@ -35,6 +35,7 @@
 #include "flight_sw/flight_software.hpp"
 #include "plant/collision.hpp"
 #include "render/renderer.hpp"
+#include "shelfcross/cell_index.hpp"
 #include "verification/dispersion.hpp"
 #include "verification/metrics.hpp"
 #include "verification/scenario.hpp"
@@ -93,8 +94,8 @@ struct RunMetrics {
   int shelves_crossed = 0;                      ///< shelves crossed face to face through a cell
   int shelves_crossed_target = 0;               ///< ... through the cell the flight software chose there
   // Crossing, in shelf 0's frame S
-  std::optional<flight_sw::CellIndex> target;   ///< the flight software's chosen cell
-  std::optional<flight_sw::CellIndex> crossed;  ///< the cell entered and left face to face
+  std::optional<CellIndex> target;   ///< the flight software's chosen cell
+  std::optional<CellIndex> crossed;  ///< the cell entered and left face to face
   bool crossed_target = false;
   std::optional<double> entry_offset_y_m;       ///< body origin - cell centre, at the front face
   std::optional<double> entry_offset_z_m;
@@ -144,13 +145,17 @@ double mission_shelf_spacing_m(const Scenario& scenario);
 /// The flight software's configuration for a scenario: the known geometry of shelf 0, the
 /// layout (mission_shelf_count shelves at their spacing), the strategy (cosim.strategy), the
 /// camera it believes (calibration error included), the mount; tunables at their defaults.
+/// Requires at least one shelf; throws std::invalid_argument for an unknown cosim.strategy.
 flight_sw::FlightConfig flight_config_for(const Scenario& scenario, const CameraIntrinsics& believed_camera);
 
 /// The true box list of the mission's shelves as the flight software should report it.
 std::set<InventoryEntry> true_inventory(const Scenario& scenario);
 
 /// Runs one dispersed run. `renderer` must have been made for (or re-targeted at) the run's
-/// warehouse and camera; the harness uses it only from the calling thread.
+/// warehouse and camera; the harness uses it only from the calling thread. Throws
+/// std::invalid_argument for a scenario it cannot fly (a start not landed, an unknown
+/// strategy); what goes wrong during the run (a contact, a timeout, an exception of the
+/// flight software) is the run's outcome, not an exception.
 RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer,
                            const FrameObserver& observer = {});
 

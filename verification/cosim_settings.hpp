@@ -38,7 +38,8 @@ inline constexpr std::array<StepLatencyQuantile, 8> kMeasuredStepLatency{{
 }};
 
 /// The step time at quantile q in [0, 1] of the measured distribution: its inverse CDF,
-/// linear between the measured quantiles (q outside [0, 1] is clamped).
+/// linear between the measured quantiles (q outside [0, 1] is clamped; NaN is not allowed:
+/// std::clamp passes it through and the result is unspecified).
 inline double measured_step_latency_s(double q) {
   q = std::clamp(q, 0.0, 1.0);
   for (size_t i = 1; i < kMeasuredStepLatency.size(); ++i) {

@@ -29,6 +29,7 @@ nlohmann::json diff_json(const PairedDiff& diff, const DiffReportOptions& option
 std::string replay_command(const DiffSide& side, std::int64_t run);
 
 /// Writes everything listed above into `out_dir` (created); returns diff.json's content.
+/// Throws std::runtime_error when a file cannot be written.
 nlohmann::json write_diff_report(const PairedDiff& diff, const std::filesystem::path& out_dir,
                                  const DiffReportOptions& options = {});
 

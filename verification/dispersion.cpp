@@ -4,6 +4,7 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "shelfcross/rotation.hpp"
 #include "verification/scenario.hpp"
 
 namespace shelfcross::verification {
@@ -18,8 +19,6 @@ RandomStream parameter_stream(std::uint64_t run_seed, const std::string& name) {
   for (unsigned char c : name) h = (h ^ c) * 0x100000001b3ull;
   return RandomStream(run_seed ^ mix64(h), StreamId::dispersion);
 }
-
-double wrap_pi(double a) { return std::remainder(a, 2.0 * kPi); }
 
 }  // namespace
 

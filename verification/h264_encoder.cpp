@@ -8,23 +8,12 @@
 extern "C" {
 #include <libavcodec/avcodec.h>
 #include <libavutil/frame.h>
-#include <libavutil/log.h>
 #include <libavutil/opt.h>
 }
 
+#include "flight_sw/tello/h264_decoder.hpp"
+
 namespace shelfcross::verification {
-namespace {
-
-// FFmpeg's log stays quiet (as the decoder's does): the callers report what matters.
-void quiet_ffmpeg() {
-  static const bool once = [] {
-    av_log_set_level(AV_LOG_FATAL);
-    return true;
-  }();
-  (void)once;
-}
-
-}  // namespace
 
 struct H264Encoder::Impl {
   AVCodecContext* ctx = nullptr;
@@ -50,7 +39,7 @@ void keep_buffer(void*, std::uint8_t*) {}
 
 H264Encoder::H264Encoder(int width_px, int height_px, int fps, int key_interval, int qp, int slices)
     : impl_(std::make_unique<Impl>()) {
-  quiet_ffmpeg();
+  tello::quiet_ffmpeg();
   if (width_px < 2 || height_px < 2 || width_px % 2 || height_px % 2) {
     throw std::invalid_argument("H264Encoder: 4:2:0 needs an even width and height, got " + std::to_string(width_px) +
                                 " x " + std::to_string(height_px));

@@ -64,9 +64,12 @@ struct LinkSettings {
 /// one sent before it on the same channel.
 class LinkModel {
  public:
+  /// Requires settings checked by the scenario reader (latencies and jitters >= 0,
+  /// probabilities in [0, 1]); not checked again here. Any seed; does not throw.
   LinkModel(const LinkSettings& settings, std::uint64_t run_seed);
 
   /// When a frame captured at t_capture_ns reaches the flight software, or nothing if dropped.
+  /// On one channel an arrival never precedes the previous call's: order is kept in call order.
   std::optional<TimeNs> video_arrival(TimeNs t_capture_ns);
   /// When a state record or a reply sent at t_send_ns reaches the flight software.
   TimeNs state_arrival(TimeNs t_send_ns);

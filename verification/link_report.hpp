@@ -13,6 +13,8 @@ namespace shelfcross::verification {
 /// A markdown section, and link_loss.png in `dir` when any run of the sdk link carried video:
 /// runs binned by their measured video datagram loss (lost / sent, 0.5 % bins), each bin's
 /// runs, successes, rate and one-sided 95 % Clopper-Pearson lower bound; and the links' models.
+/// Requires `dir` to exist. Throws std::invalid_argument when a run's stored metrics do not
+/// read (stored_metrics.hpp) and std::runtime_error when the PNG cannot be written.
 std::string link_section(const std::vector<RunRecord>& runs, const std::filesystem::path& dir);
 
 }  // namespace shelfcross::verification

@@ -61,6 +61,8 @@ struct RunMargins {
 };
 
 /// The margins of a run of `nominal` from its stored outcome and metrics (run_metrics_json).
+/// Does not throw: a metric that is missing or not a number reads as NaN, and a margin made
+/// from it is NaN, which failed() counts as not failed.
 RunMargins run_margins(const Scenario& nominal, const std::string& outcome, const nlohmann::json& metrics);
 
 }  // namespace shelfcross::verification

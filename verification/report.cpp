@@ -7,6 +7,7 @@
 #include <optional>
 #include <sstream>
 
+#include "shelfcross/rotation.hpp"
 #include "verification/campaign.hpp"
 #include "verification/dispersion.hpp"
 #include "verification/link_report.hpp"
@@ -179,7 +180,7 @@ CampaignSummary write_campaign_report(const std::filesystem::path& dir) {
                  yaw = numbers(trace["yaw"]);
       top.add_line(x, y, colour);
       side.add_line(x, z, colour);
-      std::optional<flight_sw::CellIndex> target;
+      std::optional<CellIndex> target;
       if (stored.run) target = stored.run->target;
       if (trace["approach_start_s"].is_number() && target) {
         const double t0 = trace["approach_start_s"].get<double>();
@@ -192,7 +193,7 @@ CampaignSummary write_campaign_report(const std::filesystem::path& dir) {
           tt.push_back(t[i] - t0);
           ez.push_back(p_S.z() - c.z());
           ey.push_back(p_S.y() - c.y());
-          eyaw.push_back(std::remainder(yaw[i] - shelf.yaw_rad, 2 * M_PI) * 180.0 / M_PI);
+          eyaw.push_back(wrap_pi(yaw[i] - shelf.yaw_rad) * 180.0 / M_PI);
         }
         altitude.add_line(tt, ez, colour);
         heading.add_line(tt, eyaw, colour);

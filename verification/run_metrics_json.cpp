@@ -9,7 +9,7 @@ namespace {
 
 using nlohmann::json;
 
-json cell_json(const std::optional<flight_sw::CellIndex>& c) {
+json cell_json(const std::optional<CellIndex>& c) {
   return c ? json{{"level", c->level}, {"column", c->column}} : json(nullptr);
 }
 
@@ -20,10 +20,10 @@ json response_json(const std::optional<StepResponse>& r) {
           {"overshoot_abs", r->overshoot_abs},       {"peak_abs_error", r->peak_abs_error}};
 }
 
-std::optional<flight_sw::CellIndex> read_cell(StrictObject& parent, const std::string& key) {
+std::optional<CellIndex> read_cell(StrictObject& parent, const std::string& key) {
   auto o = parent.optional_object(key);
   if (!o) return std::nullopt;
-  flight_sw::CellIndex c;
+  CellIndex c;
   c.level = static_cast<int>(o->integer("level"));
   c.column = static_cast<int>(o->integer("column"));
   o->finish();

@@ -12,7 +12,8 @@ namespace shelfcross::verification {
 
 class SuccessBins {
  public:
-  /// Bins [k w, (k + 1) w) of width w > 0.
+  /// Bins [k w, (k + 1) w) of width w; requires w > 0 and finite values in add() (not
+  /// checked: a NaN value lands in an arbitrary bin).
   explicit SuccessBins(double width) : width_(width) {}
   void add(double value, bool success);
   bool empty() const { return counts_.empty(); }

@@ -28,10 +28,6 @@
 namespace shelfcross::verification {
 namespace {
 
-/// Rates may be non-integer (a scenario's frame rate is a number): event k of a clock of
-/// `mhz` millihertz is at floor(k * 1e12 / mhz) ns, as in the co-simulation.
-std::int64_t millihertz(double hz) { return std::llround(hz * 1000.0); }
-TimeNs event_time(std::int64_t k, std::int64_t mhz) { return k * (kNsPerSecond * 1000) / mhz; }
 TimeNs ms_to_ns(double ms) { return static_cast<TimeNs>(std::llround(ms * 1e6)); }
 
 /// mean + N(0, sigma) truncated at +-3 sigma, never below 0, in ns. No draw when sigma is 0,

@@ -64,11 +64,11 @@
 
 #include <Eigen/Geometry>
 
-#include "flight_sw/perception.hpp"
 #include "flight_sw/tello/udp_socket.hpp"
-#include "render/renderer.hpp"
 #include "plant/collision.hpp"
 #include "plant/simulated_tello.hpp"
+#include "render/renderer.hpp"
+#include "shelfcross/cell_index.hpp"
 #include "shelfcross/random.hpp"
 #include "verification/dispersion.hpp"
 #include "verification/metrics.hpp"
@@ -177,7 +177,7 @@ struct EmulatorReport {
   bool flew = false;
   bool landed = true;
   std::optional<plant::Contact> contact;          ///< the first contact with a shelf part or a wall
-  std::optional<flight_sw::CellIndex> crossed;    ///< shelf 0's cell crossed face to face
+  std::optional<CellIndex> crossed;    ///< shelf 0's cell crossed face to face
   std::optional<double> entry_offset_y_m, entry_offset_z_m;
   std::optional<double> min_clearance_m;          ///< to any shelf part near shelf 0
   std::set<InventoryEntry> inventory_truth;       ///< (marker id, shelf, level, column) of shelf 0

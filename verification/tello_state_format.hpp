@@ -13,7 +13,8 @@ namespace shelfcross::verification {
 /// The simulated Tello's state datagram (SDK 2.0 layout, no mission pad seen), from a record
 /// in shelfcross units, with the inverse of sdk::parse_state_record's conversion, rounding the
 /// way the drone reports: integers for attitude, velocity, heights, battery and temperatures.
-/// `battery_pct`, temperatures and times come from the record too.
+/// `battery_pct`, temperatures and times come from the record too. Total for finite fields
+/// (no throw); a non-finite or out-of-range field gives an unspecified integer in its place.
 std::string format_state_record(const StateRecord& record);
 
 }  // namespace shelfcross::verification

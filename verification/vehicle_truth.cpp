@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "sdk/state_record.hpp"
+#include "shelfcross/rotation.hpp"
 
 namespace shelfcross::verification {
 
@@ -14,11 +15,6 @@ plant::AutopilotParams autopilot_params_for(const Scenario& scenario) {
   return p;
 }
 
-using flight_sw::CellIndex;
-
-Eigen::Vector3d euler_zyx(const Eigen::Matrix3d& R) {
-  return {std::atan2(R(2, 1), R(2, 2)), std::asin(std::clamp(-R(2, 0), -1.0, 1.0)), std::atan2(R(1, 0), R(0, 0))};
-}
 
 Eigen::Isometry3d body_pose(const plant::RigidBodyState& s) {
   Eigen::Isometry3d X = Eigen::Isometry3d::Identity();

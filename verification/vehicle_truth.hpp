@@ -8,9 +8,10 @@
 
 #include <Eigen/Geometry>
 
-#include "flight_sw/perception.hpp"
 #include "plant/dynamics.hpp"
 #include "plant/params.hpp"
+#include "shelfcross/cell_index.hpp"
+#include "shelfcross/rotation.hpp"
 #include "shelfcross/sdk_messages.hpp"
 #include "shelfcross/warehouse.hpp"
 #include "verification/scenario.hpp"
@@ -22,14 +23,12 @@ namespace shelfcross::verification {
 /// autopilot answers `battery?` and fills every state record from it).
 plant::AutopilotParams autopilot_params_for(const Scenario& scenario);
 
-/// ZYX Euler angles (roll, pitch, yaw) of R_WB, the convention of sdk_messages.hpp.
-Eigen::Vector3d euler_zyx(const Eigen::Matrix3d& R);
-
 /// X_WB of a plant state.
 Eigen::Isometry3d body_pose(const plant::RigidBodyState& s);
 
-/// The cell of shelf `s` whose opening contains (y_S, z_S), if any (levels and columns from 1).
-std::optional<flight_sw::CellIndex> cell_at(const ShelfSpec& s, double y_S, double z_S);
+/// The cell of shelf `s` whose opening contains (y_S, z_S), if any (levels and columns from 1);
+/// nothing outside the grid or for NaN coordinates. Does not throw.
+std::optional<CellIndex> cell_at(const ShelfSpec& s, double y_S, double z_S);
 
 /// The Tello's state record from the plant's truth, before the SDK's quantisation (which
 /// format_state_record applies, tello_state_format.hpp): attitude from R_WB, velocity in the heading frame,
@@ -47,6 +46,7 @@ class ShelfCrossingMonitor {
     bool front = false;  ///< this update crossed the front face forward
     bool back = false;   ///< ... the back face
   };
+  /// Keeps a reference to `shelf`, which must outlive the monitor.
   ShelfCrossingMonitor(const ShelfSpec& shelf, const Eigen::Vector3d& p_WB_m);
   /// The body origin's next position; returns the faces crossed since the previous one.
   Faces update(const Eigen::Vector3d& p_WB_m);
@@ -54,7 +54,7 @@ class ShelfCrossingMonitor {
   /// The latest body origin in S.
   const Eigen::Vector3d& p_S_m() const { return p_S_m_; }
   /// The cell entered and left face to face (the latest such crossing).
-  const std::optional<flight_sw::CellIndex>& crossed() const { return crossed_; }
+  const std::optional<CellIndex>& crossed() const { return crossed_; }
   /// Body origin - cell centre at the latest front-face crossing inside a cell.
   const std::optional<double>& entry_offset_y_m() const { return entry_offset_y_m_; }
   const std::optional<double>& entry_offset_z_m() const { return entry_offset_z_m_; }
@@ -63,7 +63,7 @@ class ShelfCrossingMonitor {
   const ShelfSpec& shelf_;
   Eigen::Isometry3d X_SW_;
   Eigen::Vector3d p_S_m_;
-  std::optional<flight_sw::CellIndex> entry_cell_, crossed_;
+  std::optional<CellIndex> entry_cell_, crossed_;
   std::optional<double> entry_offset_y_m_, entry_offset_z_m_;
 };
 

@@ -19,7 +19,6 @@ extern "C" {
 }
 
 namespace shelfcross::tello {
-namespace {
 
 // FFmpeg's decoders print every damaged macroblock; the receiver counts errors itself.
 void quiet_ffmpeg() {
@@ -29,8 +28,6 @@ void quiet_ffmpeg() {
   }();
   (void)once;
 }
-
-}  // namespace
 
 // ---- Decoder ----
 

@@ -15,6 +15,11 @@
 
 namespace shelfcross::tello {
 
+/// Sets FFmpeg's process-wide log level to fatal messages only, once (thread-safe; later calls
+/// do nothing). The decoder and the simulated Tello's encoder both call it: their callers
+/// report what matters (damage counts, errors) themselves.
+void quiet_ffmpeg();
+
 /// What decoding one access unit gave.
 struct DecodeResult {
   int pictures = 0;       ///< pictures completed by these bytes

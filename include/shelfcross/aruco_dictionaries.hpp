@@ -32,6 +32,8 @@ inline constexpr ArucoDictionaryEntry kArucoDictionaries[] = {
     {"DICT_APRILTAG_36h11", cv::aruco::DICT_APRILTAG_36h11, 587},
 };
 
+/// The entry of OpenCV's dictionary name ("DICT_4X4_50", case-sensitive), or nullptr for a name
+/// not in the table.
 inline const ArucoDictionaryEntry* find_aruco_dictionary(std::string_view name) {
   for (const ArucoDictionaryEntry& e : kArucoDictionaries) {
     if (name == e.name) return &e;

@@ -44,6 +44,7 @@ struct CameraMount {
 
 /// R_BC: the rotation taking camera-frame vectors to body-frame vectors, for a mount pitch.
 /// R_BC = R_y(pitch) * R_BC0 with R_BC0 the zero-pitch axes above (columns x_C, y_C, z_C in B).
+/// Any finite pitch; a rotation matrix (orthonormal, det +1).
 inline Eigen::Matrix3d rotation_body_from_camera(double mount_pitch_rad) {
   Eigen::Matrix3d R_BC0;
   R_BC0 << 0, 0, 1,

@@ -70,7 +70,9 @@ class RandomStream {
     return result;
   }
 
-  /// Uniform in [0, 1) with 53 random bits.
+  /// Uniform in [0, 1) with 53 random bits. uniform01, uniform and bernoulli take exactly one
+  /// 64-bit output of the stream and normal two, whatever their arguments (so a draw's place in
+  /// its stream never depends on a value); below takes one or more (rejection).
   double uniform01() { return static_cast<double>(next_u64() >> 11) * 0x1.0p-53; }
 
   double uniform(double lo, double hi) { return lo + (hi - lo) * uniform01(); }
@@ -84,9 +86,11 @@ class RandomStream {
   }
   double normal(double mean, double stddev) { return mean + stddev * normal(); }
 
+  /// True with probability p: never for p <= 0, always for p >= 1.
   bool bernoulli(double p) { return uniform01() < p; }
 
-  /// Uniform integer in [0, n), unbiased (rejection of the short last bucket), n > 0.
+  /// Uniform integer in [0, n), unbiased (rejection of the short last bucket). Requires n > 0
+  /// (n = 0 divides by zero).
   std::uint64_t below(std::uint64_t n) {
     const std::uint64_t limit = ~std::uint64_t{0} - (~std::uint64_t{0} % n);
     std::uint64_t x;

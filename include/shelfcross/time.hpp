@@ -21,6 +21,14 @@ constexpr TimeNs tick_time_ns(std::int64_t k, std::int64_t rate_hz) {
   return k * kNsPerSecond / rate_hz;
 }
 
+/// A rate given in hertz (a configuration value, possibly fractional: 29.97) as an integer
+/// count of millihertz, rounded to the nearest. Requires 0 < rate_hz < 9.2e15.
+inline std::int64_t millihertz(double rate_hz) { return std::llround(rate_hz * 1000.0); }
+
+/// The event clock: the k-th event (first at 0) of a clock at `mhz` millihertz is at
+/// t_k = floor(k * 1e12 / mhz) ns, exact in integers for k < 9.2e6. Requires mhz > 0.
+constexpr TimeNs event_time(std::int64_t k, std::int64_t mhz) { return k * (kNsPerSecond * 1000) / mhz; }
+
 /// Seconds (a configuration value) to nanoseconds, rounded to the nearest nanosecond.
 inline TimeNs seconds_to_ns(double t_s) { return static_cast<TimeNs>(std::llround(t_s * 1e9)); }
 

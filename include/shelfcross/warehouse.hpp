@@ -87,6 +87,7 @@ struct Warehouse {
 // ---- Conventions stated as functions (positions in the shelf frame S) ----
 
 /// Lateral position y_S of the centre line of column boundary i (0 = left edge .. ncols).
+/// Requires 0 <= i <= ncols (not checked: a larger i reads past column_pitch_m).
 inline double post_y_S_m(const ShelfSpec& s, int i) {
   double width = 0.0;
   for (double w : s.column_pitch_m) width += w;
@@ -96,13 +97,15 @@ inline double post_y_S_m(const ShelfSpec& s, int i) {
 }
 
 /// Height z_S of the centre line of level boundary j (0 = lowest beam .. nrows).
+/// Requires 0 <= j <= nrows (not checked: a larger j reads past row_pitch_m).
 inline double beam_z_S_m(const ShelfSpec& s, int j) {
   double z = s.base_height_m;
   for (int k = 0; k < j; ++k) z += s.row_pitch_m[static_cast<size_t>(k)];
   return z;
 }
 
-/// Centre of cell (level, column), both from 1, on the front-face plane x_S = 0.
+/// Centre of cell (level, column), both from 1, on the front-face plane x_S = 0. Requires
+/// 1 <= level <= nrows and 1 <= column <= ncols (not checked, as above).
 inline Eigen::Vector3d cell_centre_S_m(const ShelfSpec& s, int level, int column) {
   return {0.0, 0.5 * (post_y_S_m(s, column - 1) + post_y_S_m(s, column)),
           0.5 * (beam_z_S_m(s, level - 1) + beam_z_S_m(s, level))};

@@ -143,7 +143,7 @@ TEST(RenderedFrames, PnPPoseWithinTwoCentimetresAndOneDegreeAtOnePointFiveMetres
   render::Renderer renderer(s.warehouse, s.camera, options);
   const render::GroundTruthProjector truth(s.warehouse, s.camera);
   flight_sw::TagDetector detector(config.perception);
-  const flight_sw::CellIndex cell{3, 3};  // an empty cell of the default shelf
+  const CellIndex cell{3, 3};  // an empty cell of the default shelf
   const Eigen::Vector3d c_S = cell_centre_S_m(shelf, cell.level, cell.column);
   struct Case { double dy, dz, yaw_deg; };
   for (const Case& k : {Case{0.0, 0.0, 0.0}, Case{0.06, -0.04, 3.0}, Case{-0.08, 0.05, -5.0}}) {

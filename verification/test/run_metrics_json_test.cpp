@@ -34,8 +34,8 @@ RunMetrics full_metrics() {
   m.shelves = 3;
   m.shelves_crossed = 2;
   m.shelves_crossed_target = 1;
-  m.target = flight_sw::CellIndex{1, 2};
-  m.crossed = flight_sw::CellIndex{0, 2};
+  m.target = CellIndex{1, 2};
+  m.crossed = CellIndex{0, 2};
   m.crossed_target = true;
   m.entry_offset_y_m = -0.0425;
   m.entry_offset_z_m = 0.0175;

@@ -1,136 +1,32 @@
-#pragma once
-// The perception benchmark's frame set: a fixed, versioned list of camera poses and
-// conditions over a scenario (by default scenarios/paper_test_shelf.yaml), rendered by the
-// co-simulation's renderer at the scenario's 960 x 720 camera. Shared by
-// `shelfcross frames` (app/cmd_frames.cpp), which writes the set, and the benchmark
-// (bench/perception_bench.cpp), which reads it or writes it on first use. Header-only because
-// the benchmark program and the `shelfcross` program link no common library of bench code.
-//
-// Versions: 1, the first renderer (undistorted pinhole render + bilinear lens
-// remap); 2, the lens in the geometry, point-sampled at pixel centres: edge pixels
-// change (measured on four poses of the test shelf: 1.4-5.1 % of pixels differ, mean absolute
-// difference 0.18-0.62 grey levels, all within 2 px of an edge but for the old renderer's
-// darkened top row and right column, where its remap sampled past its render); 3, the
-// adaptive lens grid (lens_mesh.hpp: a k-d tree of cells, large where the lens bends little):
-// faces are split at other places, so drawn edges move by up to the chord tolerance (0.25 px)
-// and edge pixels change: over the 428 noise-free frames, 186,239 of 295.8 million pixels
-// (0.063 %; at most 0.12 % of one frame) differ from version 2, 98.9 % of them within 2 px of
-// an edge, each a pixel centre that changed face (differences up to 202 grey levels; mean
-// absolute difference over all pixels 0.033). `--check` gives the same decisions as on
-// version 2.
-//
-// What the set holds (kFrameSetVersion 3). For each condition (nominal light; dim, light x0.5;
-// bright, light x1.6; behind: a second shelf 1.2 m behind shelf 0 with boxes in every cell
-// that is empty on shelf 0, so its tags and markers show through the front shelf's empty
-// cells), one video sequence at 30 fps:
-//   steps 0..kViewpointFrames-1   hovering at the optimal viewpoint (flight_sw::
-//                                 optimal_viewpoint_G), a few mm and mrad of deterministic
-//                                 jitter: group "viewpoint"
-//   then kApproachFrames frames   a straight line from the viewpoint to kApproachEndRange_m in
-//                                 front of the target cell (about 0.5 m/s, twice the flight
-//                                 software's forward speed), heading turning toward the cell
-//                                 centre at up to kApproachYawRate_radps: group
-//                                 "approach" while the camera is farther than kCloseRange_m
-//                                 from the tag plane, "close" nearer (corner tags leave the
-//                                 view at the end)
-// plus, nominal only, stills of group "far" (FindShelf: 3 and 4.2 m away, a shelf half out of
-// view, a bare wall). The target cell is the empty cell the flight software picks (the one
-// whose corner tags' centroid projects nearest the principal point from the viewpoint).
-//
-// Files: <dir>/manifest.csv and one noise-free PNG per frame (PNG keeps flat renders small).
-// The loader adds the sensor noise of the scenario's cosim.render_noise_stddev with
-// render::SensorNoise and the frame's seed: the very image the renderer would have produced
-// with that noise, as the co-simulation feeds the flight software. The manifest's header
-// names the version and a hash of the scenario; a mismatch means "regenerate".
-// Deterministic: same scenario, same code, same machine and driver give the same images.
+#include "verification/frames/frame_set.hpp"
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
-#include <deque>
-#include <filesystem>
+#include <cstdio>
 #include <fstream>
-#include <optional>
 #include <sstream>
 #include <stdexcept>
-#include <string>
-#include <vector>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "flight_sw/flight_software.hpp"
 #include "flight_sw/navigation.hpp"
 #include "render/ground_truth.hpp"
 #include "render/noise.hpp"
 #include "render/renderer.hpp"
 #include "shelfcross/random.hpp"
+#include "shelfcross/rotation.hpp"
 #include "verification/cosim.hpp"
-#include "verification/scenario.hpp"
 
-namespace shelfcross::bench {
+namespace shelfcross::frames {
 
-inline constexpr int kFrameSetVersion = 3;
-inline constexpr std::int64_t kFrameRateHz = 30;
-inline constexpr int kViewpointFrames = 6;
-inline constexpr int kApproachFrames = 100;
-/// Heading rate limit on the approach path (the flight software commands at most 0.8 rad/s).
-inline constexpr double kApproachYawRate_radps = 0.5;
-inline constexpr double kApproachEndRange_m = 0.42;  ///< camera to the tag plane, last frame
-inline constexpr double kCloseRange_m = 0.80;        ///< "close" below this range
-
-/// A lighting / scene variant of the scenario.
-struct Condition {
-  const char* name;
-  double light_scale;
-  bool shelf_behind;
-};
-
-inline const std::vector<Condition>& frame_conditions() {
+const std::vector<Condition>& frame_conditions() {
   static const std::vector<Condition> c{
       {"nominal", 1.0, false}, {"dim", 0.5, false}, {"bright", 1.6, false}, {"behind", 1.0, true}};
   return c;
 }
 
-struct FrameSpec {
-  std::string name;       ///< file stem, unique
-  std::string group;      ///< far | viewpoint | approach | close
-  std::string condition;  ///< nominal | dim | bright | behind
-  int step = -1;          ///< index in its condition's video sequence; -1 for a still
-  Eigen::Vector3d p_WB_m = Eigen::Vector3d::Zero();
-  double yaw_rad = 0.0;
-  double range_m = 0.0;  ///< camera to shelf 0's tag plane along its normal
-  std::uint64_t noise_seed = 0;
-};
-
-struct Frame {
-  FrameSpec spec;
-  cv::Mat bgr;  ///< with sensor noise
-};
-
-struct FrameSet {
-  std::string source;  ///< directory read
-  std::vector<Frame> frames;
-  /// Frames of one condition's sequence, in step order.
-  std::vector<const Frame*> sequence(const std::string& condition) const {
-    std::vector<const Frame*> s;
-    for (const Frame& f : frames) {
-      if (f.spec.condition == condition && f.spec.step >= 0) s.push_back(&f);
-    }
-    std::sort(s.begin(), s.end(), [](const Frame* a, const Frame* b) { return a->spec.step < b->spec.step; });
-    return s;
-  }
-  std::vector<const Frame*> group(const std::string& group) const {
-    std::vector<const Frame*> s;
-    for (const Frame& f : frames) {
-      if (f.spec.group == group) s.push_back(&f);
-    }
-    return s;
-  }
-};
-
-/// The scenario of one condition: shelf 0 untouched, light scaled, maybe a shelf behind.
-inline verification::Scenario condition_scenario(const verification::Scenario& base, const Condition& c) {
+verification::Scenario condition_scenario(const verification::Scenario& base, const Condition& c) {
   verification::Scenario s = base;
   s.warehouse.lighting.ambient *= c.light_scale;
   s.warehouse.lighting.directional *= c.light_scale;
@@ -161,8 +57,7 @@ inline verification::Scenario condition_scenario(const verification::Scenario& b
   return s;
 }
 
-/// FNV-1a of the scenario's fully written form.
-inline std::string scenario_hash(const verification::Scenario& s) {
+std::string scenario_hash(const verification::Scenario& s) {
   std::uint64_t h = 0xcbf29ce484222325ull;
   for (unsigned char ch : verification::write_scenario(s)) h = (h ^ ch) * 0x100000001b3ull;
   std::ostringstream os;
@@ -170,9 +65,9 @@ inline std::string scenario_hash(const verification::Scenario& s) {
   return os.str();
 }
 
-namespace detail {
+namespace {
 
-inline Eigen::Isometry3d body_pose(const Eigen::Vector3d& p_WB_m, double yaw_rad) {
+Eigen::Isometry3d body_pose(const Eigen::Vector3d& p_WB_m, double yaw_rad) {
   Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
   X.linear() = Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   X.translation() = p_WB_m;
@@ -181,29 +76,26 @@ inline Eigen::Isometry3d body_pose(const Eigen::Vector3d& p_WB_m, double yaw_rad
 
 /// Grid frame G (flight_sw/navigation.hpp) in shelf 0's frame S: G's origin is the grid
 /// centre on the front bars' centre plane, axes as S.
-inline Eigen::Vector3d grid_origin_S(const ShelfSpec& shelf) {
+Eigen::Vector3d grid_origin_S(const ShelfSpec& shelf) {
   const double top = beam_z_S_m(shelf, static_cast<int>(shelf.row_pitch_m.size()));
   return {0.0, 0.0, 0.5 * (shelf.base_height_m + top)};
 }
 
-}  // namespace detail
+}  // namespace
 
-/// Camera range to the tag plane of shelf 0 for a body pose (along the shelf normal).
-inline double range_to_tags_m(const verification::Scenario& sc, const flight_sw::FlightConfig& config,
-                              const Eigen::Vector3d& p_WB_m, double yaw_rad) {
+double range_to_tags_m(const verification::Scenario& sc, const flight_sw::FlightConfig& config,
+                       const Eigen::Vector3d& p_WB_m, double yaw_rad) {
   const Eigen::Isometry3d X_WS = shelf_pose_W(sc.warehouse.shelves.front());
-  const Eigen::Vector3d p_WC = detail::body_pose(p_WB_m, yaw_rad) * sc.camera_mount.p_BC_B_m;
+  const Eigen::Vector3d p_WC = body_pose(p_WB_m, yaw_rad) * sc.camera_mount.p_BC_B_m;
   return -(X_WS.inverse() * p_WC).x() - config.shelf.tag_offset_m;
 }
 
-/// The target cell: among shelf 0's empty cells the vehicle fits through, the one whose
-/// corner tags' centroid projects nearest the principal point from camera pose X_WC.
-inline flight_sw::CellIndex expected_target(const verification::Scenario& sc, const flight_sw::FlightConfig& config,
-                                            const Eigen::Isometry3d& X_WC) {
+CellIndex expected_target(const verification::Scenario& sc, const flight_sw::FlightConfig& config,
+                          const Eigen::Isometry3d& X_WC) {
   const ShelfSpec& shelf = sc.warehouse.shelves.front();
   const render::GroundTruthProjector gt(sc.warehouse, sc.camera);
   const Eigen::Isometry3d X_WS = shelf_pose_W(shelf);
-  std::optional<flight_sw::CellIndex> best;
+  std::optional<CellIndex> best;
   double best_d = 0.0;
   for (int level = 1; level <= config.shelf.levels(); ++level) {
     for (int column = 1; column <= config.shelf.columns(); ++column) {
@@ -230,7 +122,7 @@ inline flight_sw::CellIndex expected_target(const verification::Scenario& sc, co
       if (!all) continue;
       const double d = std::hypot(c.x - sc.camera.cx_px, c.y - sc.camera.cy_px);
       if (!best || d < best_d) {
-        best = flight_sw::CellIndex{level, column};
+        best = CellIndex{level, column};
         best_d = d;
       }
     }
@@ -239,19 +131,18 @@ inline flight_sw::CellIndex expected_target(const verification::Scenario& sc, co
   return *best;
 }
 
-/// The frame list for a scenario (no rendering).
-inline std::vector<FrameSpec> frame_specs(const verification::Scenario& sc) {
+std::vector<FrameSpec> frame_specs(const verification::Scenario& sc) {
   if (sc.warehouse.shelves.empty()) throw std::runtime_error("frame set: the scenario has no shelf");
   const flight_sw::FlightConfig config = verification::flight_config_for(sc, sc.camera);
   const ShelfSpec& shelf = sc.warehouse.shelves.front();
   const Eigen::Isometry3d X_WS = shelf_pose_W(shelf);
-  const Eigen::Vector3d g_S = detail::grid_origin_S(shelf);
+  const Eigen::Vector3d g_S = grid_origin_S(shelf);
   const Eigen::Vector3d vp_S =
       g_S + flight_sw::optimal_viewpoint_G(config.shelf, config.camera, config.mount, config.mission.viewpoint_margin);
   const auto camera_at = [&](const Eigen::Vector3d& p_S, double yaw_S) {
-    return render::camera_pose_W(detail::body_pose(X_WS * p_S, shelf.yaw_rad + yaw_S), sc.camera_mount);
+    return render::camera_pose_W(body_pose(X_WS * p_S, shelf.yaw_rad + yaw_S), sc.camera_mount);
   };
-  const flight_sw::CellIndex target = expected_target(sc, config, camera_at(vp_S, 0.0));
+  const CellIndex target = expected_target(sc, config, camera_at(vp_S, 0.0));
   const Eigen::Vector3d cell_S = cell_centre_S_m(shelf, target.level, target.column);
   // Last pose: on the cell normal, camera kApproachEndRange_m in front of the tag plane.
   const Eigen::Vector3d end_S(-(kApproachEndRange_m + config.shelf.tag_offset_m) - sc.camera_mount.p_BC_B_m.x(),
@@ -267,7 +158,7 @@ inline std::vector<FrameSpec> frame_specs(const verification::Scenario& sc) {
     f.condition = std::move(condition);
     f.step = step;
     f.p_WB_m = X_WS * p_S;
-    f.yaw_rad = std::remainder(shelf.yaw_rad + yaw_S, 2.0 * M_PI);
+    f.yaw_rad = wrap_pi(shelf.yaw_rad + yaw_S);
     f.range_m = range_to_tags_m(sc, config, f.p_WB_m, f.yaw_rad);
     f.noise_seed = mix64(0xBE7C4F2A3E5D0001ull + counter++);
     specs.push_back(std::move(f));
@@ -309,17 +200,14 @@ inline std::vector<FrameSpec> frame_specs(const verification::Scenario& sc) {
   return specs;
 }
 
-// ---- Files ----
-
-inline std::string manifest_header(const verification::Scenario& sc) {
+std::string manifest_header(const verification::Scenario& sc) {
   std::ostringstream os;
   os << "# shelfcross bench frames version " << kFrameSetVersion << " scenario " << sc.name << " hash "
      << scenario_hash(sc) << " noise_stddev " << sc.cosim.render_noise_stddev;
   return os.str();
 }
 
-/// Why the set in `dir` cannot be used for `sc` (missing, other version or scenario), or empty.
-inline std::optional<std::string> frame_set_stale(const std::filesystem::path& dir, const verification::Scenario& sc) {
+std::optional<std::string> frame_set_stale(const std::filesystem::path& dir, const verification::Scenario& sc) {
   std::ifstream in(dir / "manifest.csv");
   if (!in) return "no " + (dir / "manifest.csv").string();
   std::string first;
@@ -328,10 +216,8 @@ inline std::optional<std::string> frame_set_stale(const std::filesystem::path& d
   return std::nullopt;
 }
 
-/// Renders the set of `sc` into `dir` (created). `only_condition` non-empty: that condition's
-/// sequence only (and the far stills if nominal). Returns the number of frames written.
-inline int generate_frame_set(const verification::Scenario& sc, const std::filesystem::path& dir,
-                              const std::string& only_condition = "") {
+int generate_frame_set(const verification::Scenario& sc, const std::filesystem::path& dir,
+                       const std::string& only_condition) {
   std::filesystem::create_directories(dir);
   const std::vector<FrameSpec> specs = frame_specs(sc);
   std::ofstream manifest(dir / "manifest.csv.tmp");
@@ -351,7 +237,7 @@ inline int generate_frame_set(const verification::Scenario& sc, const std::files
       else renderer->set_warehouse(csc.warehouse);
       current = f.condition;
     }
-    const cv::Mat bgr = renderer->render(render::camera_pose_W(detail::body_pose(f.p_WB_m, f.yaw_rad), sc.camera_mount));
+    const cv::Mat bgr = renderer->render(render::camera_pose_W(body_pose(f.p_WB_m, f.yaw_rad), sc.camera_mount));
     const std::string file = (dir / (f.name + ".png")).string();
     if (!cv::imwrite(file, bgr, {cv::IMWRITE_PNG_COMPRESSION, 3})) throw std::runtime_error("cannot write " + file);
     manifest << f.name << ',' << f.group << ',' << f.condition << ',' << f.step << ',' << f.p_WB_m.x() << ','
@@ -364,8 +250,7 @@ inline int generate_frame_set(const verification::Scenario& sc, const std::files
   return written;
 }
 
-/// Reads a set written by generate_frame_set for `sc` (throws std::runtime_error if stale).
-inline FrameSet load_frame_set(const std::filesystem::path& dir, const verification::Scenario& sc) {
+FrameSet load_frame_set(const std::filesystem::path& dir, const verification::Scenario& sc) {
   if (auto why = frame_set_stale(dir, sc)) throw std::runtime_error("frame set: " + *why);
   std::ifstream in(dir / "manifest.csv");
   std::string line;
@@ -406,9 +291,7 @@ inline FrameSet load_frame_set(const std::filesystem::path& dir, const verificat
   return set;
 }
 
-/// A folder of recorded images (png, jpg, jpeg, bmp; sorted by name) as one sequence of
-/// condition and group "recorded"; images of another size are resized to width x height.
-inline FrameSet load_image_folder(const std::filesystem::path& dir, int width_px, int height_px) {
+FrameSet load_image_folder(const std::filesystem::path& dir, int width_px, int height_px) {
   std::vector<std::filesystem::path> files;
   for (const auto& e : std::filesystem::directory_iterator(dir)) {
     std::string ext = e.path().extension().string();
@@ -436,99 +319,4 @@ inline FrameSet load_image_folder(const std::filesystem::path& dir, int width_px
   return set;
 }
 
-// ---- Driving the flight software with a sequence ----
-
-/// Feeds a FlightSoftware as the co-simulation would, without a vehicle: the opening
-/// exchange (every non-rc command answered "ok" 20 ms later), then frames at kFrameRateHz in
-/// order. Only frame() is the flight software's per-frame step; replies due before a frame are
-/// handed over first, outside it (prepare()), so a caller can time the frame step alone.
-class SequenceDriver {
- public:
-  explicit SequenceDriver(const flight_sw::FlightConfig& config) : fsw_(config) {
-    handle(fsw_.start(0));
-    while (fsw_.phase() != flight_sw::Phase::WaitVideo && !fsw_.finished() && t_ns_ < seconds_to_ns(5.0)) {
-      t_ns_ += 10'000'000;
-      prepare();
-      handle(fsw_.step(flight_sw::ClockTick{t_ns_}));
-    }
-  }
-  /// Advances to the next frame time and hands over the replies due by then.
-  const CameraFrame& prepare_frame(const cv::Mat& bgr) {
-    ++k_;
-    t_ns_ = std::max(t_ns_, tick_time_ns(k_, kFrameRateHz));
-    prepare();
-    frame_.t_ns = t_ns_;
-    frame_.index = k_;
-    frame_.bgr = bgr;
-    return frame_;
-  }
-  /// The step on the prepared frame.
-  void step_frame() { handle(fsw_.step(frame_)); }
-  flight_sw::FlightSoftware& fsw() { return fsw_; }
-
- private:
-  void prepare() {
-    while (!replies_.empty() && replies_.front().t_ns <= t_ns_) {
-      const SdkReply r = replies_.front();
-      replies_.pop_front();
-      handle(fsw_.step(r));
-    }
-  }
-  void handle(const std::vector<SdkCommand>& commands) {
-    for (const SdkCommand& c : commands) {
-      if (c.text.rfind("rc ", 0) != 0) replies_.push_back({c.t_ns + 20'000'000, "ok"});
-    }
-  }
-  flight_sw::FlightSoftware fsw_;
-  TimeNs t_ns_ = 0;
-  std::int64_t k_ = 0;
-  std::deque<SdkReply> replies_;
-  CameraFrame frame_;
-};
-
-/// Plays one sequence to a fresh flight software as a flight would go: the viewpoint frames
-/// (group "viewpoint") cycled while it searches, goes to the viewpoint and takes the inventory
-/// (at most kMaxViewpointSteps), then every other frame in order until it is done.
-class SequencePlayer {
- public:
-  static constexpr int kMaxViewpointSteps = 60;
-  SequencePlayer(const flight_sw::FlightConfig& config, const std::vector<const Frame*>& sequence)
-      : config_(config) {
-    for (const Frame* f : sequence) (f->spec.group == "viewpoint" ? viewpoint_ : rest_).push_back(f);
-    restart();
-  }
-  void restart() {
-    driver_.emplace(config_);
-    viewpoint_steps_ = 0;
-    next_rest_ = 0;
-  }
-  /// The next frame (already prepared on the driver: call driver().step_frame()), or nullptr
-  /// when the sequence is over.
-  const Frame* next() {
-    using flight_sw::Phase;
-    const Phase p = driver_->fsw().phase();
-    const bool before_approach = p == Phase::WaitVideo || p == Phase::TakeOff || p == Phase::FindShelf ||
-                                 p == Phase::GoToViewpoint || p == Phase::TakeInventory;
-    const Frame* f = nullptr;
-    if (driver_->fsw().finished()) return nullptr;
-    if (!viewpoint_.empty() && before_approach && viewpoint_steps_ < kMaxViewpointSteps) {
-      f = viewpoint_[static_cast<size_t>(viewpoint_steps_++) % viewpoint_.size()];
-    } else if (next_rest_ < rest_.size()) {
-      f = rest_[next_rest_++];
-    } else {
-      return nullptr;
-    }
-    driver_->prepare_frame(f->bgr);
-    return f;
-  }
-  SequenceDriver& driver() { return *driver_; }
-
- private:
-  flight_sw::FlightConfig config_;
-  std::vector<const Frame*> viewpoint_, rest_;
-  std::optional<SequenceDriver> driver_;
-  int viewpoint_steps_ = 0;
-  size_t next_rest_ = 0;
-};
-
-}  // namespace shelfcross::bench
+}  // namespace shelfcross::frames

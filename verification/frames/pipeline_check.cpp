@@ -1,39 +1,15 @@
-#pragma once
-// Decision equivalence of the fast and the reference perception pipelines on a
-// sequence of the benchmark frame set: both flight softwares get the same inputs (the
-// SequencePlayer's), and after every frame their phase, target, rc commands, full-view state
-// and inventory so far must be equal, their SI velocity commands within kVelocityTolerance and
-// their poses (when both have one) within kPoseTolerance_m / _rad. (The poses agree to about
-// 1e-14: the same tag centroids go into the PnP.)
+#include "verification/frames/pipeline_check.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <sstream>
-#include <string>
 
-#include "bench/frame_set.hpp"
+#include "shelfcross/rotation.hpp"
 
-namespace shelfcross::bench {
+namespace shelfcross::frames {
 
-inline constexpr double kPoseTolerance_m = 0.002;
-inline constexpr double kPoseTolerance_rad = 0.002;
-/// SI velocity commands before their rounding to rc sticks (which must be equal).
-inline constexpr double kVelocityTolerance = 1e-6;
-
-struct PipelineComparison {
-  bool same = true;
-  int frames = 0;
-  int poses_compared = 0;
-  double max_pose_diff_m = 0.0;
-  double max_pose_diff_rad = 0.0;
-  std::string target;     ///< fast pipeline's target ("L3 C3", or "none")
-  std::string inventory;  ///< fast pipeline's inventory JSON
-  std::string phases;     ///< "phase@frame ..." of the fast pipeline
-  std::string summary;    ///< one paragraph for people
-};
-
-inline PipelineComparison compare_pipelines(const FrameSet& set, const std::string& condition,
-                                            flight_sw::FlightConfig config) {
+PipelineComparison compare_pipelines(const FrameSet& set, const std::string& condition,
+                                     flight_sw::FlightConfig config) {
   using flight_sw::PerceptionPipeline;
   config.perception.pipeline = PerceptionPipeline::fast;
   const std::vector<const Frame*> seq = set.sequence(condition);
@@ -43,8 +19,17 @@ inline PipelineComparison compare_pipelines(const FrameSet& set, const std::stri
   PipelineComparison c;
   std::ostringstream why;
   std::optional<flight_sw::Phase> last_phase;
-  const auto cell = [](const std::optional<flight_sw::CellIndex>& t) {
-    return t ? "L" + std::to_string(t->level) + " C" + std::to_string(t->column) : std::string("none");
+  const auto cell = [](const std::optional<CellIndex>& t) {
+    // Appended piece by piece: GCC 12 misreads "literal" + std::string as an overlapping copy
+    // (-Wrestrict, a false positive in its own <string>).
+    std::string text = "none";
+    if (t) {
+      text = "L";
+      text += std::to_string(t->level);
+      text += " C";
+      text += std::to_string(t->column);
+    }
+    return text;
   };
   const auto box = [](const std::optional<cv::Rect2d>& r) {
     std::ostringstream os;
@@ -89,7 +74,7 @@ inline PipelineComparison compare_pipelines(const FrameSet& set, const std::stri
     if (ta.pose && tb.pose) {
       ++c.poses_compared;
       const double dp = (ta.pose->p_FB_m() - tb.pose->p_FB_m()).norm();
-      const double dr = std::abs(std::remainder(ta.pose->yaw_rad - tb.pose->yaw_rad, 2.0 * M_PI));
+      const double dr = std::abs(wrap_pi(ta.pose->yaw_rad - tb.pose->yaw_rad));
       c.max_pose_diff_m = std::max(c.max_pose_diff_m, dp);
       c.max_pose_diff_rad = std::max(c.max_pose_diff_rad, dr);
       if (dp > kPoseTolerance_m || dr > kPoseTolerance_rad) fail("pose differs by " + std::to_string(dp) + " m");
@@ -114,19 +99,7 @@ inline PipelineComparison compare_pipelines(const FrameSet& set, const std::stri
   return c;
 }
 
-/// Whole-frame tag detection of both pipelines on every frame of the set (stills included),
-/// as the flight software uses it: the front-shelf tags after eq. 1 must be the same, in the
-/// same order, with bit-identical centroids, areas and boxes. (Before eq. 1 the fast detector
-/// may miss blobs with no solid stride x stride part, such as a tag cut to a sliver by the
-/// image border or a bar: counted in `raw_missed`. Such a sliver is far below 45 % of a whole
-/// tag's area, so eq. 1 drops it in both pipelines.)
-struct TagComparison {
-  bool same = true;
-  int frames = 0, front_tags = 0, raw_missed = 0;
-  std::string summary;
-};
-
-inline TagComparison compare_tag_detection(const FrameSet& set, flight_sw::FlightConfig config) {
+TagComparison compare_tag_detection(const FrameSet& set, flight_sw::FlightConfig config) {
   const double threshold = config.perception.area_ratio_threshold;
   config.perception.pipeline = flight_sw::PerceptionPipeline::fast;
   flight_sw::TagDetector fast(config.perception);
@@ -161,4 +134,4 @@ inline TagComparison compare_tag_detection(const FrameSet& set, flight_sw::Fligh
   return c;
 }
 
-}  // namespace shelfcross::bench
+}  // namespace shelfcross::frames
