@@ -14,6 +14,7 @@
 #include <opencv2/aruco.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "render/frame_target.hpp"
 #include "render/lens_mesh.hpp"
 #include "render/noise.hpp"
 #include "render/scene.hpp"
@@ -214,8 +215,8 @@ struct Renderer::Impl {
   EglContext egl;
   std::string gl_renderer, gl_version;
 
-  GLuint flat_program = 0, textured_program = 0, vao = 0, vbo = 0, ibo = 0, fbo = 0,
-         colour_rb = 0, depth_rb = 0, atlas = 0;
+  GLuint flat_program = 0, textured_program = 0, vao = 0, vbo = 0, ibo = 0, atlas = 0;
+  FrameTarget target;  // the framebuffer: colour and depth textures
   // Every non-room face lies inside the arena box, so the room (whose visible faces never
   // overlap: the inside of a convex box) can be drawn first without the depth test.
   bool room_first = false;
@@ -366,30 +367,7 @@ void Renderer::Impl::build(const SceneLayout& layout) {
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
 
-  GLint max_rb = 0;
-  glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &max_rb);
-  if (hi_width > max_rb || hi_height > max_rb) {
-    std::ostringstream os;
-    os << "OpenGL: render size " << hi_width << " x " << hi_height
-       << " exceeds GL_MAX_RENDERBUFFER_SIZE " << max_rb << " (lower supersample)";
-    throw RenderError(os.str());
-  }
-  glGenFramebuffers(1, &fbo);
-  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
-  glGenRenderbuffers(1, &colour_rb);
-  glBindRenderbuffer(GL_RENDERBUFFER, colour_rb);
-  glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, hi_width, hi_height);
-  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, colour_rb);
-  glGenRenderbuffers(1, &depth_rb);
-  glBindRenderbuffer(GL_RENDERBUFFER, depth_rb);
-  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, hi_width, hi_height);
-  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_rb);
-  const GLenum status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
-  if (status != GL_FRAMEBUFFER_COMPLETE) {
-    std::ostringstream os;
-    os << "OpenGL: framebuffer incomplete (status 0x" << std::hex << status << ")";
-    throw RenderError(os.str());
-  }
+  target.create(hi_width, hi_height);
   glViewport(0, 0, hi_width, hi_height);
   glDepthFunc(GL_LESS);
   // Faces are clipped against the near and far planes in 3-D already (lens_mesh.cpp); depth
@@ -414,7 +392,7 @@ void Renderer::Impl::draw(const Eigen::Isometry3d& X_WC) {
   mesher.build(X_WC);
   const std::vector<GpuVertex>& vertices = mesher.vertices();
   const std::vector<std::uint32_t>& indices = mesher.indices();
-  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+  target.bind();
   glBindVertexArray(vao);
   glBindBuffer(GL_ARRAY_BUFFER, vbo);
   glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(GpuVertex)),
@@ -432,22 +410,26 @@ void Renderer::Impl::draw(const Eigen::Isometry3d& X_WC) {
     farthest = std::max(farthest, (arena.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c)) - p).norm());
   const bool room_covers = room_first && wall_distance > options.near_m * max_ray_stretch &&
                            farthest < options.far_m;
-  // When the room covers the view, its largest face is not drawn: the colour clear (a fill of
-  // the tiles, cheaper than shading their fragments) paints it, and the room's other faces
-  // and everything else are drawn over it.
+  // When the room covers the view, its largest face is not drawn: the colour fill that starts
+  // the frame (cheaper than shading its fragments) paints it, and the room's other faces and
+  // everything else are drawn over it.
   const std::vector<LensMesher::FaceSpan>& room = mesher.room_spans();
   std::size_t skipped = room.size();
   if (room_covers) {
     for (std::size_t k = 0; k < room.size(); ++k)
       if (skipped == room.size() || room[k].area_px2 > room[skipped].area_px2) skipped = k;
   }
+  std::array<std::uint8_t, 4> fill{0, 0, 0, 255};  // black where nothing covers a pixel
   if (skipped < room.size()) {
-    const Eigen::Vector3f& c = room[skipped].rgb;
-    glClearColor(c.x(), c.y(), c.z(), 1.f);
-  } else {
-    glClearColor(0.f, 0.f, 0.f, 1.f);
+    // The face's colour is k / 255 (FaceBuilder::colour): its bytes k.
+    for (int k = 0; k < 3; ++k)
+      fill[static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(std::lround(room[skipped].rgb[k] * 255.f));
   }
-  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  // The depth buffer matters only where a depth-tested face is drawn: everything but the room
+  // when the room goes first, else everything.
+  const std::size_t depth_tested = mesher.first_index(room_first ? kFlatFaces : kRoomFaces);
+  target.start_frame(fill, covered_pixels(vertices, indices, depth_tested, indices.size(),
+                                          hi_width, hi_height));
   auto draw_range = [&](std::size_t a, std::size_t b) {
     if (b > a)
       glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(b - a), GL_UNSIGNED_INT,
@@ -548,16 +530,14 @@ Renderer::Renderer(const Warehouse& warehouse, const CameraIntrinsics& intrinsic
 }
 
 void Renderer::Impl::release_gl() {
-  glDeleteFramebuffers(1, &fbo);
-  glDeleteRenderbuffers(1, &colour_rb);
-  glDeleteRenderbuffers(1, &depth_rb);
+  target.release();
   glDeleteTextures(1, &atlas);
   glDeleteBuffers(1, &vbo);
   glDeleteBuffers(1, &ibo);
   glDeleteVertexArrays(1, &vao);
   glDeleteProgram(flat_program);
   glDeleteProgram(textured_program);
-  fbo = colour_rb = depth_rb = atlas = vbo = ibo = vao = flat_program = textured_program = 0;
+  atlas = vbo = ibo = vao = flat_program = textured_program = 0;
 }
 
 void Renderer::set_warehouse(const Warehouse& warehouse) {

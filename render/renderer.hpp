@@ -11,10 +11,11 @@
 //      split along the lens grid and projected through the lens on the CPU (lens_mesh.hpp):
 //      every vertex exactly as cv::projectPoints puts it, every drawn edge within
 //      kLensChordTolerance_px of the true (curved) image of the face's edge;
-//   2. rasterised at the output size (x supersample): the room first, without depth test
-//      (its largest face painted by the colour clear when the room fills the view), then the
-//      shelves with it, then tags and markers with a depth offset; point-sampled at pixel
-//      centres, no MSAA;
+//   2. rasterised at the output size (x supersample) into colour and depth textures
+//      (frame_target.hpp; a frame starts with a fill of the colour, the room's largest face
+//      when the room fills the view, and of the depth where depth-tested faces fall): the room
+//      first, without depth test, then the shelves with it, then tags and markers with a
+//      depth offset; point-sampled at pixel centres, no MSAA;
 //   3. glReadPixels as RGBA (rows already in image order: the projection writes image row v
 //      to GL row v);
 //   4. [supersample s > 1: exact s x s block average (cv::resize INTER_AREA)]
