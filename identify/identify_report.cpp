@@ -29,7 +29,9 @@ std::string interval_text(const Interval& iv, int digits = 3) {
   return num(iv.value, digits) + " [" + num(iv.lo, digits) + ", " + num(iv.hi, digits) + "]";
 }
 
-json interval_json(const Interval& iv) { return {{"value", iv.value}, {"lo", iv.lo}, {"hi", iv.hi}, {"stddev", iv.stddev}}; }
+json interval_json(const Interval& iv) {
+  return {{"value", iv.value}, {"lo", iv.lo}, {"hi", iv.hi}, {"stddev", iv.stddev}, {"model_allowance", iv.margin}};
+}
 
 const char* observed_as(Axis a) {
   switch (a) {
