@@ -63,11 +63,14 @@ EnvelopeEntry entry(const std::string& name, const Interval& iv, const verificat
 
 // A truncated normal centred on the estimate: +-3 standard deviations, inside the parameter's
 // allowed range (dispersion.hpp); a zero spread (a noise-free record) gets 1 % of the value.
+// The standard deviation holds the bootstrap's and the model-error allowance's, the latter as
+// a bias anywhere within +-margin (uniform: margin / sqrt(3)).
 verification::Distribution centred(const Interval& iv, double centre, double rel_scale, const std::string& dispersion) {
   verification::Distribution d;
   d.kind = verification::Distribution::Kind::truncated_normal;
   d.mean = centre;
-  d.stddev = std::max(iv.stddev * rel_scale, 0.01 * std::abs(centre));
+  const double sd = std::hypot(iv.stddev, iv.margin / std::sqrt(3.0));
+  d.stddev = std::max(sd * rel_scale, 0.01 * std::abs(centre));
   double lowest = 0.0, highest = 0.0;
   for (const auto& p : verification::dispersion_parameters()) {
     if (dispersion == p.name) {
@@ -124,6 +127,7 @@ std::vector<EnvelopeEntry> check_envelope(const Identification& id, const verifi
     scaled.lo /= nominal;
     scaled.hi /= nominal;
     scaled.stddev /= nominal;
+    scaled.margin /= nominal;
     out.push_back(entry(std::string("rc_gain_scale (") + axis_name(a.axis) + ")", scaled, s, "rc_gain_scale"));
   }
   return out;

@@ -61,6 +61,24 @@ LinkFigures link_figures(const FlightRecord& r) {
   return f;
 }
 
+// The model-error allowance (identification.hpp), relative to the value, per axis: {gain, time
+// constant}.
+constexpr std::array<std::array<double, 2>, 4> kModelAllowance = {{
+    {kAllowanceVelocityGain, kAllowanceTimeConstant},   // forward
+    {kAllowanceVelocityGain, kAllowanceTimeConstant},   // lateral
+    {kAllowanceIntegralGain, kAllowanceTimeConstant},   // vertical
+    {kAllowanceIntegralGain, kAllowanceTimeConstant}}};  // yaw
+
+// Adds an absolute allowance to the interval: a bias anywhere within +-margin (uniform, standard
+// deviation margin / sqrt(3)) is independent of the bootstrap's spread, so each half-width
+// becomes the root sum of squares of the bootstrap's and 1.96 margin / sqrt(3).
+void widen(Interval& iv, double margin) {
+  constexpr double kUniformAt95 = 1.96 / 1.7320508075688772;
+  iv.margin += margin;
+  iv.lo = iv.value - std::hypot(iv.value - iv.lo, kUniformAt95 * margin);
+  iv.hi = iv.value + std::hypot(iv.hi - iv.value, kUniformAt95 * margin);
+}
+
 // Replicate-wise inverse-variance weighted combination of intervals (see the header).
 std::optional<Interval> combine(const std::vector<const Interval*>& parts, const std::vector<double>& scale) {
   std::vector<double> w;
@@ -75,14 +93,21 @@ std::optional<Interval> combine(const std::vector<const Interval*>& parts, const
   for (size_t i = 0; i < parts.size(); ++i) value += w[i] / total * parts[i]->value * scale[i];
   size_t reps = parts.front()->replicates.size();
   for (const Interval* p : parts) reps = std::min(reps, p->replicates.size());
+  double margin = 0.0;  // a bound on each part's model error bounds their weighted mean's
+  for (size_t i = 0; i < parts.size(); ++i) margin += w[i] / total * std::abs(scale[i]) * parts[i]->margin;
   std::vector<double> combined(reps, 0.0);
   // Replicate b of each axis comes from that axis's own independent resampling: pairing them
   // by index is a draw from the joint bootstrap distribution.
   for (size_t b = 0; b < reps; ++b) {
     for (size_t i = 0; i < parts.size(); ++i) combined[b] += w[i] / total * parts[i]->replicates[b] * scale[i];
   }
-  return interval_of(value, std::move(combined));
+  Interval iv = interval_of(value, std::move(combined));
+  widen(iv, margin);
+  return iv;
 }
+
+// Each axis its own resampling stream: the seed mixed with the axis.
+std::uint64_t axis_seed(const IdentifyOptions& o, size_t axis) { return mix64(o.seed + 0x1D0 + axis); }
 
 }  // namespace
 
@@ -219,23 +244,16 @@ Identification identify_flight(const FlightRecord& r, const IdentifyOptions& o) 
   id.link = link_figures(r);
   int identified = 0;
   // The dead time is the link's (the command's way to the drone, the state record's way back;
-  // the onboard lags are the tracking loops'): one for all axes. The velocity axes tell it
-  // apart from the time constant; the integral axes (height, heading) barely, so they are
-  // fitted second, with the velocity axes' dead time and its bootstrap replicates.
-  std::optional<Interval> link_delay;
+  // the onboard lags are the tracking loops'): one for all axes. Each axis is fitted with a
+  // dead time of its own first; the link's is their inverse-variance weighted combination,
+  // replicate by replicate (the integral axes resolve the response finely but trade the dead
+  // time against the time constant; the velocity axes separate the two but read in 0.1 m/s:
+  // neither alone pins it). The integral axes (height, heading) are then refitted with it and
+  // its replicates, so that its uncertainty passes on to their time constants; the velocity
+  // axes keep their own fit, whose intervals hold their own dead time's uncertainty.
   for (size_t i : {0u, 1u, 2u, 3u}) {
     AxisResult& a = id.axes[i];
     a.axis = kAxes[i];
-    if (i == 2 && !link_delay) {
-      std::vector<const Interval*> parts;
-      std::vector<double> ones;
-      for (size_t h : {0u, 1u}) {
-        if (!id.axes[h].identified) continue;
-        parts.push_back(&id.axes[h].id.delay_s);
-        ones.push_back(1.0);
-      }
-      link_delay = combine(parts, ones);
-    }
     a.record = axis_record(r, a.axis, o.min_stick, &a.windows);
     a.record.loop = tracking_loop(a.axis, o.autopilot, o.vehicle);
     // The SDK's velocities are integer dm/s: coarse against the calibration's 0.2-0.4 m/s.
@@ -249,16 +267,32 @@ Identification identify_flight(const FlightRecord& r, const IdentifyOptions& o) 
                   std::to_string(o.min_samples) + " needed)";
       continue;
     }
-    // Each axis its own resampling stream: the seed mixed with the axis.
-    FitBounds bounds = o.bounds;
-    const std::vector<double>* delays = nullptr;
-    if (a.record.observation == Observation::integral && link_delay) {
-      bounds.delay_min_s = bounds.delay_max_s = link_delay->value;
-      delays = &link_delay->replicates;
-    }
-    a.id = identify_axis(a.record, o.bootstrap_replicates, mix64(o.seed + 0x1D0 + i), o.block_s, bounds, delays);
+    a.id = identify_axis(a.record, o.bootstrap_replicates, axis_seed(o, i), o.block_s, o.bounds);
     a.identified = true;
     ++identified;
+  }
+  std::optional<Interval> link_delay;
+  {
+    std::vector<const Interval*> parts;
+    for (const AxisResult& a : id.axes) {
+      if (a.identified) parts.push_back(&a.id.delay_s);
+    }
+    link_delay = combine(parts, std::vector<double>(parts.size(), 1.0));
+  }
+  if (link_delay && identified > 1) {
+    for (size_t i : {2u, 3u}) {
+      AxisResult& a = id.axes[i];
+      if (!a.identified) continue;
+      FitBounds bounds = o.bounds;
+      bounds.delay_min_s = bounds.delay_max_s = link_delay->value;
+      a.id = identify_axis(a.record, o.bootstrap_replicates, axis_seed(o, i), o.block_s, bounds, &link_delay->replicates);
+    }
+  }
+  for (size_t i = 0; i < id.axes.size(); ++i) {
+    AxisResult& a = id.axes[i];
+    if (!a.identified) continue;
+    widen(a.id.gain, kModelAllowance[i][0] * std::abs(a.id.gain.value));
+    widen(a.id.tau_s, kModelAllowance[i][1] * a.id.tau_s.value);
   }
   if (identified == 0) {
     throw std::invalid_argument(r.source + ": no axis could be identified: no stick moved while flying (fly the "
@@ -287,18 +321,7 @@ Identification identify_flight(const FlightRecord& r, const IdentifyOptions& o) 
     put("yaw_time_constant_s", {&axis(Axis::yaw).id.tau_s}, {1.0});
   }
   if (auto scale = gain_scale(id, o.autopilot)) id.parameters["rc_gain_scale"] = std::move(*scale);
-  if (link_delay) {
-    id.parameters["response_delay_s"] = *link_delay;
-  } else {  // no velocity axis: the integral axes' own dead times
-    std::vector<const Interval*> delays;
-    std::vector<double> ones;
-    for (Axis a : kAxes) {
-      if (!axis(a).identified) continue;
-      delays.push_back(&axis(a).id.delay_s);
-      ones.push_back(1.0);
-    }
-    put("response_delay_s", delays, ones);
-  }
+  if (link_delay) id.parameters["response_delay_s"] = *link_delay;
   return id;
 }
 

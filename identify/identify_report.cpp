@@ -29,7 +29,9 @@ std::string interval_text(const Interval& iv, int digits = 3) {
   return num(iv.value, digits) + " [" + num(iv.lo, digits) + ", " + num(iv.hi, digits) + "]";
 }
 
-json interval_json(const Interval& iv) { return {{"value", iv.value}, {"lo", iv.lo}, {"hi", iv.hi}, {"stddev", iv.stddev}}; }
+json interval_json(const Interval& iv) {
+  return {{"value", iv.value}, {"lo", iv.lo}, {"hi", iv.hi}, {"stddev", iv.stddev}, {"model_allowance", iv.margin}};
+}
 
 const char* observed_as(Axis a) {
   switch (a) {
@@ -89,8 +91,12 @@ void write_axis_plots(const AxisResult& a, const std::string& dir) {
 
 void write_parameters_md(std::ostream& o, const ReportInputs& in) {
   const Identification& id = *in.identification;
-  o << "## Parameters\n\n95 % intervals: moving-block residual bootstrap (" << id.options.bootstrap_replicates
-    << " refits, blocks of " << id.options.block_s << " s, seed " << id.options.seed << ").\n\n";
+  o << "## Parameters\n\n95 % intervals: " << id.options.bootstrap_replicates << " bootstrap refits (seed "
+    << id.options.seed << "): height and heading by a moving-block residual bootstrap (blocks of " << id.options.block_s
+    << " s), the velocities by a parametric one (their rounded readings drawn again with the residuals' correlation); "
+    << "each widened by the model-error allowance (gains " << 100 * kAllowanceVelocityGain << " % for the velocities, "
+    << 100 * kAllowanceIntegralGain << " % for height and heading, time constants " << 100 * kAllowanceTimeConstant
+    << " %, root sum of squares with the bootstrap's half-width; docs/calibration.md).\n\n";
   o << "| parameter | identified [95 % interval] |" << (in.truth.empty() ? "" : " true | within |") << "\n";
   o << "|---|---|" << (in.truth.empty() ? "" : "---|---|") << "\n";
   for (const auto& [name, iv] : id.parameters) {

@@ -179,7 +179,14 @@ std::vector<double> unit_response(const PiecewiseInput& input, double tau_s, dou
 
 namespace {
 
-constexpr double kSigmaFloorQuanta = 0.28867513459481287;  // 1 / sqrt(12)
+// The floor on the noise's standard deviation, in quanta (response_fit.hpp): a state record's
+// sampling instant is known to within a few ms of its stamp, and the steepest velocity change
+// of the calibration is about 1 m/s^2, so a reading's value before rounding is blurred by about
+// 0.005 m/s = q / 20 even without noise. A floor of a whole rounding's standard deviation (q /
+// sqrt(12)) treats the rounding as noise and pulls every plateau to the middle of its reading:
+// on a noise-free record of the plant (the calibration manoeuvre, gain 1, time constant 0.5 s)
+// that fitted 0.955 and 0.44 s and a dead time of 0.04 s where the truth is 0.
+constexpr double kSigmaFloorQuanta = 0.05;
 
 // log(Phi(b) - Phi(a)) for a < b, accurate in either tail.
 double log_normal_mass(double a, double b) {
@@ -252,8 +259,9 @@ AxisFit fit_axis(const AxisRecord& r, const FitBounds& b) {
   for (size_t k = 0; k < unit.size(); ++k) sse += (r.y[k] - f.fitted[k]) * (r.y[k] - f.fitted[k]);
   f.rms = std::sqrt(sse / static_cast<double>(r.y.size()));
   const double tol = 1e-3;
+  const bool delay_free = b.delay_max_s > b.delay_min_s;  // a given dead time is no search bound
   f.at_bound = f.tau_s < b.tau_min_s * (1 + tol) || f.tau_s > b.tau_max_s * (1 - tol) ||
-               f.delay_s < b.delay_min_s + tol || f.delay_s > b.delay_max_s - tol;
+               (delay_free && (f.delay_s < b.delay_min_s + tol || f.delay_s > b.delay_max_s - tol));
   return f;
 }
 
@@ -323,6 +331,20 @@ Eigen::VectorXd gauss_newton_step(const AxisRecord& r, const Eigen::VectorXd& y,
   return theta;
 }
 
+// The lag-1 autocorrelation of the residuals over pairs of consecutive samples of one segment
+// at most max_gap_s apart, clamped to [0, 0.95] (a negative one is no reason for narrower
+// intervals; above 0.95 the AR(1) stands for a drift the offsets or the model should take).
+double lag1_correlation(const AxisRecord& r, const std::vector<double>& residual, double max_gap_s) {
+  double cross = 0.0, square = 0.0;
+  for (size_t k = 0; k < residual.size(); ++k) {
+    square += residual[k] * residual[k];
+    if (k > 0 && r.segment[k] == r.segment[k - 1] && r.t_s[k] - r.t_s[k - 1] <= max_gap_s) {
+      cross += residual[k] * residual[k - 1];
+    }
+  }
+  return square > 0.0 ? std::clamp(cross / square, 0.0, 0.95) : 0.0;
+}
+
 }  // namespace
 
 AxisIdentification identify_axis(const AxisRecord& r, int replicates, std::uint64_t seed, double block_s,
@@ -352,9 +374,18 @@ AxisIdentification identify_axis(const AxisRecord& r, int replicates, std::uint6
     const double q = r.quantum;
     const std::vector<double> start = {id.fit.gain, std::log(id.fit.tau_s), id.fit.delay_s,
                                        std::log(std::max(id.fit.sigma - kSigmaFloorQuanta * q, 1e-6))};
+    // The noise of a replicate is AR(1) with the residuals' lag-1 correlation (gusts move the
+    // drone for a second or so; independent draws would pretend each reading a new chance).
+    const double rho = lag1_correlation(r, residual, 1.5 * dt);
+    const double innovation = std::sqrt(1.0 - rho * rho);
     std::vector<double> y(n);
     for (int rep = 0; rep < replicates; ++rep) {
-      for (size_t k = 0; k < n; ++k) y[k] = q * std::round((id.fit.fitted[k] + id.fit.sigma * stream.normal()) / q);
+      double e = 0.0;
+      for (size_t k = 0; k < n; ++k) {
+        const bool continues = k > 0 && r.segment[k] == r.segment[k - 1] && r.t_s[k] - r.t_s[k - 1] <= 1.5 * dt;
+        e = continues ? rho * e + innovation * id.fit.sigma * stream.normal() : id.fit.sigma * stream.normal();
+        y[k] = q * std::round((id.fit.fitted[k] + e) / q);
+      }
       const std::vector<double> theta = fit_quantised(r, y, start, {0.02 * std::max(std::abs(id.fit.gain), 0.1), 0.05, 0.01, 0.5}, 100, b);
       gains.push_back(theta[0]);
       taus.push_back(std::exp(theta[1]));

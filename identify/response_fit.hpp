@@ -101,25 +101,32 @@ struct AxisFit {
 /// A record with a quantum (direct observations only) is then refined by maximum likelihood
 /// of its rounded samples: y_k = q round((f_k + e_k) / q), e_k ~ N(0, sigma^2) independent, so
 /// P(y_k) = Phi((y_k + q/2 - f_k) / sigma) - Phi((y_k - q/2 - f_k) / sigma), over (K, tau, d,
-/// sigma), sigma at least q / 4. Least squares on such samples is biased: a plateau of 0.247
+/// sigma), sigma at least q / 20. Least squares on such samples is biased: a plateau of 0.247
 /// m/s read as 0.2 for two seconds pulls the fit by 0.047 m/s, which the likelihood knows to be
 /// within the reading's rounding. The floor on sigma stands for what blurs a reading's last
-/// digit besides noise (the drone's sampling instant, unknown within a record's period); without
-/// it a noise-free record's likelihood would be a hard set membership.
+/// digit besides noise (the sampling instant, known to a few ms, times the response's slope);
+/// without it a noise-free record's likelihood would be a hard set membership. A floor as
+/// large as the rounding itself (q / sqrt(12)) would bias the fit the way least squares does:
+/// plateaus pulled to the middle of their readings, the dead time and the time constant traded.
 AxisFit fit_axis(const AxisRecord& record, const FitBounds& bounds = {});
 
-/// A value with its 95 % bootstrap interval and the replicates it came from.
+/// A value with its 95 % bootstrap interval and the replicates it came from. `margin` is a
+/// stated model-error allowance (identification.hpp), already added to both ends of [lo, hi];
+/// stddev and the replicates are the bootstrap's alone.
 struct Interval {
   double value = 0.0;
   double lo = 0.0, hi = 0.0;
   double stddev = 0.0;
+  double margin = 0.0;
   std::vector<double> replicates;
 };
 
 /// The fit and its moving-block residual bootstrap (`replicates` refits, blocks of block_s,
 /// resampling drawn from a RandomStream seeded from `seed`). Quantised records: a parametric
 /// bootstrap instead, records drawn from the fitted likelihood (the fitted response plus
-/// N(0, sigma^2) noise, rounded to the quantum) and refitted by maximum likelihood.
+/// noise of standard deviation sigma, rounded to the quantum) and refitted by maximum
+/// likelihood; the noise is AR(1) with the residuals' lag-1 correlation between consecutive
+/// records, so that a disturbance lasting several records (a gust) counts once, not each time.
 struct AxisIdentification {
   AxisFit fit;
   Interval gain, tau_s, delay_s;
@@ -127,7 +134,7 @@ struct AxisIdentification {
 /// A dead time known from elsewhere is given by bounds with delay_min_s == delay_max_s, and
 /// its bootstrap replicates by `delay_replicates` (replicate i refits with the i-th, so that
 /// its uncertainty passes on).
-AxisIdentification identify_axis(const AxisRecord& record, int replicates, std::uint64_t seed, double block_s = 1.0,
+AxisIdentification identify_axis(const AxisRecord& record, int replicates, std::uint64_t seed, double block_s = 2.0,
                                  const FitBounds& bounds = {}, const std::vector<double>* delay_replicates = nullptr);
 
 /// The 2.5 and 97.5 % percentiles, the mean and standard deviation of `replicates` around

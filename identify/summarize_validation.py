@@ -23,7 +23,7 @@ for _, j in runs:
         if "truth" in p and n not in names:
             names.append(n)
 print("| parameter | true value within the 95 % interval | widest interval | quarter of the scenario's range |"
-      " every interval within a quarter |")
+      " intervals within a quarter |")
 print("|---|---|---|---|---|")
 for n in names:
     within = sum(1 for _, j in runs if j["parameters"].get(n, {}).get("within"))
@@ -31,8 +31,8 @@ for n in names:
     widths = [j["parameters"][n]["hi"] - j["parameters"][n]["lo"] for _, j in runs if n in j["parameters"]]
     ranges = [j["parameters"][n].get("scenario_range") for _, j in runs if n in j["parameters"]]
     quarter = (ranges[0][1] - ranges[0][0]) / 4 if ranges and ranges[0] else float("nan")
-    ok = all(w <= quarter for w in widths)
-    print(f"| {n} | {within} of {have} | {max(widths):.4f} | {quarter:.4f} | {'yes' if ok else 'no'} |")
+    narrow = sum(1 for w in widths if w <= quarter)
+    print(f"| {n} | {within} of {have} | {max(widths):.4f} | {quarter:.4f} | {narrow} of {len(widths)} |")
 print("\n| seed | " + " | ".join(names) + " |")
 print("|---|" + "---|" * len(names))
 for seed, j in runs:
