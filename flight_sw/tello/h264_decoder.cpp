@@ -2,8 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdarg>
+#include <cstdio>
 #include <cstring>
 #include <limits>
+#include <map>
+#include <mutex>
 #include <stdexcept>
 #include <vector>
 
@@ -20,10 +24,57 @@ extern "C" {
 
 namespace shelfcross::tello {
 
+namespace {
+
+// What libavcodec reports of a decode in progress, by codec context: where a slice failed and
+// how many macroblocks error resilience concealed. libavcodec says this only in its log, so
+// the process-wide log callback routes the messages of the contexts registered here to their
+// decoder (it runs on the thread that called the decode: the decoder has no threads of its
+// own); every other message goes to FFmpeg's default callback, which the level set below
+// keeps quiet.
+struct DecodeReports {
+  std::vector<std::pair<int, int>> error_xy;  ///< macroblock column, row
+  int concealed_mbs = 0;
+};
+
+std::mutex reports_mutex;
+std::map<const void*, DecodeReports*>& report_registry() {
+  static std::map<const void*, DecodeReports*> registry;
+  return registry;
+}
+
+void log_callback(void* avcl, int level, const char* fmt, va_list args) {
+  DecodeReports* reports = nullptr;
+  {
+    std::lock_guard lock(reports_mutex);
+    const auto& registry = report_registry();
+    const auto it = registry.find(avcl);
+    if (it != registry.end()) reports = it->second;
+  }
+  if (!reports) {
+    av_log_default_callback(avcl, level, fmt, args);
+    return;
+  }
+  char line[256];
+  va_list copy;
+  va_copy(copy, args);
+  std::vsnprintf(line, sizeof line, fmt, copy);
+  va_end(copy);
+  int x = 0, y = 0, dc = 0, ac = 0, mv = 0;
+  if (std::sscanf(line, "error while decoding MB %d %d", &x, &y) == 2) {
+    reports->error_xy.push_back({x, y});
+  } else if (std::sscanf(line, "concealing %d DC, %d AC, %d MV errors", &dc, &ac, &mv) == 3) {
+    reports->concealed_mbs = std::max({dc, ac, mv});
+  }
+}
+
+}  // namespace
+
 // FFmpeg's decoders print every damaged macroblock; the receiver counts errors itself.
 void quiet_ffmpeg() {
   static const bool once = [] {
     av_log_set_level(AV_LOG_FATAL);
+    av_log_set_callback(log_callback);
     return true;
   }();
   (void)once;
@@ -38,6 +89,7 @@ struct H264Decoder::Impl {
   AVFrame* frame = nullptr;   // receive buffer
   AVFrame* latest = nullptr;  // the last decoded picture
   bool have_latest = false;
+  DecodeReports reports;  // registered for ctx while it lives
   SwsContext* sws = nullptr;
   // The access unit's bytes followed by AV_INPUT_BUFFER_PADDING_SIZE zero bytes: libavcodec's
   // parser and bit readers read up to that far past the end of their input (avcodec.h,
@@ -47,6 +99,10 @@ struct H264Decoder::Impl {
   std::vector<uint8_t> padded;
 
   ~Impl() {
+    {
+      std::lock_guard lock(reports_mutex);
+      report_registry().erase(ctx);
+    }
     sws_freeContext(sws);
     av_frame_free(&latest);
     av_frame_free(&frame);
@@ -114,6 +170,8 @@ H264Decoder::H264Decoder() : impl_(std::make_unique<Impl>()) {
   // Each picture's motion vectors as side data: where its damage came from (picture_damage.hpp).
   c->export_side_data |= AV_CODEC_EXPORT_DATA_MVS;
   if (avcodec_open2(c, codec, nullptr) < 0) throw std::runtime_error("cannot open the H.264 decoder");
+  std::lock_guard lock(reports_mutex);
+  report_registry()[c] = &impl_->reports;
 }
 
 H264Decoder::~H264Decoder() = default;
@@ -130,6 +188,7 @@ DecodeResult H264Decoder::decode(std::string_view au) {
   std::memset(buf.data() + au.size(), 0, AV_INPUT_BUFFER_PADDING_SIZE);
   const uint8_t* data = buf.data();
   int size = static_cast<int>(au.size());
+  impl_->reports = DecodeReports{};
   while (size > 0) {
     uint8_t* out = nullptr;
     int out_size = 0;
@@ -148,6 +207,9 @@ DecodeResult H264Decoder::decode(std::string_view au) {
     }
     if (used == 0 && out_size == 0) break;  // no progress
   }
+  const int mb_columns = (impl_->ctx->width + 15) / 16;
+  for (const auto& [x, y] : impl_->reports.error_xy) r.error_mbs.push_back(y * mb_columns + x);
+  r.concealed_mbs = impl_->reports.concealed_mbs;
   return r;
 }
 

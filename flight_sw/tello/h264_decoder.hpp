@@ -31,6 +31,11 @@ struct DecodeResult {
   /// (AV_CODEC_EXPORT_DATA_MVS): where each lands and where it comes from (picture_damage.hpp).
   std::vector<BlockMotion> motion;
   int refs = 1;           ///< reference pictures the stream's SPS allows (at least 1)
+  /// Where libavcodec's slice decoder failed in these bytes (macroblock indices, raster order:
+  /// its "error while decoding MB x y" report) and how many macroblocks its error resilience
+  /// concealed in the last picture ("concealing ... MV errors"; 0 when it concealed nothing).
+  std::vector<int> error_mbs;
+  int concealed_mbs = 0;
 };
 
 /// av_parser_parse2 with the h264 parser over access units (the receiver hands one

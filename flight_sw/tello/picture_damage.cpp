@@ -73,23 +73,46 @@ void add_range(Ranges& r, int first, int end) {
   r.swap(merged);
 }
 
+int count(const Ranges& r) {
+  int n = 0;
+  for (const auto& [first, end] : r) n += end - first;
+  return n;
+}
+
 }  // namespace
 
-std::vector<std::pair<int, int>> suspect_macroblocks(const PictureEvidence& e, int macroblocks) {
+std::vector<std::pair<int, int>> suspect_macroblocks(const PictureEvidence& e, int macroblocks, int slice_mbs) {
   const std::vector<sdk::SliceSpan>& slices = e.slices;
   for (std::size_t i = 1; i < slices.size(); ++i) {
     if (slices[i].first_mb <= slices[i - 1].first_mb) return {{0, macroblocks}};
   }
   if (slices.empty() || slices.back().first_mb >= macroblocks) return {{0, macroblocks}};
-  Ranges out;
-  add_range(out, 0, slices.front().first_mb);
+  const bool layout = slice_mbs > 0 && std::all_of(slices.begin(), slices.end(), [&](const sdk::SliceSpan& s) {
+                        return s.first_mb % slice_mbs == 0;
+                      });
+  Ranges gaps, spanning;
+  add_range(gaps, 0, slices.front().first_mb);
   for (std::size_t i = 0; i < slices.size(); ++i) {
     const sdk::SliceSpan& s = slices[i];
-    const bool trusted = std::none_of(e.datagram_ends.begin(), e.datagram_ends.end(),
+    const int next = i + 1 < slices.size() ? slices[i + 1].first_mb : macroblocks;
+    const bool boundary = std::any_of(e.datagram_ends.begin(), e.datagram_ends.end(),
                                       [&](std::size_t end) { return end > s.begin && end <= s.end; });
-    if (!trusted) add_range(out, s.first_mb, i + 1 < slices.size() ? slices[i + 1].first_mb : macroblocks);
+    if (layout && next != std::min(s.first_mb + slice_mbs, macroblocks)) {
+      // ... and the slice after the gap: libavcodec's error resilience conceals it too where
+      // the missing slices' neighbours decide it (found by the check against the truth).
+      add_range(gaps, s.first_mb, std::min(next + slice_mbs, macroblocks));
+    } else if (boundary) {
+      add_range(spanning, s.first_mb, next);
+    }
   }
-  return out;
+  const auto in_gaps = [&](int mb) {
+    return std::any_of(gaps.begin(), gaps.end(), [&](const auto& g) { return mb >= g.first && mb < g.second; });
+  };
+  const bool vouched = layout && e.concealed_mbs <= count(gaps) && std::all_of(e.error_mbs.begin(), e.error_mbs.end(), in_gaps);
+  if (!vouched) {
+    for (const auto& [first, end] : spanning) add_range(gaps, first, end);
+  }
+  return gaps;
 }
 
 PictureDamage::PictureDamage(int width_px, int height_px, int concealment_reach_px)
@@ -101,6 +124,16 @@ PictureDamage::PictureDamage(int width_px, int height_px, int concealment_reach_
   }
 }
 
+void PictureDamage::learn_layout(const std::vector<sdk::SliceSpan>& slices) {
+  // One size for all but the last slice, which may be shorter, starting at macroblock 0.
+  const int macroblocks = mb_cols_ * mb_rows_;
+  int size = slices.size() > 1 ? slices[1].first_mb - slices[0].first_mb : macroblocks;
+  bool uniform = !slices.empty() && slices[0].first_mb == 0 && size > 0;
+  for (std::size_t i = 1; uniform && i < slices.size(); ++i) uniform = slices[i].first_mb - slices[i - 1].first_mb == size;
+  if (uniform) uniform = macroblocks - slices.back().first_mb <= size;
+  slice_mbs_ = uniform ? size : 0;
+}
+
 std::vector<RowSpan> PictureDamage::update(const PictureEvidence& e) {
   std::vector<std::uint8_t> mask(static_cast<std::size_t>(height_px_), 0);
   // 1. Lost here: whole macroblock rows touched by a suspect range. (Their concealment, and
@@ -109,11 +142,12 @@ std::vector<RowSpan> PictureDamage::update(const PictureEvidence& e) {
   if (e.unplaced) {
     lost.push_back({0, height_px_});
   } else if (e.lost) {
-    for (const auto& [first, end] : suspect_macroblocks(e, mb_cols_ * mb_rows_)) {
+    for (const auto& [first, end] : suspect_macroblocks(e, mb_cols_ * mb_rows_, slice_mbs_)) {
       if (end > first) lost.push_back({(first / mb_cols_) * kMbPx, ((end - 1) / mb_cols_ + 1) * kMbPx});
     }
   }
   for (const RowSpan& r : lost) mark(mask, r.v_begin_px, r.v_end_px);
+  if (!e.lost && !e.unplaced) learn_layout(e.slices);
   // 2. Predicted from damage in any picture it may reference.
   const int refs = std::clamp(e.refs, 1, kMaxRefs);
   std::vector<std::uint8_t> reference(static_cast<std::size_t>(height_px_), 0);

@@ -9,13 +9,24 @@
 // where each received datagram ended. Rows are damaged in three ways:
 //   1. Lost in this picture (when it shows a sign of loss): the macroblocks before the first
 //      slice that arrived, and every slice whose bytes may not all have arrived, up to the
-//      next slice that did. A slice is trusted only if it lies inside one received datagram
-//      and does not end where a datagram ended (a datagram that followed may be missing, with
-//      the rest of the slice or the starts of the slices it carried). The decoder's own error
-//      reports do not place the damage: a slice that lost its tail and ran on into the bytes
-//      of a later datagram may decode to wrong pixels without any error, which the check
-//      against the truth found. The concealment deblocks the concealed edges, which reaches a
-//      few rows past them (`concealment_reach_px`).
+//      next slice that did. Where that is:
+//      - A slice followed by a missing slice start (a gap): the lost datagram took the starts
+//        of the slices after it and, unless it began exactly at one, its own tail; and the
+//        slice after the gap, which libavcodec's error resilience was seen to conceal as well
+//        (the check against the truth, below, found it; its source does not say). Gaps are
+//        seen where the stream keeps one slice layout (slices of one size in macroblocks,
+//        learnt from the last whole picture; libx264 with a fixed slice count, as the Tello
+//        and its simulation encode): every slice that arrived must start on it.
+//      - A slice that holds a datagram boundary (a received datagram ends inside it or at
+//        its end) with no gap after it: a whole datagram may have been lost inside it. The
+//        decoder vouches for these when it reported no failure outside the gaps and
+//        concealed no more macroblocks than the gaps hold: a slice that lost its middle
+//        decodes the bytes of a later datagram as its own and fails, or ends early or late,
+//        which leaves macroblocks concealed. Otherwise, or without a known layout, they are
+//        suspect.
+//      The concealment then smooths each edge between a concealed and a decoded 8 x 8 block
+//      (libavcodec's error resilience, FF_EC_DEBLOCK), 4 sample rows on each side: 4 picture
+//      rows of luma and 4 chroma rows, 8 picture rows, of chroma (`concealment_reach_px`).
 //   2. Predicted from damage: a row of an inter block (the decoder's exported motion vectors,
 //      a block's destination and its source in a reference picture) is damaged when the rows
 //      it is interpolated from touch a damaged row of any picture it may reference (the last
@@ -33,7 +44,10 @@
 // neighbour towards a damaged block by a clipped amount; that low-amplitude bleed is not
 // followed (following it would spread a band by a macroblock row per picture). The
 // simulated Tello's stream does not deblock, and there the rows outside the damage are
-// byte-identical to a loss-free decode (verification/test/picture_damage_test.cpp).
+// byte-identical to a loss-free decode (verification/test/picture_damage_test.cpp, at 1, 3
+// and 5 % datagram loss). Two parts of rule 1 rest on that check rather than on a proof: the
+// decoder's vouching (a slice that lost a whole datagram and still decoded to exactly its
+// macroblocks with no report would escape it) and the slice after a gap.
 
 #include <cstddef>
 #include <deque>
@@ -59,6 +73,8 @@ struct BlockMotion {
 struct PictureEvidence {
   bool lost = false;                        ///< a sign of loss in this access unit
   bool unplaced = false;                    ///< damage nothing here can place (a picture lost before it)
+  std::vector<int> error_mbs;               ///< macroblocks where the decoder reported a slice failing
+  int concealed_mbs = 0;                    ///< macroblocks the decoder reported concealing
   std::vector<sdk::SliceSpan> slices;       ///< its slices that arrived, byte order
   std::vector<std::size_t> datagram_ends;   ///< offsets where each received datagram ended
   std::vector<BlockMotion> motion;          ///< its inter blocks (empty for intra pictures)
@@ -66,22 +82,28 @@ struct PictureEvidence {
 };
 
 /// Macroblock ranges [first, end) of a picture of `macroblocks` that may be lost from an access
-/// unit with a sign of loss (rule 1 above). Slices out of raster order, or none at all: the
-/// whole picture.
-std::vector<std::pair<int, int>> suspect_macroblocks(const PictureEvidence& e, int macroblocks);
+/// unit with a sign of loss (rule 1 above), for a stream whose slices are `slice_mbs`
+/// macroblocks each (0: not known). Slices out of raster order, or none at all: the whole
+/// picture.
+std::vector<std::pair<int, int>> suspect_macroblocks(const PictureEvidence& e, int macroblocks, int slice_mbs = 0);
 
 /// Follows the damage of one stream picture by picture. Not thread-safe; one per decoder.
 class PictureDamage {
  public:
   /// A picture of width x height pixels (both > 0; std::invalid_argument otherwise).
-  PictureDamage(int width_px, int height_px, int concealment_reach_px = 4);
+  PictureDamage(int width_px, int height_px, int concealment_reach_px = 8);
   /// The next decoded picture: returns its damaged rows (disjoint, top down; empty: whole).
   std::vector<RowSpan> update(const PictureEvidence& e);
   /// Forgets all damage (a new stream).
-  void reset() { history_.clear(); }
+  void reset() {
+    history_.clear();
+    slice_mbs_ = 0;
+  }
 
  private:
   int width_px_, height_px_, mb_cols_, mb_rows_, reach_px_;
+  void learn_layout(const std::vector<sdk::SliceSpan>& slices);
+  int slice_mbs_ = 0;  ///< the stream's slice layout, from the last whole picture (0: not known)
   std::deque<std::vector<std::uint8_t>> history_;  ///< row masks, newest first
 };
 

@@ -179,6 +179,8 @@ void VideoReceiver::finish_frame(TimeNs t_ns, bool lost_end) {
     evidence.lost = damaged;
     evidence.unplaced = picture_lost_ && !(key && !damaged);  // a whole key frame refers to nothing
     evidence.motion = std::move(r.motion);
+    evidence.error_mbs = std::move(r.error_mbs);
+    evidence.concealed_mbs = r.concealed_mbs;
     evidence.refs = r.refs;
     picture_lost_ = false;
     damaged_rows = picture_damage_->update(evidence);

@@ -103,6 +103,17 @@ Tally stream(double loss, int frames, std::uint64_t seed) {
       if (marked[static_cast<std::size_t>(v)]) continue;
       if (cv::norm(a->bgr.row(v), b->bgr.row(v), cv::NORM_INF) != 0) {
         ++t.violations;
+        {
+          std::cerr << "differing rows:";
+          int prev = -2;
+          for (int u = 0; u < kHeight; ++u) {
+            if (cv::norm(a->bgr.row(u), b->bgr.row(u), cv::NORM_INF) == 0) continue;
+            if (u != prev + 1) std::cerr << " " << u;
+            prev = u;
+            if (u + 1 == kHeight || cv::norm(a->bgr.row(u + 1), b->bgr.row(u + 1), cv::NORM_INF) == 0) std::cerr << "-" << u;
+          }
+          std::cerr << "\n";
+        }
         ADD_FAILURE() << "loss " << loss << ", picture " << b->index << ": row " << v
                       << " differs from the loss-free picture but is not marked damaged";
         break;

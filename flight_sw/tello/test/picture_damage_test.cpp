@@ -56,6 +56,61 @@ TEST(PictureDamage, SuspectsTheSlicesADatagramEndTouches) {
   EXPECT_EQ(suspect_macroblocks(PictureEvidence{}, kMbs), (Ranges{{0, kMbs}}));
 }
 
+TEST(PictureDamage, PlacesTheLossByTheSliceLayoutWhereTheDecoderVouchesForTheRest) {
+  // One slice per macroblock row (60 macroblocks), 500 bytes each, in 1460-byte datagrams; the
+  // datagram that held the starts of rows 10 to 12 was lost, 200 bytes into row 9.
+  PictureEvidence e;
+  e.lost = true;
+  e.slices = row_slices(45, 500);
+  e.slices.erase(e.slices.begin() + 10, e.slices.begin() + 13);
+  e.slices[9].end = e.slices[10].begin;
+  for (std::size_t end = 1560; end < 100 + 42 * 500; end += 1460) e.datagram_ends.push_back(end);
+  e.datagram_ends.push_back(100 + 42 * 500);
+  e.concealed_mbs = 3 * 60 + 25;  // rows 10 to 12 and the tail of row 9
+  e.error_mbs = {9 * 60 + 35};
+  const Ranges by_datagrams = suspect_macroblocks(e, kMbs);
+  EXPECT_GT(by_datagrams.size(), 5u) << "every slice across a boundary";
+  // The gap after row 9 places the loss (row 9, the missing rows and row 13 after them); the
+  // decoder concealed no more than that and failed only in it, so the slices across the other
+  // boundaries are whole.
+  EXPECT_EQ(suspect_macroblocks(e, kMbs, 60), (Ranges{{9 * 60, 14 * 60}}));
+  // It concealed more (a slice that lost its middle ended early), or failed elsewhere: every
+  // slice across a boundary is suspect again, with the gap.
+  Ranges with_gap;
+  for (const auto& r : by_datagrams) {
+    if (r.second == 13 * 60) with_gap.push_back({r.first, 14 * 60});
+    else if (r.first == 13 * 60 || r.first == 14 * 60) with_gap.back().second = r.second;
+    else with_gap.push_back(r);
+  }
+  PictureEvidence more = e;
+  more.concealed_mbs = 6 * 60;
+  EXPECT_EQ(suspect_macroblocks(more, kMbs, 60), with_gap);
+  PictureEvidence elsewhere = e;
+  elsewhere.error_mbs.push_back(30 * 60 + 4);
+  EXPECT_EQ(suspect_macroblocks(elsewhere, kMbs, 60), with_gap);
+  // A slice that does not start on the layout: the layout is not this stream's.
+  PictureEvidence off = e;
+  off.slices[20].first_mb += 30;
+  EXPECT_EQ(suspect_macroblocks(off, kMbs, 60), suspect_macroblocks(off, kMbs));
+}
+
+TEST(PictureDamage, LearnsTheSliceLayoutFromAWholePicture) {
+  PictureEvidence lost;
+  lost.lost = true;
+  lost.slices = row_slices(45, 500);
+  lost.slices.erase(lost.slices.begin() + 30);
+  lost.slices[29].end = lost.slices[30].begin;
+  lost.datagram_ends = {100, 100 + 29 * 500 + 100, 100 + 45 * 500};
+  lost.concealed_mbs = 60;
+  PictureEvidence whole;
+  whole.slices = row_slices(45, 500);
+  PictureDamage unknown(960, 720, 0), learnt(960, 720, 0);
+  learnt.update(whole);
+  // Without the layout, the last slice (it ends where the last datagram did) is suspect too.
+  EXPECT_EQ(unknown.update(lost), (std::vector<RowSpan>{{29 * 16, 31 * 16}, {44 * 16, 720}}));
+  EXPECT_EQ(learnt.update(lost), (std::vector<RowSpan>{{29 * 16, 32 * 16}}));  // and row 31 after the gap
+}
+
 TEST(PictureDamage, FollowsDamageAlongMotionVectorsUntilAWholeKeyFrame) {
   PictureDamage d(960, 720, 4);
   // Picture 1: row 20 lost (its slice held a datagram end).
