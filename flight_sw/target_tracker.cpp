@@ -3,9 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <numbers>
 
 #include <opencv2/calib3d.hpp>
+
+#include "shelfcross/rotation.hpp"
 
 namespace shelfcross::flight_sw {
 
@@ -458,7 +459,7 @@ bool TargetTracker::measure(const Picture& pic, const cv::Rect2d& predicted, Tag
   if (pose_K_) {
     const double dt = ns_to_seconds(now_ns - pose_t_ns_);
     const double jump_m = (pose->p_FB_m() - pose_K_->p_FB_m()).norm();
-    const double turn = std::abs(std::remainder(pose->yaw_rad - pose_K_->yaw_rad, 2.0 * std::numbers::pi));
+    const double turn = std::abs(wrap_pi(pose->yaw_rad - pose_K_->yaw_rad));
     if (dt <= mp.pose_jump_window_s && (jump_m > mp.pose_jump_m + 1.0 * dt ||
                                         turn > mp.pose_jump_rad + 1.0 * dt)) {
       ++counts_.rejected_poses;

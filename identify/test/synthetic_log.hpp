@@ -18,6 +18,7 @@
 
 #include "flight_sw/tello/calibration_manoeuvre.hpp"
 #include "identify/identification.hpp"
+#include "shelfcross/rotation.hpp"
 #include "identify/response_fit.hpp"
 #include "plant/params.hpp"
 #include "shelfcross/random.hpp"
@@ -100,7 +101,7 @@ inline std::string synthetic_log(const KnownDrone& drone) {
     r.vx_H_mps = y[0][k] + noise.normal(0.0, drone.velocity_noise_mps);
     r.vy_H_mps = y[1][k] + noise.normal(0.0, drone.velocity_noise_mps);
     r.height_m = 1.0 + y[2][k] + noise.normal(0.0, drone.height_noise_m);
-    r.yaw_rad = std::remainder(0.3 + y[3][k] + noise.normal(0.0, drone.yaw_noise_rad), 2.0 * 3.14159265358979323846);
+    r.yaw_rad = shelfcross::wrap_pi(0.3 + y[3][k] + noise.normal(0.0, drone.yaw_noise_rad));
     r.battery_pct = 80;
     r.tof_m = r.height_m + 0.1;
     r.az_B_mps2 = 9.81;
