@@ -150,6 +150,7 @@ void read_control(const Map& m, ControlGains& c) {
   opt(m, "commit_range_m", c.commit_range_m, kNonNegative);
   opt(m, "crossing_kp_z", c.crossing_kp_z, kNonNegative);
   opt(m, "crossing_z_speed_max_mps", c.crossing_z_speed_max_mps, kPositive);
+  opt(m, "unsteered_hold_s", c.unsteered_hold_s, kNonNegative);
   m.finish();
 }
 

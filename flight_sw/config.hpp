@@ -23,6 +23,7 @@
 //               psi_lateral_threshold_rad viewpoint_kp viewpoint_speed_max_mps viewpoint_yaw_kp
 //               search_yaw_rate_radps back_off_speed_mps crossing_speed_mps max_control_dt_s
 //               approach_cone_rad commit_range_m crossing_kp_z crossing_z_speed_max_mps
+//               unsteered_hold_s
 //   rc:         rc_per_mps_horizontal rc_per_mps_vertical rc_per_radps_yaw rc_period_s
 //               keepalive_s
 //   timeouts:   command_reply_s takeoff_reply_s land_reply_s command_retries command_gap_s
@@ -157,6 +158,10 @@ struct ControlGains {
   /// height in the frame of the state height h, measured in the approach (flight_sw/README.md).
   double crossing_kp_z = 1.0;               ///< (m/s) per m
   double crossing_z_speed_max_mps = 0.1;
+  /// A picture that cannot steer (too damaged, or the target not in it) holds the last command
+  /// for up to this long after it was set, then the vehicle hovers (FlightSoftware::
+  /// hold_or_hover): snapping to hover on every such picture pitches the Tello back and forth.
+  double unsteered_hold_s = 0.3;
 };
 
 /// Conversion between SI commands and the SDK's -100..100 sticks.

@@ -189,9 +189,7 @@ void FlightSoftware::on_frame(const CameraFrame& f) {
   const Picture pic{*image, now_ns_, damage, decides};
   if (!decides && damage > config_.perception.steer_max_damage_events) {
     ++telemetry_.unflown_frames;
-    if (airborne_phase() && phase_ != Phase::Cross && phase_ != Phase::Transfer) {
-      velocity_ = {};  // hover; the PI states are kept for the next usable frame
-    }
+    if (airborne_phase() && phase_ != Phase::Cross && phase_ != Phase::Transfer) hold_or_hover();
     if (phase_ == Phase::WaitVideo) command_takeoff_if_ready();
     else emit_rc(false);
     return;
@@ -482,7 +480,26 @@ void FlightSoftware::abort_on_ground(const std::string& reason) {
   enter(Phase::Done, "gave up on the ground: " + reason);
 }
 
-void FlightSoftware::set_velocity(const VelocityCommand& v) { velocity_ = v; }
+void FlightSoftware::set_velocity(const VelocityCommand& v) {
+  velocity_ = v;
+  velocity_set_ns_ = now_ns_;
+}
+
+// A picture that cannot steer (too damaged to fly on, or the target not found in a damaged
+// one): the last command is held over a gap of up to control.unsteered_hold_s, then the
+// vehicle hovers (the PI states are kept for the next usable picture). Snapping to hover on
+// every such picture starts and stops the vehicle with the link's loss: each 0.25 m/s step
+// tips the Tello by a few degrees, and its camera, fixed to the body, swings the shelf by
+// fy * 4 deg ~ 65 px up and down the picture, off the tracker's search window (corner_gate
+// 0.35 of a 160 px box is 57 px), so that the target is lost on the very pictures that could
+// have measured it. Not while the corner tags are leaving the view: there only nearly whole
+// pictures move the vehicle (approach).
+void FlightSoftware::hold_or_hover() {
+  const bool leaving = phase_ == Phase::Approach && tracker_.near_edge();
+  if (leaving || !velocity_set_ns_ || ns_to_seconds(now_ns_ - *velocity_set_ns_) > config_.control.unsteered_hold_s) {
+    velocity_ = {};
+  }
+}
 
 void FlightSoftware::hover() {
   velocity_ = {};
@@ -662,13 +679,9 @@ bool FlightSoftware::select_target(const cv::Mat& bgr) {
     }
   }
   if (!best) return false;
-  // The target's height, from the full view it was chosen on (the grid pose's range).
+  // The target's height, from the full view it was chosen on (the grid pose, G parallel to K).
   std::optional<double> height_m;
-  if (pose_G_) {
-    const auto q = cell_quad(view_, *best);
-    height_m = cell_height_m(config_, state_, 0.25 * (q[0].y + q[1].y + q[2].y + q[3].y),
-                             -pose_G_->X_FC.translation().x());
-  }
+  if (pose_G_) height_m = cell_height_m(state_, pose_G_->p_FB_m().z() - cell_centre_G(config_.shelf, *best).z());
   // Chosen on a full view, where every cell's grid position is counted from the edges.
   tracker_.choose(*best, view_, bgr, now_ns_, height_m);
   telemetry_.target = best;
@@ -781,6 +794,54 @@ void FlightSoftware::reread_shelf(const std::string& why, const std::optional<st
   enter(Phase::FindShelf, why + ": re-reading the shelf from the viewpoint");
 }
 
+// The crossing gate (crossing_refusal) judged on the last pose from a nearly whole picture;
+// if it is clear, the crossing begins (or, with no room behind the shelf to stop, the vehicle
+// lands) and nothing is returned, else the refusal. `why_now` begins the crossing's event.
+std::optional<std::string> FlightSoftware::cross_if_clear(const std::string& why_now) {
+  const ControlGains& g = config_.control;
+  const PoseEstimate& pose = *tracker_.decision_pose_K();
+  CrossingGateInput gate;
+  gate.pose_age_s = ns_to_seconds(now_ns_ - tracker_.decision_pose_t_ns());
+  gate.still_for_s = ns_to_seconds(tracker_.decision_pose_t_ns() - lateral_active_ns_);
+  gate.identity = tracker_.identity();
+  const std::optional<double> cell_centre_h_m = cell_height_.measured_m();
+  if (cell_centre_h_m && state_fresh()) {
+    gate.height_above_cell_m = state_->height_m - *cell_centre_h_m;
+    gate.vz_mps = state_->vz_H_mps;
+  }
+  gate.line_hold = line_hold_forecast(pose);
+  const std::optional<std::string> refusal = crossing_refusal(config_, *tracker_.target(), pose, gate);
+  if (refusal) return refusal;
+  // Past the back face by beyond_distance_m, or less where a shelf stands behind
+  // (guidance.hpp, crossing_beyond_m).
+  const std::optional<double>& behind_m = tracker_.behind_m();
+  const double beyond_m = crossing_beyond_m(config_, behind_m);
+  if (beyond_m < config_.mission.min_beyond_distance_m) {
+    land(Outcome::Aborted, "no room behind the shelf to stop after crossing (tags " + format_m(*behind_m) + " m behind)");
+    return std::nullopt;
+  }
+  // Along the line from the pose through the cell centre at mid-depth, heading held, ended
+  // by the distance the state odometry has flown (guidance.hpp, plan_crossing).
+  const double yaw_O = state_ ? state_->yaw_rad : 0.0;
+  const CrossingPlan plan =
+      plan_crossing(config_, pose, beyond_m, forward_gain_.gain(), odometry_.p_O_m().head<2>(), yaw_O);
+  crossing_end_ = plan.end;
+  watch_ = plan_crossing_watch(config_, line_room(config_, *tracker_.target(), pose), pose.p_FB_m(),
+                               crossing_direction_K(config_.shelf, pose));
+  enter(Phase::Cross, why_now + ": crossing " + cell_text(*tracker_.target()) + " (" + format_m(beyond_m) +
+                          " m past the back face; speed gain " + format_m(forward_gain_.gain()) + "; " +
+                          format_m(*gate.height_above_cell_m) + " m above the cell centre by the state height; " +
+                          "line-hold forecast " + format_m(gate.line_hold.y_m) + " m across, " +
+                          format_m(gate.line_hold.z_m) + " m up" +
+                          (behind_m ? "; tags " + format_m(*behind_m) + " m behind)" : ")"));
+  // Horizontally along the line; vertically the cell centre's height held by the state
+  // height (on_state), not the line's slope: that slope came from a pose a video latency
+  // old, and open loop it flew a vehicle still settling vertically into the beam below.
+  crossing_height_m_ = cell_centre_h_m;
+  set_velocity(crossing_velocity(g, plan, crossing_vz_mps(g, *cell_centre_h_m, state_->height_m)));
+  return std::nullopt;
+}
+
 void FlightSoftware::approach(const Picture& pic) {
   const ControlGains& g = config_.control;
   if (retreat_until_ns_) return set_velocity(back_off_velocity(g));  // declined: backing out (supervise)
@@ -828,6 +889,15 @@ void FlightSoftware::approach(const Picture& pic) {
     // so only such pictures move the vehicle now (it hovers on damaged ones), and the last
     // one before the tags leave is at most a frame old.
     if (tracker_.near_edge() && !pic.decides) v = {};
+    // Near the border on a nearly whole picture: its pose is the freshest the approach will
+    // get, and the crossing is judged on it now rather than when the tags have left the view
+    // on a later nearly whole picture, which over a lossy link may come a second after the
+    // last one, its pose then too old to cross on (pose_fresh_s). A refusal here only lets
+    // the approach go on.
+    if (tracker_.near_edge() && pic.decides && -pose.p_FB_m().x() <= config_.mission.cross_range_max_m &&
+        !cross_if_clear("corner tags leaving the view")) {
+      return;
+    }
     set_velocity(v);
     estimate_forward_gain(pic, pose);
     sample_cell_height(pic, pose);
@@ -844,56 +914,16 @@ void FlightSoftware::approach(const Picture& pic) {
     // Not found in a damaged picture: the tags may sit in a guessed band. Nothing is decided
     // (no crossing, no re-acquisition) until a nearly whole picture shows where they are.
     start_losing_target();
-    velocity_ = {};
+    hold_or_hover();
     return;
   }
   // The corner tags are gone. Close and at the border: they left the view; cross if centred,
   // judged on the last pose from a nearly whole picture.
   const std::optional<PoseEstimate>& decision_pose_K = tracker_.decision_pose_K();
   if (decision_pose_K && tracker_.near_edge() && -decision_pose_K->p_FB_m().x() <= config_.mission.cross_range_max_m) {
-    const PoseEstimate& pose = *decision_pose_K;
-    CrossingGateInput gate;
-    gate.pose_age_s = ns_to_seconds(now_ns_ - tracker_.decision_pose_t_ns());
-    gate.still_for_s = ns_to_seconds(tracker_.decision_pose_t_ns() - lateral_active_ns_);
-    gate.identity = tracker_.identity();
-    const std::optional<double> cell_centre_h_m = cell_height_.measured_m();
-    if (cell_centre_h_m && state_fresh()) {
-      gate.height_above_cell_m = state_->height_m - *cell_centre_h_m;
-      gate.vz_mps = state_->vz_H_mps;
-    }
-    gate.line_hold = line_hold_forecast(pose);
-    const std::optional<std::string> refusal = crossing_refusal(config_, *tracker_.target(), pose, gate);
-    const std::string why = refusal.value_or("");
-    if (!refusal) {
-      // Past the back face by beyond_distance_m, or less where a shelf stands behind
-      // (guidance.hpp, crossing_beyond_m).
-      const std::optional<double>& behind_m = tracker_.behind_m();
-      const double beyond_m = crossing_beyond_m(config_, behind_m);
-      if (beyond_m < config_.mission.min_beyond_distance_m) {
-        land(Outcome::Aborted, "no room behind the shelf to stop after crossing (tags " + format_m(*behind_m) + " m behind)");
-        return;
-      }
-      // Along the line from the pose through the cell centre at mid-depth, heading held, ended
-      // by the distance the state odometry has flown (guidance.hpp, plan_crossing).
-      const double yaw_O = state_ ? state_->yaw_rad : 0.0;
-      const CrossingPlan plan =
-          plan_crossing(config_, pose, beyond_m, forward_gain_.gain(), odometry_.p_O_m().head<2>(), yaw_O);
-      crossing_end_ = plan.end;
-      watch_ = plan_crossing_watch(config_, line_room(config_, *tracker_.target(), pose), pose.p_FB_m(),
-                                   crossing_direction_K(config_.shelf, pose));
-      enter(Phase::Cross, "corner tags left the view: crossing " + cell_text(*tracker_.target()) + " (" + format_m(beyond_m) +
-                              " m past the back face; speed gain " + format_m(forward_gain_.gain()) + "; " +
-                              format_m(*gate.height_above_cell_m) + " m above the cell centre by the state height; " +
-                              "line-hold forecast " + format_m(gate.line_hold.y_m) + " m across, " +
-                              format_m(gate.line_hold.z_m) + " m up" +
-                              (behind_m ? "; tags " + format_m(*behind_m) + " m behind)" : ")"));
-      // Horizontally along the line; vertically the cell centre's height held by the state
-      // height (on_state), not the line's slope: that slope came from a pose a video latency
-      // old, and open loop it flew a vehicle still settling vertically into the beam below.
-      crossing_height_m_ = cell_centre_h_m;
-      set_velocity(crossing_velocity(g, plan, crossing_vz_mps(g, *cell_centre_h_m, state_->height_m)));
-      return;
-    }
+    const std::optional<std::string> refusal = cross_if_clear("corner tags left the view");
+    if (!refusal) return;
+    const std::string& why = *refusal;
     if (!back_off_since_ns_) {
       if (++crossing_refusals_ >= config_.mission.crossing_attempts) {
         // The air, not the view, keeps the line from being held: a re-read would not help.

@@ -257,6 +257,7 @@ class FlightSoftware {
   void go_to_viewpoint(const Picture& pic, bool view_fresh);
   void take_inventory(const Picture& pic);
   void approach(const Picture& pic);
+  std::optional<std::string> cross_if_clear(const std::string& why_now);
   // Approach helpers
   bool select_target(const cv::Mat& bgr);
   bool reacquire(const Picture& pic);
@@ -299,6 +300,7 @@ class FlightSoftware {
   void abort_on_ground(const std::string& reason);
   void set_velocity(const VelocityCommand& v);
   void hover();
+  void hold_or_hover();
   void emit_rc(bool force);
   void update_view_telemetry();
   double control_dt_s();
@@ -332,6 +334,7 @@ class FlightSoftware {
   std::optional<TimeNs> last_rc_ns_;
   std::optional<TimeNs> last_control_ns_;
   VelocityCommand velocity_;
+  std::optional<TimeNs> velocity_set_ns_;  ///< when set_velocity last set velocity_ (hold_or_hover)
   bool video_stalled_ = false;
 
   // Perception state (buffers reused frame to frame)

@@ -284,8 +284,13 @@ cv::Rect2d corner_box(const std::array<cv::Point2d, 4>& q, double side) {
 
 }  // namespace
 
-std::optional<double> cell_height_m(const FlightConfig& config, const std::optional<StateRecord>& state,
-                                    double v_px, double range_m) {
+std::optional<double> cell_height_m(const std::optional<StateRecord>& state, double z_K_m) {
+  if (!state) return std::nullopt;
+  return state->height_m - z_K_m;
+}
+
+std::optional<double> row_height_m(const FlightConfig& config, const std::optional<StateRecord>& state,
+                                   double v_px, double range_m) {
   if (!state) return std::nullopt;
   const CameraIntrinsics& k = config.camera;
   const double elevation = std::atan((k.cy_px - v_px) / k.fy_px) - (state->pitch_rad + config.mount.pitch_rad);
@@ -469,13 +474,22 @@ bool TargetTracker::measure(const Picture& pic, const cv::Rect2d& predicted, Tag
   // Identity: the target cell's centre stays at one height above the take-off point. After
   // the target was lost, the tracked box can settle on the cell above or below (and the
   // jump test above no longer applies once the last pose is old); a level's corner tags make
-  // as good a pose as the target's. The height check tells them apart: the height the cell's
-  // image row puts it at (cell_height_m) must stay within 0.4 of the smallest row pitch of
-  // the height found when the target was chosen; another level is a whole pitch away.
+  // as good a pose as the target's, but one a row pitch off in height. The height check tells
+  // them apart: the cell centre's height must stay within 0.4 of the smallest row pitch of the
+  // height found, from the grid's pose, when the target was chosen. The height is the pose's
+  // (cell_height_m) when the pose's pitch agrees with the state record's: the pose solves the
+  // camera's attitude, which the record gives only in whole degrees and a video latency late
+  // (a Tello tipping 3 deg as it starts, stops or meets a gust moves the cell's image row by
+  // 12 cm at 2.3 m). Far out, four tags leave the pose's tilt ambiguous (planar PnP's two
+  // solutions: the other one tilted several degrees more, its height decimetres off); a pose
+  // whose pitch disagrees falls back on the image row under the state's pitch (row_height_m).
   // (mission.level_check off: for verification studies only, to show what the check prevents.)
   if (mp.level_check && target_height_m_) {
+    const bool pose_attitude_agrees =
+        state && std::abs(wrap_pi(pose->pitch_rad - state->pitch_rad)) <= kLevelPitchAgreement_rad;
     const cv::Point2d c = 0.25 * (img[0] + img[1] + img[2] + img[3]);
-    const auto height_m = cell_height_m(config_, state, c.y, -pose->X_FC.translation().x());
+    const auto height_m = pose_attitude_agrees ? cell_height_m(state, pose->p_FB_m().z())
+                                               : row_height_m(config_, state, c.y, -pose->X_FC.translation().x());
     const auto& rows = config_.shelf.row_pitch_m;
     if (height_m && std::abs(*height_m - *target_height_m_) > 0.4 * *std::min_element(rows.begin(), rows.end())) {
       ++counts_.rejected_poses;

@@ -33,6 +33,7 @@
 // only tags of a shelf behind, the largest of which then passes eq. 1 against itself).
 
 #include <array>
+#include <numbers>
 #include <optional>
 #include <string>
 #include <vector>
@@ -126,13 +127,22 @@ std::optional<std::string> crossing_refusal(const FlightConfig& config, CellInde
 /// leaves only y0 (depth/2) / (r + depth/2) at either face.
 Eigen::Vector3d crossing_direction_K(const KnownShelf& shelf, const PoseEstimate& pose_K);
 
+/// Height above the take-off point of a cell's centre (the origin of K), from a pose that puts
+/// the body z_K_m above it: the state's height h less z_K (K and G are parallel, so a grid pose's
+/// height above the cell centre serves as well). Empty without a state record.
+std::optional<double> cell_height_m(const std::optional<StateRecord>& state, double z_K_m);
+
 /// Height above the take-off point of a point on the shelf's front at image row v_px, seen from
 /// range_m in front of it: the state's height h plus range * tan(elevation), the elevation being
 /// the row's angle above the optical axis, atan((cy - v) / fy), less the axis' tilt down (the
 /// body's pitch from the state record plus the mount's). The body's roll is neglected (the cell
 /// is near the image's vertical centre line). Empty without a state record.
-std::optional<double> cell_height_m(const FlightConfig& config, const std::optional<StateRecord>& state,
-                                    double v_px, double range_m);
+std::optional<double> row_height_m(const FlightConfig& config, const std::optional<StateRecord>& state,
+                                   double v_px, double range_m);
+
+/// The pose's pitch agrees with the state record's within this (whole degrees in the record,
+/// and a video latency newer than the picture), rad: its height is the level check's.
+constexpr double kLevelPitchAgreement_rad = 3.0 * std::numbers::pi / 180.0;
 
 /// The tracked target: the cell chosen on a full view, its four corner tags followed from
 /// picture to picture (fast pipeline: BoxTracker; reference: Median Flow), its pose in the cell

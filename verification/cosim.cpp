@@ -198,10 +198,13 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
   RunHasher hash;
   const plant::CollisionWorld world(sc.warehouse, sc.vehicle.size_m, cs.vehicle_margin_m);
 
-  const auto log_event = [&](TimeNs t, const std::string& text) {
+  // An event of the run, logged; `hashed` ones also enter the run hash (the flight
+  // software's notes within a phase do not: they only explain what the hashed telemetry did).
+  const auto log_event = [&](TimeNs t, const std::string& text, bool hashed = true) {
     char stamp[32];
     std::snprintf(stamp, sizeof stamp, "%.3f ", ns_to_seconds(t));
     result.events.push_back(stamp + text);
+    if (!hashed) return;
     hash.add(t);
     hash.add(std::string_view(text));
   };
@@ -227,6 +230,7 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
   };
   std::vector<std::optional<CellIndex>> targets(static_cast<size_t>(shelf_count));  // the chosen cell per shelf
   std::optional<flight_sw::Phase> last_phase;
+  std::string last_event;  // the flight software's last notable event, logged when it changes
   std::optional<TimeNs> approach_start_ns;
   std::vector<double> approach_t, err_z, err_yaw, err_y;
   const double half_length_m = 0.5 * sc.vehicle.size_m.x() + cs.vehicle_margin_m;
@@ -336,7 +340,10 @@ RunResult run_cosimulation(const RunSetup& setup, render::Renderer& renderer, co
         m.target = tm.target;
       }
       if (*last_phase == flight_sw::Phase::Cross && !result.cross_start_s) result.cross_start_s = ns_to_seconds(t);
+    } else if (tm.event != last_event && !tm.event.empty()) {
+      log_event(t, "event " + tm.event, false);  // within a phase: refusals, losses, back-offs
     }
+    last_event = tm.event;
     if (tm.target && fsw.shelf_index() == 0) m.target = tm.target;
     if (tm.target && fsw.shelf_index() < shelf_count) targets[static_cast<size_t>(fsw.shelf_index())] = tm.target;
   };

@@ -368,5 +368,23 @@ TEST(BoxTracker, MovesAtTheMeasuredImageVelocityThenCoasts) {
   EXPECT_EQ(*t.predict(100 * ms + seconds_to_ns(BoxTracker::kCoast_s + 0.1)), cv::Rect2d(110, 95, 60, 40));
 }
 
+// Pictures of a lossy link arrive in bursts: two a millisecond apart whose boxes differ by a
+// few pixels of measurement noise must not throw the prediction hundreds of pixels away (a
+// two-point rate would be 6,000 px/s here), and a steady motion under that noise is still
+// followed at about its rate.
+TEST(BoxTracker, BurstsOfPicturesDoNotThrowThePredictionAway) {
+  BoxTracker t;
+  const TimeNs ms = 1'000'000;
+  t.init({100, 100, 50, 40}, 0);
+  t.correct({100, 106, 50, 40}, 1 * ms);  // 6 px of noise, 1 ms later: no rate yet
+  EXPECT_EQ(*t.predict(60 * ms), cv::Rect2d(100, 106, 50, 40));
+  // Then 30 px/s to the right, at irregular stamps, with +-3 px of vertical noise.
+  const std::array<std::pair<int, double>, 6> obs{{{40, 3}, {41, -3}, {90, 3}, {140, -3}, {141, 3}, {200, -3}}};
+  for (const auto& [t_ms, noise] : obs) t.correct({100 + 0.03 * t_ms, 100 + noise, 50, 40}, t_ms * ms);
+  const cv::Rect2d p = *t.predict(250 * ms);
+  EXPECT_NEAR(p.x, 100 + 0.03 * 250, 2.0);
+  EXPECT_NEAR(p.y, 100, 5.0);
+}
+
 }  // namespace
 }  // namespace shelfcross::flight_sw
