@@ -186,7 +186,7 @@ void FlightSoftware::on_frame(const CameraFrame& f) {
     image = &masked_bgr_;
     ++telemetry_.band_decided_frames;
   }
-  const Picture pic{*image, now_ns_, damage, decides};
+  const Picture pic{*image, now_ns_, damage, decides, &f.damaged_rows};
   if (!decides && damage > config_.perception.steer_max_damage_events) {
     ++telemetry_.unflown_frames;
     if (airborne_phase() && phase_ != Phase::Cross && phase_ != Phase::Transfer) hold_or_hover();
@@ -630,7 +630,12 @@ void FlightSoftware::take_inventory(const Picture& pic) {
     marker_detector_.detect(bgr, markers_);
   }
   telemetry_.markers_seen = static_cast<int>(markers_.size());
-  inventory_.observe(assign_markers(view_, markers_, config_), pic.whole());
+  const std::vector<std::pair<CellIndex, int>> sightings = assign_markers(view_, markers_, config_);
+  if (pic.whole()) {
+    inventory_.observe(sightings, true);
+  } else {
+    inventory_.observe(sightings, cells_clear_of_damage(pic));
+  }
   // Closed after inventory_frames full views, of which enough whole ones to decide which
   // cells are empty (damaged ones only vote for boxes); the timeout bounds the wait.
   if (inventory_.frames() < config_.perception.inventory_frames || !inventory_.empty_decidable()) return;
@@ -645,6 +650,32 @@ void FlightSoftware::take_inventory(const Picture& pic) {
   enter(Phase::Approach, "inventory taken; approaching cell " + cell_text(*tracker_.target()));
   lateral_active_ns_ = now_ns_;  // not yet seen still
   hold_since_ns_.reset();
+}
+
+// The cells of the full view whose rows (their corner tags' centres, band_margin_px around:
+// the marker detector's threshold window and the picture's motion) no damaged row touches: a
+// damaged picture's view of them is whole (inventory.hpp).
+std::vector<CellIndex> FlightSoftware::cells_clear_of_damage(const Picture& pic) const {
+  std::vector<CellIndex> out;
+  const double margin = config_.perception.band_margin_px;
+  if (margin < 0.0) return out;
+  for (int l = 1; l <= config_.shelf.levels(); ++l) {
+    for (int c = 1; c <= config_.shelf.columns(); ++c) {
+      const auto q = cell_quad(view_, {l, c});
+      double top = q[0].y, bottom = q[0].y;
+      for (const cv::Point2d& p : q) {
+        top = std::min(top, p.y);
+        bottom = std::max(bottom, p.y);
+      }
+      top -= margin;
+      bottom += margin;
+      const bool clear = !pic.damaged_rows || std::none_of(pic.damaged_rows->begin(), pic.damaged_rows->end(), [&](const RowSpan& r) {
+        return r.v_begin_px < bottom && r.v_end_px > top;
+      });
+      if (clear) out.push_back({l, c});
+    }
+  }
+  return out;
 }
 
 bool FlightSoftware::select_target(const cv::Mat& bgr) {

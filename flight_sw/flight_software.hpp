@@ -257,6 +257,7 @@ class FlightSoftware {
   void go_to_viewpoint(const Picture& pic, bool view_fresh);
   void take_inventory(const Picture& pic);
   void approach(const Picture& pic);
+  std::vector<CellIndex> cells_clear_of_damage(const Picture& pic) const;
   std::optional<std::string> cross_if_clear(const std::string& why_now);
   // Approach helpers
   bool select_target(const cv::Mat& bgr);

@@ -9,7 +9,8 @@ Inventory::Inventory(int shelf_index, int levels, int columns, int min_agreeing_
       levels_(levels),
       columns_(columns),
       min_agreeing_(min_agreeing_frames),
-      counts_(static_cast<size_t>(levels * columns)) {
+      counts_(static_cast<size_t>(levels * columns)),
+      whole_views_(static_cast<size_t>(levels * columns), 0) {
   assert(levels > 0 && columns > 0 && min_agreeing_frames >= 1);
 }
 
@@ -20,10 +21,28 @@ size_t Inventory::slot(CellIndex c) const {
 
 void Inventory::observe(const std::vector<std::pair<CellIndex, int>>& sightings, bool whole) {
   ++frames_;
-  if (whole) ++whole_frames_;
+  if (whole) {
+    ++whole_frames_;
+    for (int& n : whole_views_) ++n;
+  }
   for (const auto& [cell, id] : sightings) {
     ++counts_[slot(cell)][id];
   }
+}
+
+void Inventory::observe(const std::vector<std::pair<CellIndex, int>>& sightings,
+                        const std::vector<CellIndex>& whole_cells) {
+  observe(sightings, false);
+  for (const CellIndex& cell : whole_cells) ++whole_views_[slot(cell)];
+}
+
+bool Inventory::empty_decidable() const {
+  for (int l = 1; l <= levels_; ++l) {
+    for (int c = 1; c <= columns_; ++c) {
+      if (!box_at({l, c}) && whole_views({l, c}) < min_agreeing_) return false;
+    }
+  }
+  return true;
 }
 
 std::optional<int> Inventory::box_at(CellIndex cell) const {
@@ -43,7 +62,7 @@ std::optional<int> Inventory::box_at(CellIndex cell) const {
 }
 
 bool Inventory::is_empty(CellIndex cell) const {
-  return empty_decidable() && counts(cell).empty();
+  return whole_views(cell) >= min_agreeing_ && counts(cell).empty();
 }
 
 std::vector<BoxEntry> Inventory::boxes() const {

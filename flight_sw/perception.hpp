@@ -21,6 +21,7 @@
 #include <opencv2/core.hpp>
 
 #include "flight_sw/config.hpp"
+#include "shelfcross/camera.hpp"
 #include "shelfcross/cell_index.hpp"
 #include "shelfcross/time.hpp"
 
@@ -208,6 +209,8 @@ struct Picture {
   TimeNs t_ns = 0;         ///< its stamp (receive time)
   int damage_events = 0;   ///< lost bands since its key frame; 0: whole
   bool decides = true;     ///< damage_events <= perception.decide_max_damage_events
+  /// Where a damaged picture may be damaged (CameraFrame::damaged_rows); null or empty: nowhere.
+  const std::vector<RowSpan>* damaged_rows = nullptr;
   bool whole() const { return damage_events == 0; }
 };
 

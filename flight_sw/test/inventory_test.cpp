@@ -105,5 +105,24 @@ TEST(Inventory, DamagedFramesVoteForBoxesButNeverForEmpty) {
   EXPECT_EQ(inv.frames(), 9);
 }
 
+// A damaged frame whose damage lies clear of a cell's rows is a whole view of that cell: three
+// such views decide an empty cell, while the cell under the damage stays undecided; the
+// inventory can close once every cell without a box has its whole views.
+TEST(Inventory, DamagedFramesViewCellsClearOfTheirDamageWhole) {
+  Inventory inv(0, 2, 1, 3);  // cell (1,1) below, (2,1) above
+  for (int f = 0; f < 3; ++f) inv.observe({}, std::vector<CellIndex>{{2, 1}});  // damage over the lower level
+  EXPECT_EQ(inv.whole_frames(), 0);
+  EXPECT_EQ(inv.whole_views({2, 1}), 3);
+  EXPECT_EQ(inv.whole_views({1, 1}), 0);
+  EXPECT_TRUE(inv.is_empty({2, 1}));
+  EXPECT_FALSE(inv.is_empty({1, 1})) << "a cell under the damage was declared empty";
+  EXPECT_FALSE(inv.empty_decidable());
+  // The lower cell's box, read on damaged frames: every cell is now judged.
+  for (int f = 0; f < 3; ++f) inv.observe({{{1, 1}, 8}}, std::vector<CellIndex>{{2, 1}});
+  EXPECT_EQ(inv.box_at({1, 1}), 8);
+  EXPECT_TRUE(inv.empty_decidable());
+  EXPECT_EQ(inv.empty_cells(), (std::vector<CellIndex>{{2, 1}}));
+}
+
 }  // namespace
 }  // namespace shelfcross::flight_sw
