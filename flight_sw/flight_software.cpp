@@ -636,8 +636,8 @@ void FlightSoftware::take_inventory(const Picture& pic) {
   } else {
     inventory_.observe(sightings, cells_clear_of_damage(pic));
   }
-  // Closed after inventory_frames full views, of which enough whole ones to decide which
-  // cells are empty (damaged ones only vote for boxes); the timeout bounds the wait.
+  // Closed after inventory_frames full views, with enough whole views of every cell without a
+  // box to decide whether it is empty (inventory.hpp); the timeout bounds the wait.
   if (inventory_.frames() < config_.perception.inventory_frames || !inventory_.empty_decidable()) return;
   if (config_.strategy.mode != Strategy::through_cells) {
     start_transfer();
