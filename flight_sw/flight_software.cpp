@@ -237,10 +237,7 @@ bool FlightSoftware::damage_clear_of_decision(const CameraFrame& f) const {
   if (f.damaged_rows.empty()) return true;  // the damage has left the picture
   const std::optional<cv::Rect2d> region = decision_region_px();
   if (!region) return false;
-  const double top = region->y - margin, bottom = region->y + region->height + margin;
-  return std::none_of(f.damaged_rows.begin(), f.damaged_rows.end(), [&](const RowSpan& r) {
-    return r.v_begin_px < bottom && r.v_end_px > top;
-  });
+  return !rows_touch(f.damaged_rows, region->y - margin, region->y + region->height + margin);
 }
 
 // `out` = the frame's picture with its damaged rows mid-grey (no tag colour, no marker).
@@ -667,12 +664,7 @@ std::vector<CellIndex> FlightSoftware::cells_clear_of_damage(const Picture& pic)
         top = std::min(top, p.y);
         bottom = std::max(bottom, p.y);
       }
-      top -= margin;
-      bottom += margin;
-      const bool clear = !pic.damaged_rows || std::none_of(pic.damaged_rows->begin(), pic.damaged_rows->end(), [&](const RowSpan& r) {
-        return r.v_begin_px < bottom && r.v_end_px > top;
-      });
-      if (clear) out.push_back({l, c});
+      if (!pic.damaged_rows || !rows_touch(*pic.damaged_rows, top - margin, bottom + margin)) out.push_back({l, c});
     }
   }
   return out;

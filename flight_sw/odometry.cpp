@@ -87,7 +87,7 @@ bool CellHeightEstimator::vertically_still_for(TimeNs now_ns, double vertical_la
 }
 
 void CellHeightEstimator::sample(double state_height_m, double z_K_m) {
-  samples_m_.push_back(state_height_m - z_K_m);
+  samples_m_.push_back(cell_centre_height_m(state_height_m, z_K_m));
   if (samples_m_.size() > kCellHeightSamples) samples_m_.erase(samples_m_.begin());
 }
 

@@ -89,6 +89,10 @@ class ForwardGainEstimator {
 /// picture); the caller takes it only on nearly whole pictures, with a fresh state, and inside
 /// commit_range_m (close in, the 4-tag pose's height is good to about 2 cm; far out its tilt
 /// ambiguity moves it by decimetres). The last kCellHeightSamples count.
+/// The cell centre's height above the take-off point from a pose: the state height less the
+/// body's z_K (z_K = 0 at the cell centre; K and G are parallel).
+inline double cell_centre_height_m(double state_height_m, double z_K_m) { return state_height_m - z_K_m; }
+
 class CellHeightEstimator {
  public:
   /// On every state record: remembers the last one showing vertical motion.

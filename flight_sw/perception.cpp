@@ -503,6 +503,11 @@ std::optional<cv::Rect2d> BoxTracker::predict(TimeNs t_ns) const {
   return cv::Rect2d(cx - 0.5 * w, cy - 0.5 * h, w, h);
 }
 
+bool rows_touch(const std::vector<RowSpan>& rows, double top_px, double bottom_px) {
+  return std::any_of(rows.begin(), rows.end(),
+                     [&](const RowSpan& r) { return r.v_begin_px < bottom_px && r.v_end_px > top_px; });
+}
+
 // ---- The front shelf in one frame ----
 
 void analyse_shelf(const cv::Mat& bgr, TagDetector& detector, const FlightConfig& config,

@@ -214,6 +214,9 @@ struct Picture {
   bool whole() const { return damage_events == 0; }
 };
 
+/// Whether any of `rows` overlaps the picture rows (top_px, bottom_px).
+bool rows_touch(const std::vector<RowSpan>& rows, double top_px, double bottom_px);
+
 /// What one frame shows of the front shelf.
 struct ShelfView {
   std::vector<TagBlob> tags;  ///< front-shelf tags (after eq. 1)

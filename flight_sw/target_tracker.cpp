@@ -286,7 +286,7 @@ cv::Rect2d corner_box(const std::array<cv::Point2d, 4>& q, double side) {
 
 std::optional<double> cell_height_m(const std::optional<StateRecord>& state, double z_K_m) {
   if (!state) return std::nullopt;
-  return state->height_m - z_K_m;
+  return cell_centre_height_m(state->height_m, z_K_m);
 }
 
 std::optional<double> row_height_m(const FlightConfig& config, const std::optional<StateRecord>& state,
