@@ -869,7 +869,9 @@ void FlightSoftware::approach(const Picture& pic) {
   const ControlGains& g = config_.control;
   if (retreat_until_ns_) return set_velocity(back_off_velocity(g));  // declined: backing out (supervise)
   forward_gain_.on_command_held(now_ns_, velocity_.vx_B_mps);
-  const TargetTracker::Prediction predicted = tracker_.predict(pic);
+  std::optional<OdometryFix> odometry;
+  if (state_fresh()) odometry = OdometryFix{odometry_.p_O_m(), state_->yaw_rad};
+  const TargetTracker::Prediction predicted = tracker_.predict(pic, odometry);
   telemetry_.tracker_ok = predicted.tracker_ok;
   const bool found = tracker_.measure(pic, predicted.box_px, tag_detector_, state_);
   if (found) after_measurement();

@@ -342,7 +342,46 @@ void TargetTracker::start_tracker(const cv::Mat& bgr, const cv::Rect2d& box, Tim
   }
 }
 
-TargetTracker::Prediction TargetTracker::predict(const Picture& pic) {
+std::optional<std::array<cv::Point2d, 4>> corners_after_motion(const FlightConfig& config, CellIndex cell,
+                                                               const PoseEstimate& pose_K, double yaw_O_at_pose_rad,
+                                                               const Eigen::Vector3d& dp_O_m, double dyaw_rad) {
+  const double yaw_K_in_O = yaw_O_at_pose_rad - pose_K.yaw_rad;
+  Eigen::Vector3d dp_K = dp_O_m;
+  dp_K.head<2>() = Eigen::Rotation2Dd(-yaw_K_in_O) * dp_O_m.head<2>();
+  Eigen::Isometry3d X_KB_moved = pose_K.X_FB;
+  X_KB_moved.linear() = Eigen::AngleAxisd(dyaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix() * pose_K.X_FB.linear();
+  X_KB_moved.translation() += dp_K;
+  const Eigen::Isometry3d X_CK = (X_KB_moved * (pose_K.X_FB.inverse() * pose_K.X_FC)).inverse();
+  const auto obj = cell_corner_tags_K(config.shelf, cell);
+  std::vector<cv::Point3d> p_C;
+  for (const cv::Point3d& o : obj) {
+    const Eigen::Vector3d c = X_CK * Eigen::Vector3d(o.x, o.y, o.z);
+    if (c.z() < 0.05) return std::nullopt;
+    p_C.emplace_back(c.x(), c.y(), c.z());
+  }
+  const CameraIntrinsics& k = config.camera;
+  const cv::Matx33d K(k.fx_px, 0, k.cx_px, 0, k.fy_px, k.cy_px, 0, 0, 1);
+  const cv::Vec<double, 5> dist(k.k1, k.k2, k.p1, k.p2, k.k3);
+  std::vector<cv::Point2d> px;
+  cv::projectPoints(p_C, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, dist, px);
+  return std::array<cv::Point2d, 4>{px[0], px[1], px[2], px[3]};
+}
+
+TargetTracker::Prediction TargetTracker::predict(const Picture& pic, const std::optional<OdometryFix>& odometry) {
+  odometry_now_ = odometry;
+  moved_box_px_.reset();
+  if (pose_K_ && target_ && odometry && odometry_at_pose_ &&
+      ns_to_seconds(pic.t_ns - pose_t_ns_) > kMotionPredictAfter_s) {
+    const auto moved = corners_after_motion(config_, *target_, *pose_K_, odometry_at_pose_->yaw_O_rad,
+                                            odometry->p_O_m - odometry_at_pose_->p_O_m,
+                                            wrap_pi(odometry->yaw_O_rad - odometry_at_pose_->yaw_O_rad));
+    if (moved) {
+      // The box around the moved corners; measure() places each corner in it as the last
+      // measured corners sat in the last box.
+      moved_box_px_ = corner_box(*moved, tag_side_px_);
+      return {*moved_box_px_, true};
+    }
+  }
   Prediction p{box_px_, false};
   if (fast()) {
     const std::optional<cv::Rect2d> b = box_tracker_.predict(pic.t_ns);
@@ -506,13 +545,19 @@ bool TargetTracker::measure(const Picture& pic, const cv::Rect2d& predicted, Tag
   // and the vehicle drifts sideways by V_y dt (8 cm in 1 s, 0.2 of a 0.4 m box at any range).
   // A longer gap, or a box found elsewhere, leaves the target unidentified until a picture
   // confirms it (check_identity). (The level is checked on every pose against the state height.)
+  // Where the vouched box is expected now: moved by the vehicle's own motion since, when this
+  // picture's prediction was made so from the last pose, which was the vouched one (every pose
+  // accepted while identified vouches); the state odometry drifts centimetres over such a gap,
+  // a few pixels, against the 0.7 box widths a slid column moves.
   const cv::Rect2d box_now = corner_box({img[0], img[1], img[2], img[3]}, side);
   const double gap_s = ns_to_seconds(now_ns - identity_vouched_ns_);
+  const std::optional<cv::Rect2d> vouched_now =
+      moved_box_px_ && identity_vouched_ns_ == pose_t_ns_ ? moved_box_px_ : vouched_box_px_;
   const bool continuous =
       gap_s <= mp.pose_jump_window_s ||
-      (gap_s <= mp.identity_continuity_s && vouched_box_px_ &&
-       cv::norm(centre_of(box_now) - centre_of(*vouched_box_px_)) < 0.3 * vouched_box_px_->width &&
-       std::abs(box_now.width / vouched_box_px_->width - 1.0) < 0.2);
+      (gap_s <= mp.identity_continuity_s && vouched_now &&
+       cv::norm(centre_of(box_now) - centre_of(*vouched_now)) < 0.3 * vouched_now->width &&
+       std::abs(box_now.width / vouched_now->width - 1.0) < 0.2);
   if (identity_ == CellIdentity::Confirmed && continuous) {
     identity_vouched_ns_ = now_ns;
     vouched_box_px_ = box_now;
@@ -524,6 +569,7 @@ bool TargetTracker::measure(const Picture& pic, const cv::Rect2d& predicted, Tag
   for (size_t k = 0; k < 4; ++k) corner_px_[k] = img[k];
   pose_K_ = pose;
   pose_t_ns_ = now_ns;
+  odometry_at_pose_ = odometry_now_;
   if (pic.decides) {  // the crossing is judged on poses from nearly whole pictures only
     decision_pose_K_ = pose;
     decision_pose_t_ns_ = now_ns;
@@ -546,7 +592,8 @@ bool TargetTracker::reacquire(const Picture& pic, const ShelfView& view, TagDete
   // whose corner tags give a plausible pose of the right level (measure's tests), so that a
   // neighbour above or below is passed over.
   if (!view.grid.valid) return false;
-  const cv::Point2d last = centre_of(box_px_);
+  // Near where the vehicle's own motion since the last pose puts the box, if it was predicted so.
+  const cv::Point2d last = centre_of(moved_box_px_ ? *moved_box_px_ : box_px_);
   const double gate = 0.5 * std::min(box_px_.width, box_px_.height);
   std::vector<std::pair<double, std::array<int, 4>>> candidates;
   for (int r = 0; r + 1 < view.grid.rows; ++r) {

@@ -144,6 +144,22 @@ std::optional<double> row_height_m(const FlightConfig& config, const std::option
 /// and a video latency newer than the picture), rad: its height is the level check's.
 constexpr double kLevelPitchAgreement_rad = 3.0 * std::numbers::pi / 180.0;
 
+/// Where the vehicle is by its own state records: StateOdometry's position in the odometry
+/// frame O and the record's yaw (CCW, rad).
+struct OdometryFix {
+  Eigen::Vector3d p_O_m = Eigen::Vector3d::Zero();
+  double yaw_O_rad = 0.0;
+};
+
+/// The target cell's four corner tags (cell_corner_tags_K order) as seen after the vehicle of
+/// `pose_K` (whose state yaw was `yaw_O_at_pose_rad`) moved by `dp_O_m` and turned by
+/// `dyaw_rad`, its attitude otherwise unchanged: K's heading in O is yaw_O - pose yaw, so
+/// dp_K = R_z(-(yaw_O - yaw_K)) dp_O; X_KB' = (R_z(dyaw) R_KB, p_KB + dp_K); the camera rides
+/// on the body (X_KC' = X_KB' X_KB^-1 X_KC). Empty when a tag would lie behind the camera.
+std::optional<std::array<cv::Point2d, 4>> corners_after_motion(const FlightConfig& config, CellIndex cell,
+                                                               const PoseEstimate& pose_K, double yaw_O_at_pose_rad,
+                                                               const Eigen::Vector3d& dp_O_m, double dyaw_rad);
+
 /// The tracked target: the cell chosen on a full view, its four corner tags followed from
 /// picture to picture (fast pipeline: BoxTracker; reference: Median Flow), its pose in the cell
 /// frame K checked for plausibility (jump, level) and its identity (above: kept by continuity,
@@ -175,7 +191,12 @@ class TargetTracker {
     cv::Rect2d box_px;
     bool tracker_ok = false;
   };
-  Prediction predict(const Picture& pic);
+  /// Where the box is in `pic`. Within kMotionPredictAfter_s of the last pose, the box
+  /// tracker's image velocity; later (damaged or tagless pictures in between), the last pose's
+  /// corner tags projected after the vehicle's own motion since then (`odometry`, now), as the
+  /// image velocity of a few pictures extrapolated over a gap throws the window off the tags.
+  Prediction predict(const Picture& pic, const std::optional<OdometryFix>& odometry);
+  static constexpr double kMotionPredictAfter_s = 0.1;  ///< three frame periods
   /// Looks for the target's four corner tags around `predicted`: tags in a window around it,
   /// eq. 1 inside the window, each corner the nearest tag to where the box puts it; the pose
   /// from them, if plausible (jump, level by `state`), becomes the target's. False: not found.
@@ -242,6 +263,9 @@ class TargetTracker {
   std::vector<TagBlob> frame_tags_;       ///< identity check buffers
   std::vector<MarkerSighting> frame_markers_;
   std::optional<double> behind_m_;        ///< nearest tag behind the target seen through it, from the front tags, m
+  std::optional<OdometryFix> odometry_now_;      ///< at the last prediction
+  std::optional<OdometryFix> odometry_at_pose_;  ///< when pose_K_ was measured
+  std::optional<cv::Rect2d> moved_box_px_;       ///< the last prediction by the vehicle's motion
   Counts counts_;
 };
 

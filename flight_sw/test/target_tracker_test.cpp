@@ -288,3 +288,63 @@ TEST(CrossingGate, JudgesTheHeightByTheStateRecordNotOnlyByTheStalePose) {
 
 }  // namespace
 }  // namespace shelfcross::flight_sw
+
+namespace shelfcross::flight_sw {
+namespace {
+
+// The camera's pixels of the cell's corner tags for a body at p_KB, heading yaw (K frame).
+std::array<cv::Point2d, 4> corners_seen(const FlightConfig& config, CellIndex cell, const Eigen::Vector3d& p_KB,
+                                        double yaw_rad) {
+  Eigen::Isometry3d X_KB = Eigen::Isometry3d::Identity();
+  X_KB.linear() = Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  X_KB.translation() = p_KB;
+  Eigen::Isometry3d X_BC = Eigen::Isometry3d::Identity();
+  X_BC.linear() = rotation_body_from_camera(config.mount.pitch_rad);
+  X_BC.translation() = config.mount.p_BC_B_m;
+  const Eigen::Isometry3d X_CK = (X_KB * X_BC).inverse();
+  std::vector<cv::Point3d> p_C;
+  for (const cv::Point3d& o : cell_corner_tags_K(config.shelf, cell)) {
+    const Eigen::Vector3d c = X_CK * Eigen::Vector3d(o.x, o.y, o.z);
+    p_C.emplace_back(c.x(), c.y(), c.z());
+  }
+  const CameraIntrinsics& k = config.camera;
+  std::vector<cv::Point2d> px;
+  cv::projectPoints(p_C, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cv::Matx33d(k.fx_px, 0, k.cx_px, 0, k.fy_px, k.cy_px, 0, 0, 1),
+                    cv::Vec<double, 5>(k.k1, k.k2, k.p1, k.p2, k.k3), px);
+  return {px[0], px[1], px[2], px[3]};
+}
+
+// Between poses (damaged pictures, a tag missed) the tracker moves the last pose's corner tags
+// by the vehicle's own motion from its state odometry (frame O, whose axes are turned from K's
+// by the heading): the prediction equals the picture the moved camera takes, to a tenth of a
+// pixel, for motions of every axis and a turn, with O turned 1 rad from K.
+TEST(MotionPrediction, CornerTagsMovedByTheOdometryAreWhereTheMovedCameraSeesThem) {
+  const FlightConfig config;
+  const CellIndex cell{2, 3};
+  const Eigen::Vector3d p0_KB(-1.6, 0.08, 0.12);
+  const double yaw0 = 0.05;
+  const auto seen0 = corners_seen(config, cell, p0_KB, yaw0);
+  const auto obj = cell_corner_tags_K(config.shelf, cell);
+  const auto pose = estimate_pose({obj.begin(), obj.end()}, {seen0.begin(), seen0.end()}, config.camera, config.mount);
+  ASSERT_TRUE(pose.has_value());
+  const double yaw_K_in_O = 1.0;  // the odometry frame's heading is arbitrary
+  const double yaw_O_at_pose = yaw_K_in_O + yaw0;
+  for (const auto& [dp_KB, dyaw] : std::vector<std::pair<Eigen::Vector3d, double>>{
+           {{0.3, 0.0, 0.0}, 0.0}, {{0.0, 0.1, 0.0}, 0.0}, {{0.0, 0.0, -0.15}, 0.0}, {{0.2, -0.05, 0.1}, -0.08}}) {
+    const Eigen::Vector3d dp_O(std::cos(yaw_K_in_O) * dp_KB.x() - std::sin(yaw_K_in_O) * dp_KB.y(),
+                               std::sin(yaw_K_in_O) * dp_KB.x() + std::cos(yaw_K_in_O) * dp_KB.y(), dp_KB.z());
+    const auto predicted = corners_after_motion(config, cell, *pose, yaw_O_at_pose, dp_O, dyaw);
+    ASSERT_TRUE(predicted.has_value());
+    const auto truth = corners_seen(config, cell, p0_KB + dp_KB, yaw0 + dyaw);
+    for (size_t k = 0; k < 4; ++k) {
+      EXPECT_LT(cv::norm((*predicted)[k] - truth[k]), 0.1) << "corner " << k << " motion " << dp_KB.transpose();
+    }
+    // And the motion moves them: a prediction that ignored it would be far off.
+    double moved_px = 0.0;
+    for (size_t k = 0; k < 4; ++k) moved_px = std::max(moved_px, cv::norm(truth[k] - seen0[k]));
+    EXPECT_GT(moved_px, 10.0);
+  }
+}
+
+}  // namespace
+}  // namespace shelfcross::flight_sw
