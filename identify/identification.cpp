@@ -36,6 +36,12 @@ double percentile(std::vector<double> v, double q) {
 
 LinkFigures link_figures(const FlightRecord& r) {
   LinkFigures f;
+  const std::vector<TimeNs> sent = state_send_times(r);
+  for (size_t i = 0; i < sent.size(); ++i) {
+    const double early_s = ns_to_seconds(r.states[i].t_ns - sent[i]);
+    f.held_up_states += early_s >= 0.010 ? 1 : 0;
+    f.held_up_max_s = std::max(f.held_up_max_s, early_s);
+  }
   f.state_records = static_cast<int>(r.states.size());
   f.bad_states = r.bad_states;
   std::vector<double> periods;
@@ -155,6 +161,19 @@ TrackingLoop tracking_loop(Axis axis, const plant::AutopilotParams& P, const pla
   return L;
 }
 
+std::vector<TimeNs> state_send_times(const FlightRecord& r) {
+  std::vector<TimeNs> t(r.states.size());
+  for (size_t i = 0; i < t.size(); ++i) t[i] = r.states[i].t_ns;
+  std::vector<double> periods;
+  for (size_t i = 1; i < t.size(); ++i) {
+    if (t[i] > t[i - 1]) periods.push_back(static_cast<double>(t[i] - t[i - 1]));
+  }
+  if (periods.size() < 10) return t;
+  const auto least_gap = static_cast<TimeNs>(percentile(periods, 0.5));
+  for (size_t i = t.size() - 1; i-- > 0;) t[i] = std::min(t[i], t[i + 1] - least_gap);
+  return t;
+}
+
 AxisRecord axis_record(const FlightRecord& r, Axis axis, int min_stick, int* windows) {
   AxisRecord rec;
   rec.observation = axis == Axis::vertical || axis == Axis::yaw ? Observation::integral : Observation::direct;
@@ -190,7 +209,9 @@ AxisRecord axis_record(const FlightRecord& r, Axis axis, int min_stick, int* win
   // Heading unwrapped over the whole record (the state's yaw is in (-pi, pi]).
   double unwrap = 0.0, last_yaw = 0.0;
   bool first = true;
-  for (const StateRecord& s : r.states) {
+  const std::vector<TimeNs> sent = state_send_times(r);
+  for (size_t k = 0; k < r.states.size(); ++k) {
+    const StateRecord& s = r.states[k];
     if (!first) {
       const double step = s.yaw_rad - last_yaw;
       if (step > std::numbers::pi) unwrap -= 2.0 * std::numbers::pi;
@@ -198,7 +219,7 @@ AxisRecord axis_record(const FlightRecord& r, Axis axis, int min_stick, int* win
     }
     first = false;
     last_yaw = s.yaw_rad;
-    const double t = ns_to_seconds(s.t_ns - t0);
+    const double t = ns_to_seconds(sent[k] - t0);
     if (t < 0.5 || t > flight_end_s) continue;  // settle after the takeoff manoeuvre
     for (size_t w = 0; w < active.size(); ++w) {
       if (t < active[w].first - kWindowBefore_s || t > active[w].second + kWindowAfter_s) continue;
