@@ -313,7 +313,8 @@ Identification identify_flight(const FlightRecord& r, const IdentifyOptions& o) 
     AxisResult& a = id.axes[i];
     if (!a.identified) continue;
     widen(a.id.gain, kModelAllowance[i][0] * std::abs(a.id.gain.value));
-    widen(a.id.tau_s, kModelAllowance[i][1] * a.id.tau_s.value);
+    const double tau_margin = kModelAllowance[i][1] * a.id.tau_s.value;
+    widen(a.id.tau_s, a.axis == Axis::yaw ? std::max(tau_margin, kAllowanceYawTimeConstant_s) : tau_margin);
   }
   if (identified == 0) {
     throw std::invalid_argument(r.source + ": no axis could be identified: no stick moved while flying (fly the "

@@ -96,7 +96,7 @@ void write_parameters_md(std::ostream& o, const ReportInputs& in) {
     << " s), the velocities by a parametric one (their rounded readings drawn again with the residuals' correlation); "
     << "each widened by the model-error allowance (gains " << 100 * kAllowanceVelocityGain << " % for the velocities, "
     << 100 * kAllowanceIntegralGain << " % for height and heading, time constants " << 100 * kAllowanceTimeConstant
-    << " %, root sum of squares with the bootstrap's half-width; docs/calibration.md).\n\n";
+    << " %, the heading's at least " << kAllowanceYawTimeConstant_s << " s, root sum of squares with the bootstrap's half-width; docs/calibration.md).\n\n";
   o << "| parameter | identified [95 % interval] |" << (in.truth.empty() ? "" : " true | within |") << "\n";
   o << "|---|---|" << (in.truth.empty() ? "" : "---|---|") << "\n";
   for (const auto& [name, iv] : id.parameters) {
