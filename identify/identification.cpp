@@ -12,6 +12,13 @@ namespace shelfcross::identify {
 namespace {
 
 constexpr double kWindowBefore_s = 1.0, kWindowAfter_s = 3.0;
+// Integral observations (height, heading) get an offset per pulse or doublet: a new segment in
+// the middle of every hover of at least this long between the axis's deflections. Each segment
+// holds its pulse with hover on both sides, so the pulse's displacement and lags stay in it;
+// what goes is the level one pulse leaves for the next, which the slow drift of a height in
+// gusts (1 to 3 cm over the manoeuvre's 25 s in tello-sim) blurs and which, left in one offset,
+// stays in the residuals as a trend and widens the intervals.
+constexpr double kSegmentGap_s = 1.0;
 
 int stick_index(Axis a) {
   switch (a) {
@@ -185,6 +192,8 @@ AxisRecord axis_record(const FlightRecord& r, Axis axis, int min_stick, int* win
   const double sign = stick_sign(axis);
   // The input: the drone flies the newest rc it received; it ignored them before the takeoff's ok.
   std::vector<std::pair<double, double>> active;  // (from, to) of deflections
+  std::vector<double> boundaries;                  // integral observations: between pulses
+  double last_deflected = -1e9;
   for (size_t i = 0; i < r.rc.size(); ++i) {
     const RcSent& rc = r.rc[i];
     if (rc.t_ns < t0 || rc.t_ns > t_end) continue;
@@ -196,6 +205,8 @@ AxisRecord axis_record(const FlightRecord& r, Axis axis, int min_stick, int* win
     }
     if (std::abs(rc.sticks[idx]) >= min_stick) {
       const double until = i + 1 < r.rc.size() ? ns_to_seconds(r.rc[i + 1].t_ns - t0) : t;
+      if (t - last_deflected >= kSegmentGap_s) boundaries.push_back(0.5 * (t + last_deflected));
+      last_deflected = until;
       if (!active.empty() && t - active.back().second < kWindowBefore_s + kWindowAfter_s) {
         active.back().second = until;
       } else {
@@ -230,13 +241,26 @@ AxisRecord axis_record(const FlightRecord& r, Axis axis, int min_stick, int* win
         case Axis::vertical: y = s.height_m; break;
         case Axis::yaw: y = s.yaw_rad + unwrap; break;
       }
+      // Direct observations: a segment per window (for the bootstrap's continuity); integral
+      // ones: a segment (an offset) per pulse or doublet, from the middle of the hover before it
+      // to the middle of the hover after it.
+      const int segment = rec.observation == Observation::integral
+                              ? static_cast<int>(std::upper_bound(boundaries.begin(), boundaries.end(), t) - boundaries.begin())
+                              : static_cast<int>(w);
       rec.t_s.push_back(t);
       rec.y.push_back(y);
-      rec.segment.push_back(static_cast<int>(w));
+      rec.segment.push_back(segment);
       break;
     }
   }
-  rec.segments = static_cast<int>(active.size());
+  // Segments numbered 0.. in order of the samples (some boundaries have none between them).
+  const std::vector<int> raw = rec.segment;
+  int segments = 0;
+  for (size_t k = 0; k < raw.size(); ++k) {
+    if (k == 0 || raw[k] != raw[k - 1]) ++segments;
+    rec.segment[k] = segments - 1;
+  }
+  rec.segments = std::max(segments, 1);
   return rec;
 }
 
