@@ -15,7 +15,9 @@
 // the first deflection to 3 s after the last, windows closer than 3 s merged; only while
 // flying free (after the takeoff's `ok`, before the first `land`). An axis whose stick never
 // moved by at least min_stick, or with fewer than min_samples state records in its windows,
-// is not identified (and says why).
+// is not identified (and says why). Height and heading, observed through their integrals, get
+// an offset per pulse or doublet (from the middle of the hover before it to the middle of the
+// hover after it), the velocities none.
 //
 // The scenario's parameters follow from the axes:
 //   rc_horizontal_mps_at_100   forward and lateral gains, inverse-variance weighted

@@ -27,7 +27,10 @@
 // height doublet's reversal (2.4 A = 0.96 at A = 40) asks at most 1.25 * 0.96 / 0.25 = 4.8 m/s^2
 // of thrust change, under the 9.8 m/s^2 a thrust-to-weight of 2 gives and the about 8.8 m/s^2
 // down to idle; the heading's (2.4 A = 1.2 at A = 50) a rate of at most 1.875 * 0.6 = 1.13 rad/s
-// each way, under the autopilot's 3 rad/s.
+// each way, under the autopilot's 3 rad/s; its reversal's angular acceleration, about 10 rad/s^2
+// for the strongest, fastest heading of the range, is what a tello-sim drone of rc_gain_scale
+// 1.18 answered with 2 to 3 cm of height during the two largest doublets (docs/calibration.md,
+// section 5): a smaller heading amplitude is the margin, at the heading's resolution's cost.
 // Space needed (at K = 1.25 m/s, 1.875 rad/s): about 0.9 m each way forward, back, left and
 // right of the take-off point, 0.6 m above the take-off height, a turn of 65 deg each way.
 
