@@ -96,7 +96,7 @@ void write_parameters_md(std::ostream& o, const ReportInputs& in) {
     << " s), the velocities by a parametric one (their rounded readings drawn again with the residuals' correlation); "
     << "each widened by the model-error allowance (gains " << 100 * kAllowanceVelocityGain << " % for the velocities, "
     << 100 * kAllowanceIntegralGain << " % for height and heading, time constants " << 100 * kAllowanceTimeConstant
-    << " %, root sum of squares with the bootstrap's half-width; docs/calibration.md).\n\n";
+    << " %, the heading's at least " << kAllowanceYawTimeConstant_s << " s, root sum of squares with the bootstrap's half-width; docs/calibration.md).\n\n";
   o << "| parameter | identified [95 % interval] |" << (in.truth.empty() ? "" : " true | within |") << "\n";
   o << "|---|---|" << (in.truth.empty() ? "" : "---|---|") << "\n";
   for (const auto& [name, iv] : id.parameters) {
@@ -162,6 +162,8 @@ void write_link_md(std::ostream& o, const LinkFigures& l) {
   o << "| state records (dropped as unparseable) | " << l.state_records << " (" << l.bad_states << ") |\n";
   o << "| state period p50 / p95 / longest gap (s) | " << num(l.state_period_p50_s) << " / " << num(l.state_period_p95_s)
     << " / " << num(l.state_gap_max_s) << " |\n";
+  o << "| state records held up: fitted 10 ms or more before they were read (state_send_times) / the most | " << l.held_up_states
+    << " / " << num(l.held_up_max_s) << " s |\n";
   o << "| frames (damaged) | " << l.frames << " (" << l.damaged_frames << ") |\n";
   o << "| frame period p50 / p95 (s) | " << num(l.frame_period_p50_s, 4) << " / " << num(l.frame_period_p95_s, 4) << " |\n";
   o << "| last datagram -> decoded p50 / p95 (s) | " << num(l.rx_to_handed_p50_s, 4) << " / "
@@ -215,6 +217,7 @@ json report_json(const ReportInputs& in) {
   const LinkFigures& l = id.link;
   j["link"] = {{"state_records", l.state_records}, {"bad_states", l.bad_states}, {"state_period_p50_s", l.state_period_p50_s},
                {"state_period_p95_s", l.state_period_p95_s}, {"state_gap_max_s", l.state_gap_max_s},
+               {"held_up_states", l.held_up_states}, {"held_up_max_s", l.held_up_max_s},
                {"frames", l.frames}, {"damaged_frames", l.damaged_frames}, {"frame_period_p50_s", l.frame_period_p50_s},
                {"rx_to_handed_p50_s", l.rx_to_handed_p50_s}, {"rx_to_handed_p95_s", l.rx_to_handed_p95_s},
                {"handed_to_taken_p50_s", l.handed_to_taken_p50_s}, {"handed_to_taken_p95_s", l.handed_to_taken_p95_s}};

@@ -1,12 +1,36 @@
 #include "flight_sw/tello/calibration_manoeuvre.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 namespace shelfcross::tello {
 namespace {
 
-constexpr double kSettle_s = 1.5;  // hover after the takeoff and between pulses: tau <= 0.7 s settles
+constexpr double kFirstHover_s = 1.5;  // after the takeoff
+constexpr double kGap_s = 0.5;         // centred sticks after each pulse or doublet
+constexpr double kLastHover_s = 1.5;   // the last response settles before the land
+constexpr double kPulse_s = 2.0;       // horizontal pulses
+constexpr double kHalf_s = 1.0;        // each half of a height or heading doublet
+constexpr int kHorizontalPulses = 4;   // per axis
+constexpr int kDoublets = 5;           // per axis
+
+// Amplitude j of n: from 0.8 A to 1.2 A, so that the responses' plateaus fall at different
+// places between the SDK's velocity steps (0.1 m/s) and their rounding does not bias the gain
+// the same way every time.
+int ramp(int amplitude, int j, int n) { return static_cast<int>(std::lround(amplitude * (0.8 + 0.4 * j / (n - 1)))); }
+
+std::array<int, 4> stick(int index, int value) {
+  std::array<int, 4> s{};
+  s[static_cast<size_t>(index)] = value;
+  return s;
+}
+
+std::string signed_text(int v) {
+  char text[16];
+  std::snprintf(text, sizeof text, "%+d", v);
+  return text;
+}
 
 }  // namespace
 
@@ -14,33 +38,29 @@ CalibrationManoeuvre::CalibrationManoeuvre(const CalibrationAmplitudes& a) {
   for (int v : {a.horizontal, a.vertical, a.yaw}) {
     if (v < 5 || v > 80) throw std::invalid_argument("calibration manoeuvre: amplitudes must be 5..80 (pulses reach 1.2 times)");
   }
-  steps_.push_back({kSettle_s, {0, 0, 0, 0}, "hover"});
-  // Stick index, amplitude, pulse length, pulse pairs, name.
-  struct AxisPlan {
-    int stick;
-    int amplitude;
-    double pulse_s;
-    int pairs;
-    const char* name;
-  };
-  const AxisPlan plans[] = {{1, a.horizontal, 2.0, 2, "forward"},
-                            {0, a.horizontal, 2.0, 2, "right"},
-                            {2, a.vertical, 1.5, 2, "up"},
-                            {3, a.yaw, 2.0, 1, "clockwise"}};
-  for (const AxisPlan& p : plans) {
-    const int pulses = 2 * p.pairs;
-    for (int j = 0; j < pulses; ++j) {
-      // Amplitudes from 0.8 A to 1.2 A: the responses' plateaus then fall at different places
-      // between the SDK's velocity steps (0.1 m/s), so their rounding does not bias the gain
-      // the same way every time.
-      const int amplitude = static_cast<int>(std::lround(p.amplitude * (0.8 + 0.4 * j / (pulses - 1))));
-      const int sign = j % 2 == 0 ? 1 : -1;
-      std::array<int, 4> sticks{};
-      sticks[static_cast<size_t>(p.stick)] = sign * amplitude;
-      steps_.push_back({p.pulse_s, sticks, std::string(p.name) + (sign > 0 ? " +" : " -") + std::to_string(amplitude)});
-      steps_.push_back({kSettle_s, {0, 0, 0, 0}, "hover"});
-    }
+  const std::array<int, 4> centred{};
+  steps_.push_back({kFirstHover_s, centred, "hover"});
+  // Horizontal: forward (stick b), then right (stick a), the same amplitude and sign, then the
+  // next amplitude with the other sign: each axis ends near where it began.
+  for (int j = 0; j < kHorizontalPulses; ++j) {
+    const int v = (j % 2 == 0 ? 1 : -1) * ramp(a.horizontal, j, kHorizontalPulses);
+    steps_.push_back({kPulse_s, stick(1, v), "forward " + signed_text(v)});
+    steps_.push_back({kGap_s, centred, "hover"});
+    steps_.push_back({kPulse_s, stick(0, v), "right " + signed_text(v)});
+    steps_.push_back({kGap_s, centred, "hover"});
   }
+  // Height (stick c) and heading (stick d) doublets in turn.
+  for (int j = 0; j < kDoublets; ++j) {
+    const int up = ramp(a.vertical, j, kDoublets);
+    steps_.push_back({kHalf_s, stick(2, up), "up " + signed_text(up)});
+    steps_.push_back({kHalf_s, stick(2, -up), "up " + signed_text(-up)});
+    steps_.push_back({kGap_s, centred, "hover"});
+    const int cw = (j % 2 == 0 ? 1 : -1) * ramp(a.yaw, j, kDoublets);
+    steps_.push_back({kHalf_s, stick(3, cw), "clockwise " + signed_text(cw)});
+    steps_.push_back({kHalf_s, stick(3, -cw), "clockwise " + signed_text(-cw)});
+    steps_.push_back({kGap_s, centred, "hover"});
+  }
+  steps_.back().duration_s = kLastHover_s;
 }
 
 double CalibrationManoeuvre::duration_s() const {

@@ -137,7 +137,7 @@ bool SdkDriver::submit(const std::string& text, const CommandOptions& options) {
   }
   if (*kind == sdk::CommandKind::Rc) {
     // The same sticks again only renew the setpoint: the steady repeat sends them.
-    if (rc_setpoint_ != text) rc_new_ = true;
+    if (rc_setpoint_ != text) rc_new_owed_ = std::max(1, config_.rc_new_copies);
     rc_setpoint_ = text;
     rc_set_ns_ = clock_.now_ns();
     return true;
@@ -299,12 +299,12 @@ void SdkDriver::send_rc(TimeNs now) {
       // Not renewed: the submitter stopped steering. Hover rather than fly on blind.
       rc_setpoint_ = kHoverRc;
       rc_set_ns_ = now;
-      rc_new_ = true;
+      rc_new_owed_ = std::max(1, config_.rc_new_copies);
     }
     const bool fresh = now - rc_set_ns_ < config_.rc_hold_ns;
-    const bool due = rc_new_ || (fresh && (!last_rc_ns_ || now - *last_rc_ns_ >= config_.rc_period_ns));
+    const bool due = rc_new_owed_ > 0 || (fresh && (!last_rc_ns_ || now - *last_rc_ns_ >= config_.rc_period_ns));
     if (due) {
-      rc_new_ = false;
+      rc_new_owed_ = std::max(0, rc_new_owed_ - 1);
       transmit_rc(now, *rc_setpoint_, DriverEvent::Kind::RcSent);
       return;
     }

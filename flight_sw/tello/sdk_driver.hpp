@@ -22,9 +22,10 @@
 //  - replies carry no tag, so a reply that arrives when nothing is outstanding is stale and
 //    dropped; pending replies are drained (dropped as stale) right before each non-rc send,
 //    and after a command timed out the next one waits stale_guard_ns more for its late reply;
-//  - rc gets no reply and is never waited for: the latest rc setpoint is sent at once and
-//    repeated every rc_period_ns while it is fresh (set within rc_hold_ns); an rc not renewed
-//    for rc_hold_ns falls back to "rc 0 0 0 0" (hover), sent once;
+//  - rc gets no reply and is never waited for: the latest rc setpoint is sent at once (and
+//    again rc_new_copies - 1 times, rc_min_gap_ns apart) and repeated every rc_period_ns while
+//    it is fresh (set within rc_hold_ns); an rc not renewed for rc_hold_ns falls back to
+//    "rc 0 0 0 0" (hover);
 //  - a manoeuvre (takeoff, land, moves, ...; not emergency) that follows deflected sticks
 //    waits until "rc 0 0 0 0" went out stop_rc_repeats times, rc_min_gap_ns apart: the drone
 //    flies the last sticks it got, so a lost `land` must leave it hovering, not flying on;
@@ -69,6 +70,11 @@ struct DriverConfig {
   TimeNs rc_hold_ns = 1500 * kMs;
   TimeNs keepalive_ns = 5 * kNsPerSecond;  ///< 0 disables
   int stop_rc_repeats = 2;  ///< "rc 0 0 0 0" sent before a manoeuvre that follows deflected sticks
+  /// New sticks go out this many times, rc_min_gap_ns apart, before the steady repeat: with
+  /// datagram loss p, a change reaches the drone late (by rc_period_ns, 100 ms, instead of at
+  /// most rc_min_gap_ns) with probability p^rc_new_copies instead of p. The calibration
+  /// manoeuvre sends 3: its identification needs each step's edge where the log says it was.
+  int rc_new_copies = 1;
   bool dry_run = false;
 };
 
@@ -196,7 +202,7 @@ class SdkDriver {
   // rc setpoint
   std::optional<std::string> rc_setpoint_;
   TimeNs rc_set_ns_ = 0;
-  bool rc_new_ = false;
+  int rc_new_owed_ = 0;  ///< copies of new sticks still to send (rc_new_copies)
   std::optional<TimeNs> last_rc_ns_;
   int stops_owed_ = 0;  ///< "rc 0 0 0 0" still to send before a manoeuvre (stop_rc_repeats after deflected sticks)
   std::optional<TimeNs> last_state_ns_;

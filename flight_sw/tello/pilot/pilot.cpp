@@ -16,10 +16,15 @@ namespace {
 
 // --fly-calibration: the calibration manoeuvre replaces the mission's sticks once airborne
 // (PilotLoopConfig::stick_program). The flight software's shelf search must outlast it: its
-// find_shelf_s timeout would otherwise land the drone halfway.
+// find_shelf_s timeout would otherwise land the drone halfway. Each new stick setting goes out
+// three times, 20 ms apart (DriverConfig::rc_new_copies): identify takes a step's edge from the
+// log's first rc datagram of it, and a lost one would move the edge the drone flew by the
+// 100 ms to the next repeat; with three copies that needs all three lost (p^3: 2.7e-5 at 3 %
+// loss, against 0.03 for each of the manoeuvre's 46 edges).
 void fly_calibration_instead(PilotLoopConfig& config) {
   auto manoeuvre = std::make_shared<const CalibrationManoeuvre>();
   config.mode = "calibration_flight";
+  config.driver.rc_new_copies = 3;
   config.flight.timeouts.find_shelf_s = std::max(config.flight.timeouts.find_shelf_s, manoeuvre->duration_s() + 15.0);
   config.stick_program = [manoeuvre](TimeNs since_ns) -> std::optional<std::string> {
     const ManoeuvreStep* step = manoeuvre->step_at(ns_to_seconds(since_ns));

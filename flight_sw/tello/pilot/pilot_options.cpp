@@ -159,7 +159,7 @@ std::optional<PilotOptions> parse_options(int argc, char** argv) {
                  "write every frame handed to the flight software to this folder as frame_INDEX[_damaged].png (costs time)");
   auto* o_dry = app.add_flag("--dry-run", o.dry_run, "connect, stream and run perception; never send a motion command");
   app.add_flag("--fly-calibration", o.fly_calibration,
-               "fly the calibration manoeuvre (steps of each stick, about 45 s, in open space) instead of the mission, "
+               "fly the calibration manoeuvre (pulses and doublets of each stick, about 48 s, in open space) instead of the mission, "
                "then land: its --log is for `shelfcross identify`");
   auto* o_st = app.add_option("--state-timeout", fs.state_timeout_s, "airborne without state this long (s): land")->check(CLI::PositiveNumber);
   auto* o_sst = app.add_option("--state-start-timeout", fs.state_start_timeout_s, "no state at all this long after start (s): give up")->check(CLI::PositiveNumber);

@@ -1,7 +1,8 @@
 // The calibration manoeuvre of tello_pilot --fly-calibration: short, inside the SDK's and the
-// slow mode's limits, one axis at a time, hovering between, each axis back where it began.
+// slow mode's limits, one axis at a time, hovering between, each axis back near where it began.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 
@@ -14,9 +15,10 @@ TEST(CalibrationManoeuvre, IsShortOneAxisAtATimeAndHoversBetween) {
   const CalibrationManoeuvre m;
   EXPECT_LT(m.duration_s(), 50.0);  // with takeoff and landing, under a minute of flight
   ASSERT_FALSE(m.steps().empty());
-  EXPECT_EQ(m.steps().front().sticks, (std::array<int, 4>{0, 0, 0, 0}));
-  EXPECT_EQ(m.steps().back().sticks, (std::array<int, 4>{0, 0, 0, 0}));
-  std::array<int, 4> pulses{};
+  const std::array<int, 4> centred{};
+  EXPECT_EQ(m.steps().front().sticks, centred);
+  EXPECT_EQ(m.steps().back().sticks, centred);
+  std::array<int, 4> pulses{}, doublets{};
   for (size_t i = 0; i < m.steps().size(); ++i) {
     const ManoeuvreStep& s = m.steps()[i];
     int moving = 0;
@@ -25,14 +27,67 @@ TEST(CalibrationManoeuvre, IsShortOneAxisAtATimeAndHoversBetween) {
       moving += v != 0 ? 1 : 0;
     }
     EXPECT_LE(moving, 1) << s.what;
-    if (moving == 1) {
-      // Every pulse is followed by a hover.
-      ASSERT_LT(i + 1, m.steps().size());
-      EXPECT_EQ(m.steps()[i + 1].sticks, (std::array<int, 4>{0, 0, 0, 0})) << s.what;
-      for (int k = 0; k < 4; ++k) pulses[static_cast<size_t>(k)] += s.sticks[static_cast<size_t>(k)] != 0 ? 1 : 0;
+    if (moving == 0) continue;
+    // Every pulse is followed by a hover, or by its doublet's other half and then a hover.
+    size_t k = 0;
+    while (s.sticks[k] == 0) ++k;
+    ASSERT_LT(i + 1, m.steps().size());
+    const ManoeuvreStep& next = m.steps()[i + 1];
+    if (next.sticks[k] == -s.sticks[k] && std::count(next.sticks.begin(), next.sticks.end(), 0) == 3) {
+      ASSERT_LT(i + 2, m.steps().size());
+      EXPECT_EQ(m.steps()[i + 2].sticks, centred) << next.what;
+      ++doublets[k];
+      ++i;
+    } else {
+      EXPECT_EQ(next.sticks, centred) << s.what;
+      ++pulses[k];
     }
   }
-  EXPECT_EQ(pulses, (std::array<int, 4>{4, 4, 4, 2}));  // right, forward, up: two pairs; yaw one
+  // right, forward: four pulses each; up, clockwise: five doublets each.
+  EXPECT_EQ(pulses, (std::array<int, 4>{4, 4, 0, 0}));
+  EXPECT_EQ(doublets, (std::array<int, 4>{0, 0, 5, 5}));
+}
+
+TEST(CalibrationManoeuvre, EachAxisSettlesBeforeItsNextPulse) {
+  // An axis's edges: a doublet's halves 1 s apart at least; a pulse or doublet starts at least
+  // 2.5 s (3.5 time constants of the slowest plausible drone, 0.7 s) after the axis's last edge.
+  const CalibrationManoeuvre m;
+  std::array<int, 4> previous{}, edges{};
+  std::array<double, 4> last_edge_s{-1e9, -1e9, -1e9, -1e9};
+  double t = 0.0;
+  for (const ManoeuvreStep& s : m.steps()) {
+    for (size_t k = 0; k < 4; ++k) {
+      if (s.sticks[k] == previous[k]) continue;
+      const double since = t - last_edge_s[k];
+      EXPECT_GE(since, previous[k] == 0 ? 2.5 - 1e-9 : 1.0 - 1e-9) << s.what << " at " << t << " s";
+      last_edge_s[k] = t;
+      ++edges[k];
+    }
+    previous = s.sticks;
+    t += s.duration_s;
+  }
+  EXPECT_EQ(edges, (std::array<int, 4>{8, 8, 15, 15}));
+}
+
+TEST(CalibrationManoeuvre, HeightNeverGoesBelowTheTakeoffAndEachAxisEndsWhereItBegan) {
+  // Integrated stick (the response's displacement at unit gain, lags aside): height never
+  // below its start, heading and horizontal within one pulse of it, all back near the start.
+  const CalibrationManoeuvre m;
+  std::array<double, 4> position{}, lowest{}, highest{};
+  for (const ManoeuvreStep& s : m.steps()) {
+    for (size_t k = 0; k < 4; ++k) {
+      position[k] += s.sticks[k] / 100.0 * s.duration_s;
+      lowest[k] = std::min(lowest[k], position[k]);
+      highest[k] = std::max(highest[k], position[k]);
+    }
+  }
+  EXPECT_GE(lowest[2], -1e-9);
+  EXPECT_NEAR(position[2], 0.0, 1e-9);
+  EXPECT_NEAR(position[3], 0.0, 1e-9);
+  // At 1.25 m/s and 1.875 rad/s at full stick: 0.6 m above the takeoff, 65 deg each way.
+  EXPECT_LE(1.25 * highest[2], 0.61);
+  EXPECT_LE(1.875 * std::max(highest[3], -lowest[3]) * 180.0 / 3.14159265358979323846, 65.0);
+  for (size_t k : {0u, 1u}) EXPECT_LE(1.25 * std::max(highest[k], -lowest[k]), 0.9) << k;
 }
 
 TEST(CalibrationManoeuvre, StaysInsideTheSlowModesTiltForTheStrongestFastestDrone) {

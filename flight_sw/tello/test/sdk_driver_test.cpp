@@ -418,6 +418,45 @@ TEST(SdkDriver, SurvivesRandomDatagramsOnBothSockets) {
   EXPECT_EQ(c.foreign_command_datagrams + c.foreign_state_datagrams, 0);
 }
 
+// rc_new_copies: new sticks go out that many times, rc_min_gap (20 ms) apart, then repeat every
+// rc_period (100 ms) from the last copy; the same sticks renewed send no extra copy.
+TEST(SdkDriver, SendsNewSticksAsManyTimesAsAskedThenRepeatsAtTheSteadyRate) {
+  DriverConfig config;
+  config.rc_new_copies = 3;
+  Rig rig(config);
+  ASSERT_TRUE(rig.driver->submit("rc 0 30 0 0"));
+  rig.service();
+  EXPECT_EQ(rig.drone.expect_command(), "rc 0 30 0 0");
+  rig.clock.set(10 * kMs);
+  ASSERT_TRUE(rig.driver->submit("rc 0 30 0 0"));
+  rig.service();
+  EXPECT_TRUE(rig.drone.nothing_sent());  // within rc_min_gap of the last rc
+  for (int ms : {20, 40}) {
+    rig.clock.set(ms * kMs);
+    rig.service();
+    EXPECT_EQ(rig.drone.expect_command(), "rc 0 30 0 0") << ms;
+  }
+  rig.clock.set(139 * kMs);
+  rig.service();
+  EXPECT_TRUE(rig.drone.nothing_sent());
+  rig.clock.set(140 * kMs);
+  rig.service();
+  EXPECT_EQ(rig.drone.expect_command(), "rc 0 30 0 0");
+  rig.clock.set(150 * kMs);  // other sticks: three copies again, the first as soon as the gap allows
+  ASSERT_TRUE(rig.driver->submit("rc 0 0 0 0"));
+  rig.service();
+  EXPECT_TRUE(rig.drone.nothing_sent());
+  for (int ms : {160, 180, 200}) {
+    rig.clock.set(ms * kMs);
+    rig.service();
+    EXPECT_EQ(rig.drone.expect_command(), "rc 0 0 0 0") << ms;
+  }
+  rig.clock.set(299 * kMs);
+  rig.service();
+  EXPECT_TRUE(rig.drone.nothing_sent());
+  EXPECT_EQ(rig.driver->counters().rc_sent, 7);
+}
+
 }  // namespace
 }  // namespace shelfcross::tello
 
