@@ -30,7 +30,7 @@ RunContext::RunContext(const RunSetup& setup_, render::Renderer& renderer_, cons
       timeout_ns(seconds_to_ns(cs.timeout_s)),
       shelf_count(mission_shelf_count(sc)),
       traj_{sc.warehouse.shelves.at(0), shelf_pose_W(sc.warehouse.shelves.at(0)).inverse(),
-            millihertz(cs.trajectory_rate_hz)},
+            millihertz(cs.trajectory_rate_hz), 0, std::nullopt, {}, {}, {}, {}},
       fsw_log_{std::nullopt, "", std::vector<std::optional<CellIndex>>(static_cast<size_t>(shelf_count))} {
   RunMetrics& m = result.metrics;
   m.link.model = cs.link.model;
