@@ -6,12 +6,9 @@
 #include <cassert>
 #include <chrono>
 #include <cmath>
-#include <set>
-#include <sstream>
 #include <stdexcept>
 #include <variant>
 
-#include <nlohmann/json.hpp>
 #include <opencv2/core/mat.hpp>
 
 #include "render/ground_truth.hpp"
@@ -21,8 +18,6 @@
 #include "verification/campaign.hpp"
 #include "verification/cosim.hpp"
 #include "verification/h264_encoder.hpp"
-#include "verification/run_metrics_json.hpp"
-#include "verification/strict_json.hpp"
 #include "verification/tello_state_format.hpp"
 
 namespace shelfcross::verification {
@@ -62,13 +57,6 @@ bool is_manoeuvre_text(const std::string& text) {
   return c && sdk::is_manoeuvre(c->verb);
 }
 
-void check_probability(double p, const char* name) {
-  if (!(p >= 0.0 && p <= 1.0)) throw std::invalid_argument(std::string(name) + " must be a probability in 0..1");
-}
-void check_delay(double ms, const char* name) {
-  if (!(ms >= 0.0 && ms <= 600'000.0)) throw std::invalid_argument(std::string(name) + " must be 0..600000 ms");
-}
-
 RunSetup make_setup(const Scenario& nominal, const EmulatorConfig& c) {
   if (c.disperse) return disperse(nominal, c.seed);
   RunSetup setup;
@@ -78,6 +66,10 @@ RunSetup make_setup(const Scenario& nominal, const EmulatorConfig& c) {
   return setup;
 }
 
+void check_landed(const Scenario& sc) {
+  if (!sc.start.landed) throw std::invalid_argument("the Tello emulator starts landed (start.landed: true)");
+}
+
 EmulatorConfig with_seed(EmulatorConfig c, const RunSetup& setup) {
   c.seed = setup.seed;
   c.disperse = !setup.drawn.empty();
@@ -85,50 +77,6 @@ EmulatorConfig with_seed(EmulatorConfig c, const RunSetup& setup) {
 }
 
 }  // namespace
-
-bool emulator_applies_dispersion(const std::string& name) {
-  static const std::set<std::string> not_applied{
-      "camera_focal_error_rel", "camera_cx_error_px",       "camera_cy_error_px",
-      "video_latency_mean_s",   "frame_drop_probability",   "command_latency_mean_s",
-      "command_loss_probability", "compute_latency_s",      "compute_latency_quantile",
-      "video_datagram_loss",    "state_loss",               "reply_loss",
-      "not_joystick_probability", "video_stall_start_s",    "video_stall_duration_s"};
-  return not_applied.count(name) == 0;
-}
-
-void validate_emulator_config(const EmulatorConfig& c) {
-  const EmulatorFaults& f = c.faults;
-  check_probability(f.commands.loss, "loss on commands");
-  check_probability(f.replies.loss, "loss on replies");
-  check_probability(f.state.loss, "loss on state");
-  check_probability(f.video.loss, "loss on video");
-  check_delay(f.commands.delay_ms, "delay on commands");
-  check_delay(f.replies.delay_ms, "delay on replies");
-  check_delay(f.state.delay_ms, "delay on state");
-  check_delay(f.video.delay_ms, "delay on video");
-  check_delay(f.late_reply_ms, "late reply delay");
-  check_probability(f.late_replies, "late replies");
-  check_probability(f.video_frame_loss, "loss of video frames");
-  check_probability(f.commands.duplicate, "duplicate commands");
-  check_probability(f.replies.duplicate, "duplicate replies");
-  check_probability(f.state.duplicate, "duplicate state records");
-  check_delay(f.commands.jitter_ms, "jitter on commands");
-  check_delay(f.replies.jitter_ms, "jitter on replies");
-  check_delay(f.state.jitter_ms, "jitter on state");
-  check_delay(f.video.jitter_ms, "jitter on video");
-  check_probability(f.not_joystick, "not-joystick");
-  check_probability(f.no_valid_imu, "no-valid-imu");
-  if (f.video_stall_start_s && !(*f.video_stall_start_s >= 0.0 && f.video_stall_duration_s > 0.0 &&
-                                 std::isfinite(*f.video_stall_start_s) && std::isfinite(f.video_stall_duration_s))) {
-    throw std::invalid_argument("video stall needs a start T >= 0 and a duration D > 0 (s)");
-  }
-  if (!(c.linger_s >= 0.0 && std::isfinite(c.linger_s))) throw std::invalid_argument("linger must be >= 0 s");
-  if (c.client_state_port == 0 || c.client_video_port == 0) throw std::invalid_argument("client ports must be 1..65535");
-  if (c.key_interval_frames < 0 || c.key_interval_frames > 600) throw std::invalid_argument("key interval must be 0..600 frames");
-  if (c.slices_per_frame < 1 || c.slices_per_frame > 45) throw std::invalid_argument("slices per frame must be 1..45");
-  if (c.max_datagram_bytes < 16) throw std::invalid_argument("max datagram size must be >= 16 bytes");
-  tello::parse_ipv4(c.bind_ip);  // throws std::invalid_argument naming the text
-}
 
 struct TelloEmulator::VideoWorker {
   /// own_renderer: the worker thread's renderer; inline video uses the co-simulation's.
@@ -169,30 +117,18 @@ TelloEmulator::TelloEmulator(RunSetup setup, EmulatorConfig config, EmulatorChan
                                    : std::make_unique<tello::UdpSocket>(config_.bind_ip, config_.video_source_port)),
       inline_renderer_(inline_renderer),
       on_tick_(std::move(on_tick)),
-      world_(scenario_->warehouse, scenario_->vehicle.size_m, scenario_->cosim.vehicle_margin_m),
-      tello_(scenario_->vehicle, autopilot_params_for(*scenario_), scenario_->wind,
-             RandomStream(config_.seed, StreamId::wind).next_u64(), {}, scenario_->start.p_WB_m.x(),
-             scenario_->start.p_WB_m.y(), scenario_->start.yaw_rad),
-      ground_z_m_(tello_.state().p_WB_m.z()),
+      world_((check_landed(*scenario_), setup_), mission_shelf_count(*scenario_)),
       command_faults_(mix64(config_.seed ^ 1), StreamId::link_faults),
       reply_faults_(mix64(config_.seed ^ 2), StreamId::link_faults),
       state_faults_(mix64(config_.seed ^ 3), StreamId::link_faults),
       video_faults_(mix64(config_.seed ^ 4), StreamId::link_faults),
       error_faults_(mix64(config_.seed ^ 5), StreamId::link_faults),
       frame_faults_(mix64(config_.seed ^ 6), StreamId::link_faults),
-      render_noise_(config_.seed, StreamId::render_noise),
       command_jitter_(mix64(config_.seed ^ 7), StreamId::link_faults),
       reply_jitter_(mix64(config_.seed ^ 8), StreamId::link_faults),
       state_jitter_(mix64(config_.seed ^ 9), StreamId::link_faults),
       video_jitter_(mix64(config_.seed ^ 10), StreamId::link_faults),
-      tick_mhz_(millihertz(scenario_->autopilot.rate_hz)),
-      frame_mhz_(millihertz(scenario_->frame_rate_hz)),
-      state_mhz_(millihertz(scenario_->cosim.state_rate_hz)),
-      X_prev_(body_pose(tello_.state())),
-      X_WC_prev_frame_(render::camera_pose_W(X_prev_, scenario_->camera_mount)),
-      v_prev_(tello_.state().v_WB_W_mps),
-      crossing_(scenario_->warehouse.shelves.at(0), tello_.state().p_WB_m) {
-  if (!scenario_->start.landed) throw std::invalid_argument("the Tello emulator starts landed (start.landed: true)");
+      tick_mhz_(millihertz(scenario_->autopilot.rate_hz)) {
   report_.inventory_truth = true_inventory(*scenario_);
   report_.start_p_W_m = scenario_->start.p_WB_m;
   report_.start_yaw_rad = scenario_->start.yaw_rad;
@@ -306,51 +242,17 @@ std::int64_t TelloEmulator::key_interval_captures() const {
 }
 
 void TelloEmulator::tick(TimeNs t, TimeNs now_ns) {
-  const Scenario& sc = *scenario_;
-  // 1. The plant and the autopilot to t; the motion checked for contacts, the crossing watched.
-  try {
-    tello_.step_to(t);
-  } catch (const std::exception& e) {
-    end_detail_ = e.what();
-    end("numerical_failure");
-    return;
+  // 1. The world to t: the plant and the firmware, the motion checked for contacts, the arena,
+  // the crossings, the clearance.
+  const TickReport r = world_.tick(t);
+  if (r.end != WorldEnd::none) {
+    end_detail_ = r.detail;
+    end(world_end_name(r.end));
+    if (r.end == WorldEnd::numerical_failure) return;
   }
-  const plant::RigidBodyState& s = tello_.state();
-  if (!s.p_WB_m.allFinite() || !s.v_WB_W_mps.allFinite() || !s.q_WB.coeffs().allFinite()) {
-    end_detail_ = "non-finite state";
-    end("numerical_failure");
-    return;
-  }
-  const Eigen::Isometry3d X = body_pose(s);
-  if (t > t_prev_) {
-    const double dt_s = ns_to_seconds(t - t_prev_);
-    a_W_ = (s.v_WB_W_mps - v_prev_) / dt_s;
-    report_.path_length_m += (X.translation() - X_prev_.translation()).norm();
-    if (const auto contact = world_.sweep(X_prev_, t_prev_, X, t, plant::FloorContacts::ignore)) {
-      report_.contact = *contact;
-      end_detail_ = contact->element.name;
-      end(plant::is_shelf_part(contact->element.kind) ? "collision" : "left_arena");
-    }
-    const Eigen::Vector3d& p = s.p_WB_m;
-    if ((p.array() < sc.warehouse.arena_min_W_m.array()).any() || (p.array() > sc.warehouse.arena_max_W_m.array()).any()) {
-      end_detail_ = "outside the arena";
-      end("left_arena");
-    }
-    crossing_.update(p);
-    const ShelfSpec& shelf = sc.warehouse.shelves.at(0);
-    const double half_length_m = 0.5 * sc.vehicle.size_m.x() + sc.cosim.vehicle_margin_m;
-    const double x_S = crossing_.p_S_m().x();
-    if (x_S > -half_length_m - 0.05 && x_S < shelf.depth_m + half_length_m + 0.05) {
-      const double clearance = world_.clearance_to_shelves(X).distance_m;
-      report_.min_clearance_m = std::min(report_.min_clearance_m.value_or(clearance), clearance);
-    }
-    X_prev_ = X;
-    v_prev_ = s.v_WB_W_mps;
-    t_prev_ = t;
-  }
-  if (tello_.mode() != plant::FlightMode::landed) report_.flew = true;
-  if (on_tick_) on_tick_(t, tello_);
+  if (on_tick_) on_tick_(r, world_);
   if (end_reason_) return;
+  plant::SimulatedTello& tello = world_.tello();
 
   // 2. Commands due by t, to the firmware; its replies.
   while (!incoming_.empty() && incoming_.top().due_ns <= t && !end_reason_) {
@@ -358,14 +260,12 @@ void TelloEmulator::tick(TimeNs t, TimeNs now_ns) {
     incoming_.pop();
     deliver(t, c);
   }
-  for (const SdkReply& r : tello_.take_replies()) send_reply(r.t_ns, r.text, manoeuvre_reply_to_);
+  for (const SdkReply& reply : tello.take_replies()) send_reply(reply.t_ns, reply.text, manoeuvre_reply_to_);
 
   // 3. The state record, to the `command` sender's state port.
-  if (t >= event_time(k_state_, state_mhz_)) {
-    if (tello_.autopilot().sdk_mode() && client_) {
-      const plant::Autopilot& firmware = tello_.autopilot();
-      const std::string text = format_state_record(
-          state_from_truth(s, a_W_, ground_z_m_, firmware.battery_pct(), firmware.motor_on_time_s(), t));
+  if (world_.state_due(t)) {
+    if (tello.autopilot().sdk_mode() && client_) {
+      const std::string text = format_state_record(world_.state_record(t));
       std::lock_guard lock(mutex_);
       const bool lost = state_faults_.bernoulli(config_.faults.state.loss);
       const bool twice = state_faults_.bernoulli(config_.faults.state.duplicate);
@@ -381,16 +281,13 @@ void TelloEmulator::tick(TimeNs t, TimeNs now_ns) {
         }
       }
     }
-    while (event_time(k_state_, state_mhz_) <= t) ++k_state_;
   }
 
   // 4. A frame capture: handed to the video worker if it is free and the capture is recent.
-  if (t >= event_time(k_frame_, frame_mhz_)) {
-    const Eigen::Isometry3d X_WC = render::camera_pose_W(X, sc.camera_mount);
-    const std::uint64_t noise_seed = render_noise_.next_u64();  // one per capture, as in the co-simulation
-    const bool streaming = tello_.autopilot().stream_on() && client_.has_value();
+  if (const auto capture = world_.capture_due(t)) {
+    const bool streaming = tello.autopilot().stream_on() && client_.has_value();
     if (streaming) {
-      const TimeNs frame_period_ns = event_time(k_frame_ + 1, frame_mhz_) - event_time(k_frame_, frame_mhz_);
+      const TimeNs frame_period_ns = capture->period_ns;
       const auto& f = config_.faults;
       const bool stalled = f.video_stall_start_s && t >= seconds_to_ns(*f.video_stall_start_s) &&
                            t < seconds_to_ns(*f.video_stall_start_s + f.video_stall_duration_s);
@@ -409,9 +306,10 @@ void TelloEmulator::tick(TimeNs t, TimeNs now_ns) {
         // Key frames by capture time, not by frames encoded: frames dropped here (renderer
         // busy) must not stretch the group of pictures past its interval, as they would
         // if the encoder counted (the Tello's encoder sees every frame).
-        const bool key = !video_was_on_ || k_frame_ >= next_key_capture_;
-        if (key) next_key_capture_ = k_frame_ + key_interval_captures();
-        const FrameJob job{k_frame_, t, X_WC_prev_frame_, X_WC, noise_seed, key, {client_->ip, config_.client_video_port}};
+        const bool key = !video_was_on_ || capture->index >= next_key_capture_;
+        if (key) next_key_capture_ = capture->index + key_interval_captures();
+        const FrameJob job{capture->index, t,   capture->X_WC_prev, capture->X_WC, capture->noise_seed,
+                           key,            {client_->ip, config_.client_video_port}};
         video_was_on_ = true;
         if (inline_renderer_) {
           // The co-simulation: rendered and encoded now, in simulated time (an encoding
@@ -425,12 +323,10 @@ void TelloEmulator::tick(TimeNs t, TimeNs now_ns) {
     } else {
       video_was_on_ = false;  // the next streamon starts with a key frame
     }
-    X_WC_prev_frame_ = X_WC;
-    while (event_time(k_frame_, frame_mhz_) <= t) ++k_frame_;
   }
 
   // 5. Landed after flying, and nobody talking any more: the flight is over.
-  if (report_.flew && tello_.mode() == plant::FlightMode::landed && t - last_datagram_ns_ >= seconds_to_ns(config_.linger_s)) {
+  if (world_.truth().flew && tello.mode() == plant::FlightMode::landed && t - last_datagram_ns_ >= seconds_to_ns(config_.linger_s)) {
     end("landed");
   }
 }
@@ -442,7 +338,7 @@ void TelloEmulator::deliver(TimeNs t, const IncomingCommand& c) {
     std::lock_guard lock(mutex_);
     ++counters_.commands_delivered;
   }
-  if (tello_.autopilot().sdk_mode() && refusable(text)) {
+  if (world_.tello().autopilot().sdk_mode() && refusable(text)) {
     // Two draws per refusable command, always, so one setting never shifts the other's draws.
     const bool joystick = error_faults_.bernoulli(config_.faults.not_joystick);
     const bool imu = error_faults_.bernoulli(config_.faults.no_valid_imu);
@@ -456,7 +352,7 @@ void TelloEmulator::deliver(TimeNs t, const IncomingCommand& c) {
       // only learns of a datagram through a command, so it is handed the one command with no
       // effect but an immediate answer, a read, whose answer is dropped.
       try {
-        (void)tello_.submit(t, "sdk?");
+        (void)world_.tello().submit(t, "sdk?");
       } catch (const std::exception& e) {
         end_detail_ = e.what();
         end("numerical_failure");
@@ -469,7 +365,7 @@ void TelloEmulator::deliver(TimeNs t, const IncomingCommand& c) {
   if (is_manoeuvre_text(text)) manoeuvre_reply_to_ = c.from;
   std::optional<std::string> reply;
   try {
-    reply = tello_.submit(t, text);
+    reply = world_.tello().submit(t, text);
   } catch (const std::exception& e) {
     end_detail_ = e.what();
     end("numerical_failure");
@@ -606,84 +502,22 @@ EmulatorReport TelloEmulator::report() const {
   EmulatorReport r = report_;
   r.end_reason = end_reason_.value_or("running");
   r.detail = end_detail_;
-  r.elapsed_s = ns_to_seconds(tello_.time_ns());
-  r.flight_time_s = tello_.autopilot().motor_on_time_s();
-  r.landed = tello_.mode() == plant::FlightMode::landed;
-  r.crossed = crossing_.crossed();
-  r.entry_offset_y_m = crossing_.entry_offset_y_m();
-  r.entry_offset_z_m = crossing_.entry_offset_z_m();
+  const plant::SimulatedTello& tello = world_.tello();
+  const TruthRecord& truth = world_.truth();
+  const ShelfCrossingMonitor& crossing = world_.crossings().front();
+  r.elapsed_s = ns_to_seconds(tello.time_ns());
+  r.flight_time_s = tello.autopilot().motor_on_time_s();
+  r.path_length_m = truth.path_length_m;
+  r.flew = truth.flew;
+  r.landed = tello.mode() == plant::FlightMode::landed;
+  r.contact = truth.contact;
+  r.min_clearance_m = truth.min_clearance_m;
+  r.crossed = crossing.crossed();
+  r.entry_offset_y_m = crossing.entry_offset_y_m();
+  r.entry_offset_z_m = crossing.entry_offset_z_m();
   std::lock_guard lock(mutex_);
   r.counters = counters_;
   return r;
-}
-
-std::string emulator_report_json(const EmulatorReport& r) {
-  using nlohmann::json;
-  json inventory = json::array();
-  for (const auto& [id, shelf, level, column] : r.inventory_truth) {
-    inventory.push_back({{"id", id}, {"shelf", shelf}, {"level", level}, {"column", column}});
-  }
-  const EmulatorCounters& c = r.counters;
-  json j{{"end_reason", r.end_reason},
-         {"detail", r.detail},
-         {"elapsed_s", r.elapsed_s},
-         {"flight_time_s", r.flight_time_s},
-         {"path_length_m", r.path_length_m},
-         {"flew", r.flew},
-         {"landed", r.landed},
-         {"crossed", r.crossed ? json{{"level", r.crossed->level}, {"column", r.crossed->column}} : json(nullptr)},
-         {"entry_offset_y_m", number_or_null(r.entry_offset_y_m)},
-         {"entry_offset_z_m", number_or_null(r.entry_offset_z_m)},
-         {"min_clearance_m", number_or_null(r.min_clearance_m)},
-         {"inventory_truth", inventory},
-         {"start", {{"p_W_m", {r.start_p_W_m.x(), r.start_p_W_m.y(), r.start_p_W_m.z()}}, {"yaw_rad", r.start_yaw_rad}}},
-         {"seed", r.seed},
-         {"dispersed", r.dispersed},
-         {"counters",
-          {{"commands_received", c.commands_received}, {"commands_dropped", c.commands_dropped}, {"commands_duplicated", c.commands_duplicated},
-           {"commands_malformed", c.commands_malformed}, {"commands_delivered", c.commands_delivered},
-           {"injected_errors", c.injected_errors}, {"replies_sent", c.replies_sent},
-           {"replies_dropped", c.replies_dropped}, {"replies_late", c.replies_late},
-           {"replies_duplicated", c.replies_duplicated}, {"state_sent", c.state_sent},
-           {"state_dropped", c.state_dropped}, {"state_duplicated", c.state_duplicated}, {"frames_captured", c.frames_captured},
-           {"frames_sent", c.frames_sent}, {"frames_dropped_busy", c.frames_dropped_busy},
-           {"frames_dropped_late", c.frames_dropped_late}, {"frames_stalled", c.frames_stalled}, {"frames_lost", c.frames_lost},
-           {"key_frames", c.key_frames}, {"video_datagrams_sent", c.video_datagrams_sent},
-           {"video_datagrams_dropped", c.video_datagrams_dropped}, {"video_bytes_sent", c.video_bytes_sent},
-           {"send_errors", c.send_errors}}}};
-  json drawn = json::object();
-  for (const auto& [name, value] : r.drawn) drawn[name] = {{"value", value}, {"applied", emulator_applies_dispersion(name)}};
-  j["dispersions"] = drawn;
-  j["contact"] = r.contact ? contact_json(*r.contact) : json(nullptr);
-  return j.dump(2);
-}
-
-std::string emulator_report_text(const EmulatorReport& r) {
-  std::ostringstream o;
-  const EmulatorCounters& c = r.counters;
-  o << "tello-sim: " << r.end_reason << (r.detail.empty() ? "" : " (" + r.detail + ")") << " after " << r.elapsed_s
-    << " s; flight time " << r.flight_time_s << " s, path " << r.path_length_m << " m, "
-    << (r.landed ? "landed" : "airborne") << "\n";
-  o << "contact: " << (r.contact ? r.contact->element.name : std::string("none")) << "\n";
-  o << "crossed: ";
-  if (r.crossed) {
-    o << "shelf 0 level " << r.crossed->level << " column " << r.crossed->column << ", entry offset y "
-      << r.entry_offset_y_m.value_or(NAN) << " m z " << r.entry_offset_z_m.value_or(NAN) << " m";
-  } else {
-    o << "no cell";
-  }
-  if (r.min_clearance_m) o << "; min clearance " << *r.min_clearance_m << " m";
-  o << "\ninventory truth (id level column):";
-  for (const auto& [id, shelf, level, column] : r.inventory_truth) o << " " << id << "@" << level << "," << column;
-  o << "\ncommands received " << c.commands_received << " dropped " << c.commands_dropped << " malformed "
-    << c.commands_malformed << " injected errors " << c.injected_errors << "; replies sent " << c.replies_sent
-    << " dropped " << c.replies_dropped << " late " << c.replies_late << " duplicated " << c.replies_duplicated
-    << "; state sent " << c.state_sent << " dropped " << c.state_dropped << "\n";
-  o << "video frames captured " << c.frames_captured << " sent " << c.frames_sent << " (key " << c.key_frames
-    << ") dropped busy " << c.frames_dropped_busy << " late " << c.frames_dropped_late << " stalled "
-    << c.frames_stalled << " lost " << c.frames_lost << "; datagrams sent " << c.video_datagrams_sent << " dropped " << c.video_datagrams_dropped
-    << ", " << c.video_bytes_sent << " bytes; send errors " << c.send_errors << "\n";
-  return o.str();
 }
 
 void run_tello_emulator(TelloEmulator& emulator, const std::atomic<bool>& stop, double max_seconds) {

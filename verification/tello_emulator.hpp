@@ -19,9 +19,10 @@
 //
 // Time. The emulator holds no clock: advance(now_ns) is told the time elapsed since it
 // started, and simulated time follows it. The plant and the autopilot advance tick by tick
-// (autopilot.rate_hz) up to the last tick <= now_ns; at each tick the collision world sweeps
-// the motion, the crossing monitor of shelf 0 looks at the body origin, commands due by then
-// are handed to the firmware, replies, state records and frame captures due by then go out.
+// (autopilot.rate_hz) up to the last tick <= now_ns; each tick is TelloWorld::tick (the one
+// world tick the co-simulation uses too: plant, contacts, arena, crossings, clearance), then
+// commands due by then are handed to the firmware, and replies, state records and frame
+// captures due by then go out.
 // run_tello_emulator() is the one place that reads the wall clock (steady_clock) and calls
 // advance(); tests call advance() with times of their own.
 //
@@ -73,6 +74,7 @@
 #include "verification/dispersion.hpp"
 #include "verification/metrics.hpp"
 #include "verification/scenario.hpp"
+#include "verification/tello_world.hpp"
 #include "verification/vehicle_truth.hpp"
 
 namespace shelfcross::verification {
@@ -179,7 +181,7 @@ struct EmulatorReport {
   std::optional<plant::Contact> contact;          ///< the first contact with a shelf part or a wall
   std::optional<CellIndex> crossed;    ///< shelf 0's cell crossed face to face
   std::optional<double> entry_offset_y_m, entry_offset_z_m;
-  std::optional<double> min_clearance_m;          ///< to any shelf part near shelf 0
+  std::optional<double> min_clearance_m;          ///< to any shelf part near a mission shelf
   std::set<InventoryEntry> inventory_truth;       ///< (marker id, shelf, level, column) of shelf 0
   Eigen::Vector3d start_p_W_m = Eigen::Vector3d::Zero();  ///< the scenario's (dispersed) start
   double start_yaw_rad = 0.0;
@@ -203,9 +205,9 @@ struct EmulatorChannels {
 
 class TelloEmulator {
  public:
-  /// Called after every autopilot tick with its time and the vehicle (the co-simulation's
-  /// truth metrics); never from the video worker.
-  using TickObserver = std::function<void(TimeNs t_ns, const plant::SimulatedTello& tello)>;
+  /// Called after every autopilot tick whose plant state is finite, with what the tick did
+  /// and the world (the co-simulation's truth log and trajectory); never from the video worker.
+  using TickObserver = std::function<void(const TickReport& tick, const TelloWorld& world)>;
 
   /// Binds the sockets, builds the world, the renderer and the encoder. Throws
   /// std::invalid_argument (bad settings or address), std::runtime_error (port busy, no EGL,
@@ -239,10 +241,12 @@ class TelloEmulator {
   std::uint16_t command_port() const { return command_socket_->local_port(); }
   std::uint16_t state_source_port() const { return state_socket_->local_port(); }
   std::uint16_t video_source_port() const { return video_socket_->local_port(); }
-  const plant::SimulatedTello& tello() const { return tello_; }
+  const plant::SimulatedTello& tello() const { return world_.tello(); }
+  /// The simulated Tello in its world, with the run's truth record.
+  const TelloWorld& world() const { return world_; }
   /// The world flown (dispersed or nominal) and the camera its client would believe.
   const RunSetup& setup() const { return setup_; }
-  TimeNs time_ns() const { return tello_.time_ns(); }
+  TimeNs time_ns() const { return world_.tello().time_ns(); }
   /// "EGL ... GL_RENDERER ..." of the video renderer.
   std::string renderer_description() const;
 
@@ -303,11 +307,8 @@ class TelloEmulator {
   std::unique_ptr<tello::DatagramChannel> command_socket_, state_socket_, video_socket_;
   render::Renderer* inline_renderer_ = nullptr;  ///< co-simulation: render and encode inline
   TickObserver on_tick_;
-  plant::CollisionWorld world_;
-  plant::SimulatedTello tello_;
-  double ground_z_m_;
+  TelloWorld world_;  ///< the plant, the firmware, contacts, crossings, the camera's clocks
   RandomStream command_faults_, reply_faults_, state_faults_, video_faults_, error_faults_, frame_faults_;
-  RandomStream render_noise_;
   RandomStream command_jitter_, reply_jitter_, state_jitter_, video_jitter_;
   TimeNs last_due_[3] = {0, 0, 0};  ///< per outgoing channel (reply, state, video)
   TimeNs last_command_due_ = 0;
@@ -315,8 +316,8 @@ class TelloEmulator {
   // Main-loop state (the thread that calls advance()).
   std::priority_queue<IncomingCommand, std::vector<IncomingCommand>, std::greater<>> incoming_;
   std::uint64_t seq_ = 0;
-  std::int64_t tick_mhz_, frame_mhz_, state_mhz_;
-  std::int64_t k_tick_ = 0, k_frame_ = 0, k_state_ = 0;
+  std::int64_t tick_mhz_;
+  std::int64_t k_tick_ = 0;
   TimeNs now_ns_ = 0;
   TimeNs last_datagram_ns_ = 0;
   std::optional<tello::Endpoint> client_;      ///< the sender of `command`
@@ -324,14 +325,9 @@ class TelloEmulator {
   bool video_was_on_ = false;
   std::int64_t next_key_capture_ = 0;          ///< the capture index due for the next key frame
   std::int64_t key_interval_captures() const;
-  Eigen::Isometry3d X_prev_, X_WC_prev_frame_;
-  Eigen::Vector3d v_prev_ = Eigen::Vector3d::Zero();
-  Eigen::Vector3d a_W_ = Eigen::Vector3d::Zero();
-  TimeNs t_prev_ = 0;
-  ShelfCrossingMonitor crossing_;
   std::optional<std::string> end_reason_;
   std::string end_detail_;
-  EmulatorReport report_;  ///< truth fields filled as the run goes (counters live in counters_)
+  EmulatorReport report_;  ///< what is known at the start (the truth is world_'s, counters counters_)
 
   // Shared with the video worker (under mutex_).
   mutable std::mutex mutex_;

@@ -77,7 +77,8 @@ struct PilotChannels {
 /// landed it, or the land went unacknowledged; 130 stopped by a signal on the ground.
 class PilotLoop {
  public:
-  /// Throws std::runtime_error (port busy, no H.264 decoder), FlightLogError, config errors.
+  /// Keeps references to `config` and `clock`: both must outlive the loop. Throws
+  /// std::runtime_error (port busy, no H.264 decoder), FlightLogError, config errors.
   PilotLoop(const PilotLoopConfig& config, const Clock& clock, PilotChannels channels = {});
   ~PilotLoop();
   PilotLoop(const PilotLoop&) = delete;
