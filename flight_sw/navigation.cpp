@@ -10,12 +10,18 @@
 
 namespace shelfcross::flight_sw {
 
+cv::Matx33d camera_matrix(const CameraIntrinsics& k) {
+  return {k.fx_px, 0, k.cx_px, 0, k.fy_px, k.cy_px, 0, 0, 1};
+}
+
+cv::Vec<double, 5> distortion(const CameraIntrinsics& k) { return {k.k1, k.k2, k.p1, k.p2, k.k3}; }
+
 std::optional<PoseEstimate> estimate_pose(const std::vector<cv::Point3d>& points_F_m,
                                           const std::vector<cv::Point2d>& pixels,
                                           const CameraIntrinsics& k, const CameraMount& mount) {
   if (points_F_m.size() < 4 || points_F_m.size() != pixels.size()) return std::nullopt;
-  const cv::Matx33d K(k.fx_px, 0, k.cx_px, 0, k.fy_px, k.cy_px, 0, 0, 1);
-  const cv::Vec<double, 5> dist(k.k1, k.k2, k.p1, k.p2, k.k3);
+  const cv::Matx33d K = camera_matrix(k);
+  const cv::Vec<double, 5> dist = distortion(k);
   cv::Vec3d rvec, tvec;
   // All tag points are coplanar (x = -tag_offset): IPPE gives the planar solution directly.
   bool ok = false;

@@ -33,6 +33,11 @@ struct PoseEstimate {
   Eigen::Vector3d p_FB_m() const { return X_FB.translation(); }
 };
 
+/// The intrinsics as OpenCV takes them: the camera matrix K and the plumb-bob distortion
+/// (k1, k2, p1, p2, k3).
+cv::Matx33d camera_matrix(const CameraIntrinsics& camera);
+cv::Vec<double, 5> distortion(const CameraIntrinsics& camera);
+
 /// Eq. 5-8: solves s p = K [R | t] P for the tag points P_F (in F) seen at the distorted pixels
 /// p (cv::solvePnP with the intrinsics and distortion; IPPE for 4 coplanar points, then
 /// Levenberg-Marquardt refinement on all), turns the Rodrigues vector into R (eq. 8,

@@ -59,8 +59,8 @@ IdentityCheck check_cell_identity(CellIndex target, const PoseEstimate& pose_K, 
   const Eigen::Vector3d o_G = cell_centre_G(s, target);  // K's origin in G (K = G moved)
   const double min_pitch = std::min(*std::min_element(s.column_pitch_m.begin(), s.column_pitch_m.end()),
                                     *std::min_element(s.row_pitch_m.begin(), s.row_pitch_m.end()));
-  const cv::Matx33d K(k.fx_px, 0, k.cx_px, 0, k.fy_px, k.cy_px, 0, 0, 1);
-  const cv::Vec<double, 5> dist(k.k1, k.k2, k.p1, k.p2, k.k3);
+  const cv::Matx33d K = camera_matrix(k);
+  const cv::Vec<double, 5> dist = distortion(k);
 
   // 1. The grid and its continuation beyond the edges, placed by a pose (camera in K).
   const auto place = [&](const Eigen::Isometry3d& X_KC_pose) {
@@ -360,8 +360,8 @@ std::optional<std::array<cv::Point2d, 4>> corners_after_motion(const FlightConfi
     p_C.emplace_back(c.x(), c.y(), c.z());
   }
   const CameraIntrinsics& k = config.camera;
-  const cv::Matx33d K(k.fx_px, 0, k.cx_px, 0, k.fy_px, k.cy_px, 0, 0, 1);
-  const cv::Vec<double, 5> dist(k.k1, k.k2, k.p1, k.p2, k.k3);
+  const cv::Matx33d K = camera_matrix(k);
+  const cv::Vec<double, 5> dist = distortion(k);
   std::vector<cv::Point2d> px;
   cv::projectPoints(p_C, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, dist, px);
   return std::array<cv::Point2d, 4>{px[0], px[1], px[2], px[3]};
