@@ -209,6 +209,7 @@ void read_mission(const Map& m, MissionParams& p) {
   opt(m, "pose_jump_m", p.pose_jump_m, kPositive);
   opt(m, "pose_jump_rad", p.pose_jump_rad, kPositive);
   opt(m, "pose_jump_window_s", p.pose_jump_window_s, kNonNegative);
+  opt(m, "coast_s", p.coast_s, kNonNegative);
   opt(m, "level_check", p.level_check);
   opt(m, "identity_continuity_s", p.identity_continuity_s, kNonNegative);
   opt(m, "stop_distance_m", p.stop_distance_m, kNonNegative);

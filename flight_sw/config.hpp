@@ -34,7 +34,7 @@
 //               viewpoint_settle_frames viewpoint_lost_s vehicle_size_m [x, y, z]
 //               crossing_margin_m crossing_yaw_tolerance_rad crossing_attempts cross_range_max_m
 //               beyond_distance_m edge_margin_px settle_s settle_z_m settle_psi_rad
-//               settle_hold_s pose_fresh_s pose_jump_m pose_jump_rad pose_jump_window_s
+//               settle_hold_s pose_fresh_s pose_jump_m pose_jump_rad pose_jump_window_s coast_s
 //               identity_continuity_s identity_confirm_s identity_rereads stop_distance_m
 //               min_beyond_distance_m level_check vertical_lag_s line_hold_window_s
 //               line_hold_min_span_s calm_wait_s give_up_clearance_m
@@ -214,11 +214,16 @@ struct MissionParams {
   double settle_hold_s = 10.0;     ///< holding short longer than this: go on anyway
   /// The crossing is judged on a pose from a frame received at most this long ago.
   double pose_fresh_s = 0.25;
-  /// A target pose farther than pose_jump_m (+ 1 m/s) or turned more than pose_jump_rad
-  /// (+ 1 rad/s) from the last one, taken within pose_jump_window_s, is a wrong tag match.
+  /// A target pose farther than pose_jump_m (+ 1 m/s; grown as the range squared beyond 1 m,
+  /// target_tracker.hpp pose_jump_limit_m) or turned more than pose_jump_rad (+ 1 rad/s) from
+  /// the last one, taken within pose_jump_window_s, is a wrong tag match.
   double pose_jump_m = 0.06;
   double pose_jump_rad = 0.12;
   double pose_jump_window_s = 0.5;
+  /// A pose from corner tags crossed by a damaged picture's guessed rows is compared with the
+  /// last pose carried by the state odometry for at most this long after it (the odometry
+  /// drifts about 5 cm/s); later such pictures hide the target until a clean one shows it.
+  double coast_s = 1.5;
   /// The level check (every approach pose's cell height against the one measured when the
   /// target was chosen, from the state record's height). Always on in flight; off only for
   /// studies of what it prevents (a campaign over a lossy link then crosses at wrong levels).

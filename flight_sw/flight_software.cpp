@@ -134,6 +134,7 @@ std::vector<SdkCommand> FlightSoftware::step(const Input& input) {
   telemetry_.wrong_level_poses = counts.wrong_level_poses;
   telemetry_.behind_tags_dropped = counts.behind_tags_dropped;
   telemetry_.identity_checks = counts.identity_checks;
+  telemetry_.hidden_target_pictures = counts.hidden_target_pictures;
   return out_;
 }
 
@@ -717,10 +718,11 @@ bool FlightSoftware::select_target(const cv::Mat& bgr) {
 }
 
 // A sample of the target cell centre's height in the state height's frame (odometry.hpp,
-// CellHeightEstimator): on nearly whole pictures, with a fresh state, inside commit_range_m,
-// and once the state has shown the vehicle vertically still for vertical_lag_s.
-void FlightSoftware::sample_cell_height(const Picture& pic, const PoseEstimate& pose) {
-  if (!pic.decides || !state_fresh() || -pose.p_FB_m().x() > config_.control.commit_range_m) return;
+// CellHeightEstimator), from a deciding pose (TargetTracker::pose_decides): with a fresh
+// state, inside commit_range_m, and once the state has shown the vehicle vertically still for
+// vertical_lag_s.
+void FlightSoftware::sample_cell_height(const PoseEstimate& pose) {
+  if (!state_fresh() || -pose.p_FB_m().x() > config_.control.commit_range_m) return;
   if (!cell_height_.vertically_still_for(now_ns_, config_.mission.vertical_lag_s)) return;
   cell_height_.sample(state_->height_m, pose.p_FB_m().z());
 }
@@ -777,9 +779,8 @@ bool FlightSoftware::check_identity(const Picture& pic, const PoseEstimate& pose
   return true;
 }
 
-// The forward speed gain (odometry.hpp, ForwardGainEstimator), on nearly whole pictures.
-void FlightSoftware::estimate_forward_gain(const Picture& pic, const PoseEstimate& pose) {
-  if (!pic.decides) return;
+// The forward speed gain (odometry.hpp, ForwardGainEstimator), on deciding poses.
+void FlightSoftware::estimate_forward_gain(const PoseEstimate& pose) {
   forward_gain_.on_pose(now_ns_, pose.p_FB_m().x());
   telemetry_.forward_gain = forward_gain_.gain();
 }
@@ -865,6 +866,17 @@ std::optional<std::string> FlightSoftware::cross_if_clear(const std::string& why
   return std::nullopt;
 }
 
+// The approach's vertical, heading and lateral laws (eq. 12, eq. 15, Fig. 19) on errors `e`,
+// the PI states stepped by dt; a lateral command restarts the stillness the crossing waits for.
+VelocityCommand FlightSoftware::approach_steering(const ApproachErrors& e, double dt) {
+  VelocityCommand v;
+  v.vz_mps = pi_z_.update(e.e_z_m, dt);                // eq. 12
+  v.yaw_rate_radps = pi_psi_.update(e.e_psi_rad, dt);  // eq. 15
+  v.vy_B_mps = approach_lateral_mps(config_.control, e);  // Fig. 19
+  if (v.vy_B_mps != 0.0) lateral_active_ns_ = now_ns_;
+  return v;
+}
+
 void FlightSoftware::approach(const Picture& pic) {
   const ControlGains& g = config_.control;
   if (retreat_until_ns_) return set_velocity(back_off_velocity(g));  // declined: backing out (supervise)
@@ -887,14 +899,13 @@ void FlightSoftware::approach(const Picture& pic) {
     // Unidentified (continuity lost): judge this picture; a contradiction ends the approach.
     // Whole pictures only: a guessed band can put a tag beyond the grid's edge or hide one.
     if (tracker_.identity() != CellIdentity::Confirmed && pic.whole() && !check_identity(pic, pose)) return;
+    // Decisions rest only on poses from deciding pictures whose corner tags are clear of the
+    // damage (TargetTracker::pose_decides); the others steer.
+    const bool decides = tracker_.pose_decides();
     // The laws of eq. 10-15 and Fig. 19 (guidance.hpp); the PI states and the timers here.
-    if (pic.decides) line_hold_.on_pose(now_ns_, pose.p_FB_m(), pose.yaw_rad, quiet_at(now_ns_));
+    if (decides) line_hold_.on_pose(now_ns_, pose.p_FB_m(), pose.yaw_rad, quiet_at(now_ns_));
     const ApproachErrors e = approach_errors(config_.camera, tracker_.box_centre_px(), pose);
-    VelocityCommand v;
-    v.vz_mps = pi_z_.update(e.e_z_m, dt);              // eq. 12
-    v.yaw_rate_radps = pi_psi_.update(e.e_psi_rad, dt);  // eq. 15
-    v.vy_B_mps = approach_lateral_mps(g, e);           // Fig. 19
-    if (v.vy_B_mps != 0.0) lateral_active_ns_ = now_ns_;
+    VelocityCommand v = approach_steering(e, dt);
     // Held short inside commit_range_m until settled; settling is given up after
     // settle_hold_s (the crossing gate then decides).
     // Also held short while the air leaves the line no room (too_rough_to_cross: declined
@@ -913,19 +924,21 @@ void FlightSoftware::approach(const Picture& pic) {
     // About to lose the tags: the crossing will be judged on the last nearly whole picture,
     // so only such pictures move the vehicle now (it hovers on damaged ones), and the last
     // one before the tags leave is at most a frame old.
-    if (tracker_.near_edge() && !pic.decides) v = {};
+    if (tracker_.near_edge() && !decides) v = {};
     // Near the border on a nearly whole picture: its pose is the freshest the approach will
     // get, and the crossing is judged on it now rather than when the tags have left the view
     // on a later nearly whole picture, which over a lossy link may come a second after the
     // last one, its pose then too old to cross on (pose_fresh_s). A refusal here only lets
     // the approach go on.
-    if (tracker_.near_edge() && pic.decides && -pose.p_FB_m().x() <= config_.mission.cross_range_max_m &&
+    if (tracker_.near_edge() && decides && -pose.p_FB_m().x() <= config_.mission.cross_range_max_m &&
         !cross_if_clear("corner tags leaving the view")) {
       return;
     }
     set_velocity(v);
-    estimate_forward_gain(pic, pose);
-    sample_cell_height(pic, pose);
+    if (decides) {
+      estimate_forward_gain(pose);
+      sample_cell_height(pose);
+    }
     telemetry_.e_z_m = e.e_z_m;
     telemetry_.e_psi_rad = e.e_psi_rad;
     telemetry_.psi_cell_rad = e.psi_cell_rad;
@@ -933,6 +946,26 @@ void FlightSoftware::approach(const Picture& pic) {
     telemetry_.lateral_mps = v.vy_B_mps;
     telemetry_.settled = h.settled;
     telemetry_.holding_short = hold;
+    return;
+  }
+  if (tracker_.hidden_by_damage() && !back_off_since_ns_) {
+    // The guessed rows hide the corner tags (or show them where they no longer are): the
+    // target is not lost, only unseen until a picture shows it clear of the damage, which
+    // the next key frame brings; the approach's own time limit bounds the wait. Farther out
+    // than commit_range_m, for at most coast_s after the last pose, the loops steer on that
+    // pose carried by the state odometry (its drift, 5 cm/s, is far inside what the
+    // approach corrects later); closer, where the crossing's last centimetres are judged,
+    // the vehicle holds.
+    const std::optional<TargetTracker::Carried> carried = tracker_.carried_target(now_ns_);
+    if (!carried || -carried->pose_K.p_FB_m().x() <= g.commit_range_m) return hold_or_hover();
+    const PoseEstimate& pose = carried->pose_K;
+    const cv::Rect2d& b = carried->box_px;
+    const ApproachErrors e = approach_errors(config_.camera, {b.x + 0.5 * b.width, b.y + 0.5 * b.height}, pose);
+    VelocityCommand v = approach_steering(e, dt);
+    const ApproachHold h = approach_hold(config_, e, ns_to_seconds(now_ns_ - lateral_active_ns_), -pose.p_FB_m().x());
+    v.vx_B_mps = approach_forward_mps(g, !h.in_cone, tracker_.identity() == CellIdentity::Confirmed,
+                                      -pose.p_FB_m().x(), -viewpoint_G_m_.x());  // eq. 10
+    set_velocity(v);
     return;
   }
   if (!pic.decides && !back_off_since_ns_) {

@@ -104,6 +104,7 @@
 
 #include "flight_sw/config.hpp"
 #include "flight_sw/control.hpp"
+#include "flight_sw/guidance.hpp"
 #include "flight_sw/inventory.hpp"
 #include "flight_sw/line_hold.hpp"
 #include "flight_sw/navigation.hpp"
@@ -218,6 +219,7 @@ struct Telemetry {
   int damaged_frames = 0;  ///< error-concealed pictures received (CameraFrame::damaged)
   int band_decided_frames = 0;  ///< damaged pictures that decided on rows clear of their damage (perception.band_margin_px)
   int unflown_frames = 0;  ///< of which too damaged to steer on (perception.steer_max_damage_events): hovered
+  int hidden_target_pictures = 0;  ///< damaged pictures whose guessed rows hid the target's corner tags: held
 };
 
 class FlightSoftware {
@@ -262,8 +264,9 @@ class FlightSoftware {
   // Approach helpers
   bool select_target(const cv::Mat& bgr);
   bool reacquire(const Picture& pic);
+  VelocityCommand approach_steering(const ApproachErrors& e, double dt);
   void after_measurement();
-  void sample_cell_height(const Picture& pic, const PoseEstimate& pose);
+  void sample_cell_height(const PoseEstimate& pose);
   bool state_fresh() const;
   std::optional<cv::Rect2d> decision_region_px() const;
   bool damage_clear_of_decision(const CameraFrame& f) const;
@@ -277,7 +280,7 @@ class FlightSoftware {
   /// mission, abort (land where it hovers, in front of the shelf) with `give_up_reason`
   /// (default: "target cell not identified: " + why).
   void reread_shelf(const std::string& why, const std::optional<std::string>& give_up_reason = std::nullopt);
-  void estimate_forward_gain(const Picture& pic, const PoseEstimate& pose_K);
+  void estimate_forward_gain(const PoseEstimate& pose_K);
   // The line-hold gate and the in-crossing watch (line_hold.hpp)
   bool quiet_at(TimeNs t_ns) const;
   LineHoldForecast line_hold_forecast(const PoseEstimate& pose_K);

@@ -342,16 +342,22 @@ void TargetTracker::start_tracker(const cv::Mat& bgr, const cv::Rect2d& box, Tim
   }
 }
 
-std::optional<std::array<cv::Point2d, 4>> corners_after_motion(const FlightConfig& config, CellIndex cell,
-                                                               const PoseEstimate& pose_K, double yaw_O_at_pose_rad,
-                                                               const Eigen::Vector3d& dp_O_m, double dyaw_rad) {
+PoseEstimate pose_after_motion(const PoseEstimate& pose_K, double yaw_O_at_pose_rad, const Eigen::Vector3d& dp_O_m,
+                               double dyaw_rad) {
   const double yaw_K_in_O = yaw_O_at_pose_rad - pose_K.yaw_rad;
   Eigen::Vector3d dp_K = dp_O_m;
   dp_K.head<2>() = Eigen::Rotation2Dd(-yaw_K_in_O) * dp_O_m.head<2>();
-  Eigen::Isometry3d X_KB_moved = pose_K.X_FB;
-  X_KB_moved.linear() = Eigen::AngleAxisd(dyaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix() * pose_K.X_FB.linear();
-  X_KB_moved.translation() += dp_K;
-  const Eigen::Isometry3d X_CK = (X_KB_moved * (pose_K.X_FB.inverse() * pose_K.X_FC)).inverse();
+  PoseEstimate moved = pose_K;
+  moved.X_FB.linear() = Eigen::AngleAxisd(dyaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix() * pose_K.X_FB.linear();
+  moved.X_FB.translation() += dp_K;
+  moved.X_FC = moved.X_FB * (pose_K.X_FB.inverse() * pose_K.X_FC);
+  moved.yaw_rad = wrap_pi(pose_K.yaw_rad + dyaw_rad);
+  return moved;
+}
+
+std::optional<std::array<cv::Point2d, 4>> corners_seen_from(const FlightConfig& config, CellIndex cell,
+                                                            const PoseEstimate& pose_K) {
+  const Eigen::Isometry3d X_CK = pose_K.X_FC.inverse();
   const auto obj = cell_corner_tags_K(config.shelf, cell);
   std::vector<cv::Point3d> p_C;
   for (const cv::Point3d& o : obj) {
@@ -360,11 +366,20 @@ std::optional<std::array<cv::Point2d, 4>> corners_after_motion(const FlightConfi
     p_C.emplace_back(c.x(), c.y(), c.z());
   }
   const CameraIntrinsics& k = config.camera;
-  const cv::Matx33d K = camera_matrix(k);
-  const cv::Vec<double, 5> dist = distortion(k);
   std::vector<cv::Point2d> px;
-  cv::projectPoints(p_C, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, dist, px);
+  cv::projectPoints(p_C, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), camera_matrix(k), distortion(k), px);
   return std::array<cv::Point2d, 4>{px[0], px[1], px[2], px[3]};
+}
+
+double pose_jump_limit_m(const MissionParams& mission, double range_m) {
+  const double r = std::max(1.0, range_m / kPoseJumpRange_m);
+  return mission.pose_jump_m * r * r;
+}
+
+std::optional<PoseEstimate> TargetTracker::carried_pose() const {
+  if (!pose_K_ || !odometry_now_ || !odometry_at_pose_) return std::nullopt;
+  return pose_after_motion(*pose_K_, odometry_at_pose_->yaw_O_rad, odometry_now_->p_O_m - odometry_at_pose_->p_O_m,
+                           wrap_pi(odometry_now_->yaw_O_rad - odometry_at_pose_->yaw_O_rad));
 }
 
 TargetTracker::Prediction TargetTracker::predict(const Picture& pic, const std::optional<OdometryFix>& odometry) {
@@ -372,9 +387,7 @@ TargetTracker::Prediction TargetTracker::predict(const Picture& pic, const std::
   moved_box_px_.reset();
   if (pose_K_ && target_ && odometry && odometry_at_pose_ &&
       ns_to_seconds(pic.t_ns - pose_t_ns_) > kMotionPredictAfter_s) {
-    const auto moved = corners_after_motion(config_, *target_, *pose_K_, odometry_at_pose_->yaw_O_rad,
-                                            odometry->p_O_m - odometry_at_pose_->p_O_m,
-                                            wrap_pi(odometry->yaw_O_rad - odometry_at_pose_->yaw_O_rad));
+    const auto moved = corners_seen_from(config_, *target_, *carried_pose());
     if (moved) {
       // The box around the moved corners; measure() places each corner in it as the last
       // measured corners sat in the last box.
@@ -413,6 +426,7 @@ bool TargetTracker::measure(const Picture& pic, const cv::Rect2d& predicted, Tag
   const cv::Mat& bgr = pic.bgr;
   const TimeNs now_ns = pic.t_ns;
   continuity_lost_ = false;
+  hidden_by_damage_ = false;
   const PerceptionParams& p = config_.perception;
   const double grow_x = p.roi_expand * predicted.width, grow_y = p.roi_expand * predicted.height;
   const cv::Rect roi(cv::Point(static_cast<int>(std::floor(predicted.x - grow_x)),
@@ -465,6 +479,11 @@ bool TargetTracker::measure(const Picture& pic, const cv::Rect2d& predicted, Tag
   }
   keep_front_shelf(roi_tags_, p.area_ratio_threshold);
   const double gate = p.corner_gate * std::min(predicted.width, predicted.height);
+  // Damage: the rows a lost datagram left guessed until the next key frame (CameraFrame).
+  // A tag there may be shown where it was when the band was lost, or not at all.
+  const std::vector<RowSpan>* damaged =
+      pic.damaged_rows && !pic.damaged_rows->empty() && !pic.whole() ? pic.damaged_rows : nullptr;
+  const double expected_side_px = tag_side_px_ * (growth > 0.5 && growth < 2.0 ? growth : 1.0);
   std::array<int, 4> pick{-1, -1, -1, -1};
   for (size_t k = 0; k < 4; ++k) {
     const cv::Point2d d = corner_px_[k] - old_c;
@@ -477,7 +496,16 @@ bool TargetTracker::measure(const Picture& pic, const cv::Rect2d& predicted, Tag
         pick[k] = static_cast<int>(i);
       }
     }
-    if (pick[k] < 0) return false;
+    if (pick[k] < 0) {
+      // Missed where the picture is guessed (within 1.5 tag sides of a guessed row, inside
+      // the picture): hidden, not gone.
+      const bool in_picture = expect.x >= 0.0 && expect.y >= 0.0 && expect.x < bgr.cols && expect.y < bgr.rows;
+      if (damaged && in_picture &&
+          rows_touch(*damaged, expect.y - 1.5 * expected_side_px, expect.y + 1.5 * expected_side_px)) {
+        return hidden();
+      }
+      return false;
+    }
     for (size_t j = 0; j < k; ++j) {
       if (pick[j] == pick[k]) return false;
     }
@@ -491,24 +519,45 @@ bool TargetTracker::measure(const Picture& pic, const cv::Rect2d& predicted, Tag
     pose_img_.push_back(t.centre_px);
     side += 0.25 * std::sqrt(t.area_px);
   }
+  // A corner tag crossed by guessed rows (its bounding box, +-1 px): the pose may be off by
+  // what the vehicle moved since the band was lost (measured: 10-20 deg of heading).
+  bool touched = false;
+  for (size_t k = 0; k < 4 && damaged; ++k) {
+    const cv::Rect& b = roi_tags_[static_cast<size_t>(pick[k])].bbox_px;
+    touched = touched || rows_touch(*damaged, b.y - 1.0, b.y + b.height + 1.0);
+  }
   const std::vector<cv::Point2d>& img = pose_img_;
   const auto pose = estimate_pose(pose_obj_, img, config_.camera, config_.mount);
   if (!pose) return false;
   // Plausibility: between frames the vehicle moves centimetres, so a pose that jumps further
-  // than pose_jump_m (+ 1 m/s of the time since the last one) or turns more than pose_jump_rad
-  // (+ 1 rad/s) comes from a wrong corner tag (a neighbour's, as a true corner leaves the view
-  // close to the shelf): not a measurement. Once the last pose is older than
+  // than pose_jump_limit_m (+ 1 m/s of the time since the last one) or turns more than
+  // pose_jump_rad (+ 1 rad/s) comes from a wrong corner tag (a neighbour's, as a true corner
+  // leaves the view close to the shelf): not a measurement. Once the last pose is older than
   // pose_jump_window_s there is nothing to compare with.
   const MissionParams& mp = config_.mission;
   if (pose_K_) {
     const double dt = ns_to_seconds(now_ns - pose_t_ns_);
     const double jump_m = (pose->p_FB_m() - pose_K_->p_FB_m()).norm();
     const double turn = std::abs(wrap_pi(pose->yaw_rad - pose_K_->yaw_rad));
-    if (dt <= mp.pose_jump_window_s && (jump_m > mp.pose_jump_m + 1.0 * dt ||
+    const double range_m = -pose_K_->p_FB_m().x();
+    if (dt <= mp.pose_jump_window_s && (jump_m > pose_jump_limit_m(mp, range_m) + 1.0 * dt ||
                                         turn > mp.pose_jump_rad + 1.0 * dt)) {
       ++counts_.rejected_poses;
       return false;
     }
+  }
+  // A pose from touched tags must agree with the last pose carried to now by the state
+  // odometry: within the jump limit plus the odometry's drift since, within pose_jump_rad, and
+  // for at most mission.coast_s after the last pose. Otherwise the picture hides the target.
+  if (touched) {
+    const std::optional<PoseEstimate> carried = carried_pose();
+    const double age_s = ns_to_seconds(now_ns - pose_t_ns_);
+    const bool agrees =
+        carried && age_s <= mp.coast_s &&
+        (pose->p_FB_m() - carried->p_FB_m()).norm() <=
+            pose_jump_limit_m(mp, -carried->p_FB_m().x()) + kOdometryDrift_mps * age_s &&
+        std::abs(wrap_pi(pose->yaw_rad - carried->yaw_rad)) <= mp.pose_jump_rad;
+    if (!agrees) return hidden();
   }
   // Identity: the target cell's centre stays at one height above the take-off point. After
   // the target was lost, the tracked box can settle on the cell above or below (and the
@@ -570,12 +619,14 @@ bool TargetTracker::measure(const Picture& pic, const cv::Rect2d& predicted, Tag
   pose_K_ = pose;
   pose_t_ns_ = now_ns;
   odometry_at_pose_ = odometry_now_;
-  if (pic.decides) {  // the crossing is judged on poses from nearly whole pictures only
+  pose_decides_ = pic.decides && !touched;
+  if (pose_decides_) {  // the crossing is judged on poses from nearly whole pictures only
     decision_pose_K_ = pose;
     decision_pose_t_ns_ = now_ns;
   }
-  box_px_ = corner_box(corner_px_, side);
-  tag_side_px_ = side;
+  // (A touched tag's area may be cut by the band: the side is kept from clean pictures.)
+  if (!touched) tag_side_px_ = side;
+  box_px_ = corner_box(corner_px_, tag_side_px_);
   // About to leave the view: a corner tag within a tag side (plus margin) of the border.
   const double m = config_.mission.edge_margin_px + side;
   near_edge_ = false;
@@ -583,6 +634,21 @@ bool TargetTracker::measure(const Picture& pic, const cv::Rect2d& predicted, Tag
     near_edge_ = near_edge_ || c.x < m || c.y < m || c.x > bgr.cols - 1 - m || c.y > bgr.rows - 1 - m;
   }
   return true;
+}
+
+std::optional<TargetTracker::Carried> TargetTracker::carried_target(TimeNs now_ns) const {
+  if (!target_ || ns_to_seconds(now_ns - pose_t_ns_) > config_.mission.coast_s) return std::nullopt;
+  const std::optional<PoseEstimate> carried = carried_pose();
+  if (!carried) return std::nullopt;
+  const auto corners = corners_seen_from(config_, *target_, *carried);
+  if (!corners) return std::nullopt;
+  return Carried{*carried, corner_box(*corners, tag_side_px_)};
+}
+
+bool TargetTracker::hidden() {
+  hidden_by_damage_ = true;
+  ++counts_.hidden_target_pictures;
+  return false;
 }
 
 bool TargetTracker::reacquire(const Picture& pic, const ShelfView& view, TagDetector& detector,

@@ -151,14 +151,30 @@ struct OdometryFix {
   double yaw_O_rad = 0.0;
 };
 
-/// The target cell's four corner tags (cell_corner_tags_K order) as seen after the vehicle of
-/// `pose_K` (whose state yaw was `yaw_O_at_pose_rad`) moved by `dp_O_m` and turned by
-/// `dyaw_rad`, its attitude otherwise unchanged: K's heading in O is yaw_O - pose yaw, so
+/// The pose `pose_K` (taken when the state yaw was `yaw_O_at_pose_rad`) carried by the
+/// vehicle's own motion since: moved by `dp_O_m` and turned by `dyaw_rad` in the odometry frame,
+/// its attitude otherwise unchanged. K's heading in O is yaw_O - pose yaw, so
 /// dp_K = R_z(-(yaw_O - yaw_K)) dp_O; X_KB' = (R_z(dyaw) R_KB, p_KB + dp_K); the camera rides
-/// on the body (X_KC' = X_KB' X_KB^-1 X_KC). Empty when a tag would lie behind the camera.
-std::optional<std::array<cv::Point2d, 4>> corners_after_motion(const FlightConfig& config, CellIndex cell,
-                                                               const PoseEstimate& pose_K, double yaw_O_at_pose_rad,
-                                                               const Eigen::Vector3d& dp_O_m, double dyaw_rad);
+/// on the body (X_KC' = X_KB' X_KB^-1 X_KC); the yaw grows by dyaw.
+PoseEstimate pose_after_motion(const PoseEstimate& pose_K, double yaw_O_at_pose_rad, const Eigen::Vector3d& dp_O_m,
+                               double dyaw_rad);
+
+/// The target cell's four corner tags (cell_corner_tags_K order) as seen from the camera of
+/// `pose_K` (projected with the intrinsics and the distortion). Empty when a tag would lie
+/// behind the camera.
+std::optional<std::array<cv::Point2d, 4>> corners_seen_from(const FlightConfig& config, CellIndex cell,
+                                                            const PoseEstimate& pose_K);
+
+/// How far apart two poses of the target, a frame apart, may lie and still be one: the pose's
+/// position error grows as R^2 sigma / (f L) with the range R (depth from the tags' apparent
+/// size, lateral from the heading that four tags of spread L resolve), so the limit is
+/// pose_jump_m at up to kPoseJumpRange_m and pose_jump_m (R / kPoseJumpRange_m)^2 beyond.
+double pose_jump_limit_m(const MissionParams& mission, double range_m);
+constexpr double kPoseJumpRange_m = 1.0;
+
+/// How fast the state odometry's position drifts from the truth (integrated velocities in
+/// whole cm/s, 10 Hz), m/s: the margin a pose carried by it gains per second.
+constexpr double kOdometryDrift_mps = 0.05;
 
 /// The tracked target: the cell chosen on a full view, its four corner tags followed from
 /// picture to picture (fast pipeline: BoxTracker; reference: Median Flow), its pose in the cell
@@ -176,6 +192,7 @@ class TargetTracker {
     int wrong_level_poses = 0;    ///< of which on another level's tags (state height disagrees)
     int behind_tags_dropped = 0;  ///< tags in the target's window too small for the front shelf
     int identity_checks = 0;      ///< pictures judged while the target was unidentified
+    int hidden_target_pictures = 0;  ///< pictures whose damage hid the target (hidden_by_damage)
   };
 
   /// The target chosen on the full `view` of the picture `bgr` at `t_ns` (where every cell's
@@ -200,6 +217,10 @@ class TargetTracker {
   /// Looks for the target's four corner tags around `predicted`: tags in a window around it,
   /// eq. 1 inside the window, each corner the nearest tag to where the box puts it; the pose
   /// from them, if plausible (jump, level by `state`), becomes the target's. False: not found.
+  /// A damaged picture whose guessed rows cross a corner tag (or lie where a missing corner
+  /// should be) may show the tag where it was a few pictures ago: its pose only steers
+  /// (pose_decides() false), and only if it agrees with the last pose carried to now by the
+  /// state odometry; otherwise the picture hides the target (hidden_by_damage()).
   bool measure(const Picture& pic, const cv::Rect2d& predicted, TagDetector& detector,
                const std::optional<StateRecord>& state);
   /// After a measurement: the tracker follows the measured box (the reference pipeline's is
@@ -221,6 +242,21 @@ class TargetTracker {
   /// The last pose in K, and the last from a nearly whole picture (the crossing's) with its time.
   const std::optional<PoseEstimate>& pose_K() const { return pose_K_; }
   const std::optional<PoseEstimate>& decision_pose_K() const { return decision_pose_K_; }
+  /// The last accepted pose came from a picture that decides with its corner tags clear of
+  /// the damage: the crossing, the line-hold forecast, the forward gain and the cell height may
+  /// rest on it. False: it only steers.
+  bool pose_decides() const { return pose_decides_; }
+  /// The last measure found nothing because the picture's damage hides the target: nothing is
+  /// to be decided on it, and the target is not lost.
+  bool hidden_by_damage() const { return hidden_by_damage_; }
+  /// Where the vehicle's own motion has carried the target since the last pose, at most
+  /// mission.coast_s after it (at `now_ns`): the carried pose and the box its corner tags
+  /// make. Empty without odometry at both ends, later, or with a tag behind the camera.
+  struct Carried {
+    PoseEstimate pose_K;
+    cv::Rect2d box_px;
+  };
+  std::optional<Carried> carried_target(TimeNs now_ns) const;
   TimeNs decision_pose_t_ns() const { return decision_pose_t_ns_; }
   /// A corner tag was about to leave the view on the last measurement.
   bool near_edge() const { return near_edge_; }
@@ -236,6 +272,11 @@ class TargetTracker {
  private:
   bool fast() const { return config_.perception.pipeline == PerceptionPipeline::fast; }
   void start_tracker(const cv::Mat& bgr, const cv::Rect2d& box, TimeNs t_ns);
+  /// The last pose carried to the last prediction's odometry fix (pose_after_motion); empty
+  /// without both fixes.
+  std::optional<PoseEstimate> carried_pose() const;
+  /// The picture hides the target (hidden_by_damage): counted; measure() returns false.
+  bool hidden();
 
   FlightConfig config_;
   std::optional<CellIndex> target_;
@@ -252,6 +293,8 @@ class TargetTracker {
   TimeNs pose_t_ns_ = 0;                  ///< when the frame of pose_K_ was received
   std::optional<PoseEstimate> decision_pose_K_;  ///< last pose from a nearly whole picture
   TimeNs decision_pose_t_ns_ = 0;
+  bool pose_decides_ = false;             ///< see pose_decides()
+  bool hidden_by_damage_ = false;         ///< see hidden_by_damage()
   bool near_edge_ = false;                ///< a corner tag was about to leave the view
   // Identity: confirmed on the full view the target was chosen on and kept while every
   // accepted pose follows the last identified one (mission.identity_continuity_s).

@@ -406,6 +406,7 @@ class PilotLoop::Impl {
                             {"fsw_damaged_frames", tm.damaged_frames},
                             {"fsw_band_decided_frames", tm.band_decided_frames},
                             {"fsw_unflown_frames", tm.unflown_frames},
+                            {"fsw_hidden_target_pictures", tm.hidden_target_pictures},
                             {"fsw_rejected_poses", tm.rejected_poses},
                             {"fsw_wrong_level_poses", tm.wrong_level_poses},
                             {"fsw_stale_replies", tm.stale_replies},
@@ -415,6 +416,7 @@ class PilotLoop::Impl {
             << "\n  driver: " << driver_counters << "\n  video: " << video_counters
             << "\n  flight software: damaged_frames=" << tm.damaged_frames
             << " band_decided_frames=" << tm.band_decided_frames << " unflown_frames=" << tm.unflown_frames
+            << " hidden_target_pictures=" << tm.hidden_target_pictures
             << " rejected_poses=" << tm.rejected_poses << " wrong_level_poses=" << tm.wrong_level_poses;
     return summary.str();
   }

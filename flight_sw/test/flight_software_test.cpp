@@ -1011,6 +1011,11 @@ TEST(FlightSoftware, DecidesOnDamagedPicturesWhoseDamageLiesClearOfTheShelf) {
   // The biased half decides only where it is blanked: the entry is as centred as on whole
   // video (deciding on the guessed rows enters 2.5 cm high, see above).
   expect_through_cell_2_3(h2, Eigen::Vector2d(0.015, 0.015));
+  // Pictures whose guessed rows cross the lower corner tags (shown 40 rows off) hide the
+  // target (measured: 34): the approach coasts on the odometry or holds on them, never
+  // counting the target lost. Damage clear of the shelf hides nothing.
+  EXPECT_GT(h2.fsw().telemetry().hidden_target_pictures, 20);
+  EXPECT_EQ(h.fsw().telemetry().hidden_target_pictures, 0);
 }
 
 // The conventional strategies between two shelves 2.6 m apart: after the first

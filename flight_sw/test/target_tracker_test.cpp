@@ -314,10 +314,11 @@ std::array<cv::Point2d, 4> corners_seen(const FlightConfig& config, CellIndex ce
   return {px[0], px[1], px[2], px[3]};
 }
 
-// Between poses (damaged pictures, a tag missed) the tracker moves the last pose's corner tags
-// by the vehicle's own motion from its state odometry (frame O, whose axes are turned from K's
-// by the heading): the prediction equals the picture the moved camera takes, to a tenth of a
-// pixel, for motions of every axis and a turn, with O turned 1 rad from K.
+// Between poses (damaged pictures, a tag missed) the tracker carries the last pose by the
+// vehicle's own motion from its state odometry (frame O, whose axes are turned from K's by the
+// heading): the carried pose is the moved body's to a millimetre, and its corner tags are where
+// the moved camera sees them, to a tenth of a pixel, for motions of every axis and a turn, with
+// O turned 1 rad from K.
 TEST(MotionPrediction, CornerTagsMovedByTheOdometryAreWhereTheMovedCameraSeesThem) {
   const FlightConfig config;
   const CellIndex cell{2, 3};
@@ -333,7 +334,10 @@ TEST(MotionPrediction, CornerTagsMovedByTheOdometryAreWhereTheMovedCameraSeesThe
            {{0.3, 0.0, 0.0}, 0.0}, {{0.0, 0.1, 0.0}, 0.0}, {{0.0, 0.0, -0.15}, 0.0}, {{0.2, -0.05, 0.1}, -0.08}}) {
     const Eigen::Vector3d dp_O(std::cos(yaw_K_in_O) * dp_KB.x() - std::sin(yaw_K_in_O) * dp_KB.y(),
                                std::sin(yaw_K_in_O) * dp_KB.x() + std::cos(yaw_K_in_O) * dp_KB.y(), dp_KB.z());
-    const auto predicted = corners_after_motion(config, cell, *pose, yaw_O_at_pose, dp_O, dyaw);
+    const PoseEstimate moved = pose_after_motion(*pose, yaw_O_at_pose, dp_O, dyaw);
+    EXPECT_LT((moved.p_FB_m() - (p0_KB + dp_KB)).norm(), 1e-3) << "motion " << dp_KB.transpose();
+    EXPECT_NEAR(moved.yaw_rad, yaw0 + dyaw, 1e-3);
+    const auto predicted = corners_seen_from(config, cell, moved);
     ASSERT_TRUE(predicted.has_value());
     const auto truth = corners_seen(config, cell, p0_KB + dp_KB, yaw0 + dyaw);
     for (size_t k = 0; k < 4; ++k) {
