@@ -900,10 +900,14 @@ void FlightSoftware::approach(const Picture& pic) {
     // Whole pictures only: a guessed band can put a tag beyond the grid's edge or hide one.
     if (tracker_.identity() != CellIdentity::Confirmed && pic.whole() && !check_identity(pic, pose)) return;
     // Decisions rest only on poses from deciding pictures whose corner tags are clear of the
-    // damage (TargetTracker::pose_decides); the others steer.
+    // damage (TargetTracker::pose_decides); the others steer. The line-hold monitor takes
+    // every pose of a deciding picture: one from touched tags, accepted, agrees with the
+    // odometry within the jump limit, and can only widen the wander it measures (holding
+    // short longer), while poses from clean tags alone come too seldom over a lossy link for
+    // its quiet span (measured: held short until settle_hold_s gave up, then timed out).
     const bool decides = tracker_.pose_decides();
     // The laws of eq. 10-15 and Fig. 19 (guidance.hpp); the PI states and the timers here.
-    if (decides) line_hold_.on_pose(now_ns_, pose.p_FB_m(), pose.yaw_rad, quiet_at(now_ns_));
+    if (pic.decides) line_hold_.on_pose(now_ns_, pose.p_FB_m(), pose.yaw_rad, quiet_at(now_ns_));
     const ApproachErrors e = approach_errors(config_.camera, tracker_.box_centre_px(), pose);
     VelocityCommand v = approach_steering(e, dt);
     // Held short inside commit_range_m until settled; settling is given up after
