@@ -243,8 +243,8 @@ class TargetTracker {
   const std::optional<PoseEstimate>& pose_K() const { return pose_K_; }
   const std::optional<PoseEstimate>& decision_pose_K() const { return decision_pose_K_; }
   /// The last accepted pose came from a picture that decides with its corner tags clear of
-  /// the damage: the crossing, the line-hold forecast, the forward gain and the cell height may
-  /// rest on it. False: it only steers.
+  /// the damage: the crossing, the forward gain and the cell height may rest on it. False: it
+  /// only steers (and feeds the line-hold monitor if its picture decides).
   bool pose_decides() const { return pose_decides_; }
   /// The last measure found nothing because the picture's damage hides the target: nothing is
   /// to be decided on it, and the target is not lost.
