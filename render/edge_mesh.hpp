@@ -4,16 +4,16 @@
 //
 // A face without texture shows one colour, so what its triangles must get right is where its
 // edges fall, and, where it is depth-tested, its depth. Its outline in the normalised plane
-// (pinhole image, clipped to the lens region) is a convex polygon; each edge a-b is bisected,
-// recursively, until bound (2) of lens_mesh.hpp with the lens statistics over the segment's
-// box is at most the tolerance: every drawn chord lies within the tolerance of the true curve
-// D(a + t (b - a)). Bisection points are points of the edge (its midpoints in the normalised
-// plane, where a line stays a line), so they are projected exactly like any vertex.
+// (pinhole image, clipped to the lens region) is a convex polygon; each edge a-b is cut into
+// the fewest equal parts k for which bound (2) of lens_mesh.hpp, with the lens statistics
+// over each part (LensStats), is at most the tolerance: every drawn chord lies within the
+// tolerance of the true curve D(a + t (b - a)). The cut points a + (i / k) (b - a) are points
+// of the edge (a line stays a line in the normalised plane), so they are projected exactly
+// like any vertex. (Equal parts rather than halving: an edge that needs 3 parts gets 3, not 4.)
 //
-// No cracks: an edge is bisected from its end points in a canonical order (lexicographically
-// smaller first; the midpoint 0.5 (a + b) is symmetric in floating point), so two faces of one
-// solid that share an edge get the same points on it, and neither has a point the other
-// lacks (no T-junction).
+// No cracks: an edge is cut from its end points in a canonical order (lexicographically
+// smaller first), so two faces of one solid that share an edge get the same points on it,
+// bit for bit, and neither has a point the other lacks (no T-junction).
 //
 // The interior: the outline's image (the points through the lens, in pixels) is a simple
 // polygon, convex up to the tolerance; the lens may bend an edge inward, so it is triangulated
@@ -33,8 +33,9 @@
 namespace shelfcross::render {
 
 /// Appends to `out` the outline of the polygon `poly` (normalised plane, in order around its
-/// edge) with every edge bisected until LensStats::across_chord_px <= tolerance_px: each
-/// corner, then the bisection points of the edge that starts there, in order.
+/// edge) with every edge cut into the fewest equal parts whose LensStats::across_chord_px is
+/// at most tolerance_px: each corner, then the cut points of the edge that starts there, in
+/// order.
 void bisect_outline(const LensStats& stats, double tolerance_px, const std::vector<Eigen::Vector2d>& poly,
                     std::vector<Eigen::Vector2d>& out);
 

@@ -457,18 +457,12 @@ void LensMesher::build(const Eigen::Isometry3d& X_WC) {
   group_start_[kFaceGroups] = indices_.size();
 }
 
-bool LensMesher::add_face(const Face& f, const Eigen::Isometry3d& X_CW, const Vec3& p_WC, Mesh mesh,
-                          double interior_px) {
-  const MeshFace& m = f.face;
-  // Single-sided: the camera strictly in front of the face's plane.
-  if (!(m.normal_W.dot(p_WC - m.corners_W_m[0]) > 1e-9)) return true;
+bool LensMesher::clip_face(const MeshFace& m, const Eigen::Isometry3d& X_CW, const LensGrid& grid) {
   const Eigen::Matrix3d& R_CW = X_CW.linear();
   const Vec3 t_CW = X_CW.translation();
   poly_C_.clear();
   // Outcodes against the frustum that holds the lens region: a face entirely beyond one plane
   // is dropped before any clipping.
-  const bool textured = mesh == Mesh::kInteriorGrid;
-  const LensGrid& grid = textured ? grids_.interior : grids_.edges;
   const double xl = grid.x_min, xh = grid.x_max;
   const double yl = grid.y_min, yh = grid.y_max;
   unsigned all_out = 0x3f;
@@ -486,7 +480,7 @@ bool LensMesher::add_face(const Face& f, const Eigen::Isometry3d& X_CW, const Ve
     all_out &= out;
     needs_z_clip = needs_z_clip || (out & 3u);
   }
-  if (all_out != 0) return true;
+  if (all_out != 0) return false;
   if (needs_z_clip) {
     // Near and far planes in 3-D (Z = near, Z = far), crossings in canonical order.
     for (int side = 0; side < 2; ++side) {
@@ -509,11 +503,24 @@ bool LensMesher::add_face(const Face& f, const Eigen::Isometry3d& X_CW, const Ve
         }
       }
       poly_C_.swap(clipped_C_);
-      if (poly_C_.size() < 3) return true;
+      if (poly_C_.size() < 3) return false;
     }
   }
   poly_n_.clear();
   for (const Vec3& p : poly_C_) poly_n_.emplace_back(p.x() / p.z(), p.y() / p.z());
+  return true;
+}
+
+bool LensMesher::add_face(const Face& f, const Eigen::Isometry3d& X_CW, const Vec3& p_WC, Mesh mesh,
+                          double interior_px) {
+  const MeshFace& m = f.face;
+  // Single-sided: the camera strictly in front of the face's plane.
+  if (!(m.normal_W.dot(p_WC - m.corners_W_m[0]) > 1e-9)) return true;
+  const bool textured = mesh == Mesh::kInteriorGrid;
+  const LensGrid& grid = textured ? grids_.interior : grids_.edges;
+  if (!clip_face(m, X_CW, grid)) return true;
+  const Eigen::Matrix3d& R_CW = X_CW.linear();
+  const Vec3 t_CW = X_CW.translation();
   pieces_.clear();
   sizes_.clear();
   if (mesh == Mesh::kOutline) {

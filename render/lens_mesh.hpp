@@ -39,6 +39,17 @@
 // such a point off the straight chord of the large side (by up to the tolerance), and without
 // it the two sides' drawn edges would differ and leave a sliver of pixel centres uncovered.
 //
+// Faces without texture and without measured corners (the room, shelves, boxes) need none of
+// the grid's interior accuracy where it costs triangles: they are meshed along their own
+// edges (edge_mesh.hpp: each edge cut until its chords meet the edges bound, the outline's
+// image ear-clipped), so a bar crossing ten cells is a handful of triangles, not ten pieces.
+// Where such a face is depth-tested, each of its triangles must still keep the interior
+// bound of the edges grid (edges_interior_bound_px, which the decals' depth offset and the
+// depth order of faces that meet rely on), through the smallest disc around it
+// (LensStats::interior_px); a solid with a triangle beyond it is split along the edges grid
+// for that frame, all its faces alike, so the edges they share get the same points. The room,
+// drawn first without the depth test, takes its outline's triangles whatever their size.
+//
 // Culling: every face is single-sided (drawn only when the camera is strictly on the side
 // its normal points to). The world is made of closed solids, one-sided tags with a backing,
 // and the inside of the room, so this only removes faces that are hidden anyway.
@@ -233,6 +244,10 @@ class LensMesher {
   enum class Mesh { kEdgesGrid, kInteriorGrid, kOutline };
   bool add_face(const Face& f, const Eigen::Isometry3d& X_CW, const Eigen::Vector3d& p_WC, Mesh mesh,
                 double interior_px);
+  // The face in C, dropped if entirely outside the frustum of grid's region, clipped against
+  // the near and far planes, then projected to the normalised plane: poly_n_. False if nothing
+  // is left.
+  bool clip_face(const MeshFace& m, const Eigen::Isometry3d& X_CW, const LensGrid& grid);
 
   CameraIntrinsics K_;
   int s_;

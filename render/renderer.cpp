@@ -461,8 +461,9 @@ void Renderer::Impl::draw(const Eigen::Isometry3d& X_WC) {
     draw(kRoomFaces, kDecalFaces);
   }
   // Decals a millimetre off their surface: the depth of a large flat face is interpolated
-  // across its lens cell and may sit up to edges_interior_bound_px pixels' worth of depth
-  // slope off (lens_mesh.hpp), so decals are pulled forward by that much plus one pixel.
+  // across its lens cell or outline triangle and may sit up to edges_interior_bound_px pixels'
+  // worth of depth slope off (lens_mesh.hpp), so decals are pulled forward by that much plus
+  // one pixel.
   glEnable(GL_POLYGON_OFFSET_FILL);
   draw(kDecalFaces, kTexturedFaces);
   glUseProgram(textured_program);
