@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "render/camera_model.hpp"
+#include "render/edge_mesh.hpp"
 #include "render/render_error.hpp"
 
 namespace shelfcross::render {
@@ -220,10 +221,7 @@ LensGrids make_lens_grids(const CameraIntrinsics& K, double tolerance_px, double
   const int nx = static_cast<int>(std::ceil((x_max - x_min) / step)) + 3;
   const int ny = static_cast<int>(std::ceil((y_max - y_min) / step)) + 3;
   const double ox = x_min - step, oy = y_min - step;
-  struct Stats {
-    double Mf = 0.0, Mp = 0.0, Jmin = std::numeric_limits<double>::infinity();
-    void merge(const Stats& o) { Mf = std::max(Mf, o.Mf), Mp = std::max(Mp, o.Mp), Jmin = std::min(Jmin, o.Jmin); }
-  };
+  using Stats = LensStats::Stats;
   std::vector<Stats> lattice(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny));
   LensGrids grids;
   for (int j = 0; j < ny; ++j) {
@@ -275,6 +273,17 @@ LensGrids make_lens_grids(const CameraIntrinsics& K, double tolerance_px, double
         st.merge(lattice[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(i)]);
     return st;
   };
+  // The blocks of the statistics kept for the meshes that follow faces' own edges.
+  LensStats& ls = grids.stats;
+  ls.step = step;
+  for (int j = 0; j < ny; ++j) {
+    for (int i = 0; i < nx; ++i) {
+      const auto k = static_cast<std::size_t>(std::hypot(ox + i * step, oy + j * step) / step);
+      if (ls.by_radius.size() <= k) ls.by_radius.resize(k + 1);
+      ls.by_radius[k].merge(lattice[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(i)]);
+    }
+  }
+  for (std::size_t k = 1; k < ls.by_radius.size(); ++k) ls.by_radius[k].merge(ls.by_radius[k - 1]);
   for (LensGrid* g : {&grids.edges, &grids.interior}) {
     const bool edges = g == &grids.edges;
     g->x_min = x_min, g->x_max = x_max, g->y_min = y_min, g->y_max = y_max;
@@ -292,6 +301,29 @@ LensGrids make_lens_grids(const CameraIntrinsics& K, double tolerance_px, double
     }
   }
   return grids;
+}
+
+double LensStats::across_chord_px(const Vec2& a, const Vec2& b) const {
+  const Stats st = over(std::min(a.x(), b.x()), std::max(a.x(), b.x()), std::min(a.y(), b.y()),
+                        std::max(a.y(), b.y()));
+  const double L = (b - a).norm();
+  return L * L / 8.0 * (st.Mp + L * st.Mf * st.Mf / st.Jmin);
+}
+
+double LensStats::interior_px(const Vec2& a, const Vec2& b, const Vec2& c) const {
+  // The smallest disc holding a triangle: on its longest side as diameter when the angle
+  // opposite is not acute, else the circumscribed one (R = abc / (4 area)).
+  const double ab = (b - a).squaredNorm(), bc = (c - b).squaredNorm(), ca = (a - c).squaredNorm();
+  const double longest = std::max({ab, bc, ca});
+  double r2 = 0.25 * longest;
+  if (2.0 * longest < ab + bc + ca) {  // acute: the longest side's square < the sum of the others'
+    const Vec2 u = b - a, v = c - a;
+    const double area2 = std::abs(u.x() * v.y() - u.y() * v.x());
+    r2 = ab * bc * ca / (4.0 * area2 * area2);  // R = abc / (2 |u x v|)
+  }
+  const Stats st = over(std::min({a.x(), b.x(), c.x()}), std::max({a.x(), b.x(), c.x()}),
+                        std::min({a.y(), b.y(), c.y()}), std::max({a.y(), b.y(), c.y()}));
+  return 0.5 * st.Mf * r2;
 }
 
 LensGrid LensGrid::one_cell(double x0, double x1, double y0, double y1) {
@@ -325,7 +357,9 @@ LensMesher::LensMesher(const CameraIntrinsics& K, int supersample, double near_m
       s_(supersample),
       near_m_(near_m),
       far_m_(far_m),
-      grids_(make_lens_grids(K, tolerance_px)) {
+      tolerance_px_(tolerance_px),
+      grids_(make_lens_grids(K, tolerance_px)),
+      region_(LensGrid::one_cell(grids_.edges.x_min, grids_.edges.x_max, grids_.edges.y_min, grids_.edges.y_max)) {
   const int s = supersample;
   clip_from_camera_ = gl_clip_from_camera(s * K.fx_px, s * K.fy_px, s * K.cx_px + 0.5 * (s - 1),
                                           s * K.cy_px + 0.5 * (s - 1), s * K.width_px,
@@ -358,46 +392,77 @@ std::vector<MeshFace> LensMesher::faces(FaceGroup group) const {
   return out;
 }
 
+void LensMesher::set_depth_tested(FaceGroup group, bool depth_tested) {
+  depth_tested_[static_cast<std::size_t>(group)] = depth_tested;
+}
+
 void LensMesher::build(const Eigen::Isometry3d& X_WC) {
   vertices_.clear();
   indices_.clear();
   points_C_.clear();
   room_spans_.clear();
+  grid_solids_ = 0;
   const Eigen::Isometry3d X_CW = X_WC.inverse(Eigen::Isometry);
+  const Vec3 p_WC = X_WC.translation();
   for (int g = 0; g < kFaceGroups; ++g) {
     group_start_[static_cast<std::size_t>(g)] = indices_.size();
-    for (const Face& f : faces_[static_cast<std::size_t>(g)]) {
-      const std::size_t first = indices_.size();
-      add_face(f, X_CW, X_WC.translation(), g == kTexturedFaces);
-      if (g != kRoomFaces || indices_.size() == first) continue;
-      // Its area: the triangles' areas in window coordinates (x_ndc, y_ndc scaled).
-      FaceSpan span{first, indices_.size(), 0.0, f.face.rgb};
-      for (std::size_t i = first; i < indices_.size(); i += 3) {
-        Vec2 p[3];
-        for (int k = 0; k < 3; ++k) {
-          const GpuVertex& v = vertices_[indices_[i + static_cast<std::size_t>(k)]];
-          p[k] = Vec2(v.clip[0] / v.clip[3] * 0.5 * s_ * K_.width_px, v.clip[1] / v.clip[3] * 0.5 * s_ * K_.height_px);
+    const std::vector<Face>& faces = faces_[static_cast<std::size_t>(g)];
+    // Room and flat faces along their own edges, with the interior bound of the edges grid
+    // where depth-tested (so decals' depth offset and the depth order of faces that meet hold
+    // as with the grid); a solid with a face whose triangles exceed it goes along the grid.
+    const bool outline = g == kRoomFaces || g == kFlatFaces;
+    const double interior_px = depth_tested_[static_cast<std::size_t>(g)]
+                                   ? grids_.edges_interior_bound_px
+                                   : std::numeric_limits<double>::infinity();
+    const Mesh grid_mesh = g == kTexturedFaces ? Mesh::kInteriorGrid : Mesh::kEdgesGrid;
+    for (std::size_t k = 0; k < faces.size();) {
+      std::size_t end = k + 1;
+      while (end < faces.size() && faces[k].face.solid >= 0 && faces[end].face.solid == faces[k].face.solid) ++end;
+      const std::size_t v0 = vertices_.size(), i0 = indices_.size();
+      auto mesh_solid = [&](Mesh mesh) {
+        spans_.clear();
+        for (std::size_t j = k; j < end; ++j) {
+          const std::size_t first = indices_.size();
+          if (!add_face(faces[j], X_CW, p_WC, mesh, interior_px)) return false;
+          spans_.emplace_back(first, indices_.size());
         }
-        const Vec2 a = p[1] - p[0], b = p[2] - p[0];
-        span.area_px2 += 0.5 * std::abs(a.x() * b.y() - a.y() * b.x());
+        return true;
+      };
+      if (!outline || !mesh_solid(Mesh::kOutline)) {
+        if (outline) ++grid_solids_;
+        vertices_.resize(v0), points_C_.resize(v0), indices_.resize(i0);
+        mesh_solid(grid_mesh);
       }
-      room_spans_.push_back(span);
+      if (g == kRoomFaces) {
+        for (std::size_t j = k; j < end; ++j) {
+          const auto [first, last] = spans_[j - k];
+          if (last == first) continue;
+          // Its area: the triangles' areas in window coordinates (x_ndc, y_ndc scaled).
+          FaceSpan span{first, last, 0.0, faces[j].face.rgb};
+          for (std::size_t i = first; i < last; i += 3) {
+            Vec2 p[3];
+            for (int c = 0; c < 3; ++c) {
+              const GpuVertex& v = vertices_[indices_[i + static_cast<std::size_t>(c)]];
+              p[c] = Vec2(v.clip[0] / v.clip[3] * 0.5 * s_ * K_.width_px, v.clip[1] / v.clip[3] * 0.5 * s_ * K_.height_px);
+            }
+            const Vec2 a = p[1] - p[0], b = p[2] - p[0];
+            span.area_px2 += 0.5 * std::abs(a.x() * b.y() - a.y() * b.x());
+          }
+          room_spans_.push_back(span);
+        }
+      }
+      k = end;
     }
   }
   group_start_[kFaceGroups] = indices_.size();
 }
 
-void LensMesher::add_face(const Face& f, const Eigen::Isometry3d& X_CW, const Vec3& p_WC,
-                          bool textured) {
-  const MeshFace& m = f.face;
-  // Single-sided: the camera strictly in front of the face's plane.
-  if (!(m.normal_W.dot(p_WC - m.corners_W_m[0]) > 1e-9)) return;
+bool LensMesher::clip_face(const MeshFace& m, const Eigen::Isometry3d& X_CW, const LensGrid& grid) {
   const Eigen::Matrix3d& R_CW = X_CW.linear();
   const Vec3 t_CW = X_CW.translation();
   poly_C_.clear();
   // Outcodes against the frustum that holds the lens region: a face entirely beyond one plane
   // is dropped before any clipping.
-  const LensGrid& grid = textured ? grids_.interior : grids_.edges;
   const double xl = grid.x_min, xh = grid.x_max;
   const double yl = grid.y_min, yh = grid.y_max;
   unsigned all_out = 0x3f;
@@ -415,7 +480,7 @@ void LensMesher::add_face(const Face& f, const Eigen::Isometry3d& X_CW, const Ve
     all_out &= out;
     needs_z_clip = needs_z_clip || (out & 3u);
   }
-  if (all_out != 0) return;
+  if (all_out != 0) return false;
   if (needs_z_clip) {
     // Near and far planes in 3-D (Z = near, Z = far), crossings in canonical order.
     for (int side = 0; side < 2; ++side) {
@@ -438,15 +503,47 @@ void LensMesher::add_face(const Face& f, const Eigen::Isometry3d& X_CW, const Ve
         }
       }
       poly_C_.swap(clipped_C_);
-      if (poly_C_.size() < 3) return;
+      if (poly_C_.size() < 3) return false;
     }
   }
   poly_n_.clear();
   for (const Vec3& p : poly_C_) poly_n_.emplace_back(p.x() / p.z(), p.y() / p.z());
+  return true;
+}
+
+bool LensMesher::add_face(const Face& f, const Eigen::Isometry3d& X_CW, const Vec3& p_WC, Mesh mesh,
+                          double interior_px) {
+  const MeshFace& m = f.face;
+  // Single-sided: the camera strictly in front of the face's plane.
+  if (!(m.normal_W.dot(p_WC - m.corners_W_m[0]) > 1e-9)) return true;
+  const bool textured = mesh == Mesh::kInteriorGrid;
+  const LensGrid& grid = textured ? grids_.interior : grids_.edges;
+  if (!clip_face(m, X_CW, grid)) return true;
+  const Eigen::Matrix3d& R_CW = X_CW.linear();
+  const Vec3 t_CW = X_CW.translation();
   pieces_.clear();
   sizes_.clear();
-  split_by_grid(grid, poly_n_, pieces_, sizes_);
-  if (sizes_.empty()) return;
+  if (mesh == Mesh::kOutline) {
+    // The region clip alone (one cell), then the outline's edges bisected.
+    split_by_grid(region_, poly_n_, pieces_, sizes_);
+    if (sizes_.empty()) return true;
+    poly_n_.swap(pieces_);
+    pieces_.clear();
+    bisect_outline(grids_.stats, tolerance_px_, poly_n_, pieces_);
+    outline_px_.clear();
+    for (const Vec2& xy : pieces_) outline_px_.push_back(pixel_of(xy));
+    triangles_.clear();
+    triangulate_polygon(outline_px_, triangles_);
+    for (std::size_t t = 0; t < triangles_.size(); t += 3) {
+      const Vec2& a = pieces_[static_cast<std::size_t>(triangles_[t])];
+      const Vec2& b = pieces_[static_cast<std::size_t>(triangles_[t + 1])];
+      const Vec2& c = pieces_[static_cast<std::size_t>(triangles_[t + 2])];
+      if (grids_.stats.interior_px(a, b, c) > interior_px) return false;
+    }
+  } else {
+    split_by_grid(grid, poly_n_, pieces_, sizes_);
+    if (sizes_.empty()) return true;
+  }
 
   // The face's plane in C: n_C . p = d_C (< 0: the camera is on the normal side), so the point
   // of the face on the ray (x, y, 1) has depth Z = d_C / (n_C . (x, y, 1)).
@@ -462,35 +559,41 @@ void LensMesher::add_face(const Face& f, const Eigen::Isometry3d& X_CW, const Ve
   const Eigen::Matrix4d& P = clip_from_camera_;
   const double fx_s = s_ * K_.fx_px, fy_s = s_ * K_.fy_px;
   const double cx_s = s_ * K_.cx_px + 0.5 * (s_ - 1), cy_s = s_ * K_.cy_px + 0.5 * (s_ - 1);
+  auto add_vertex = [&](const Vec2& xy, const Vec2& px) {
+    const double Z = d_C / n_C.dot(Vec3(xy.x(), xy.y(), 1.0));
+    const Eigen::Vector4d clip =
+        P * Eigen::Vector4d((px.x() - cx_s) / fx_s * Z, (px.y() - cy_s) / fy_s * Z, Z, 1.0);
+    GpuVertex gv;
+    for (int c = 0; c < 4; ++c) gv.clip[c] = static_cast<float>(clip[c]);
+    for (int c = 0; c < 3; ++c) gv.rgb[c] = m.rgb[c];
+    if (textured) {
+      const Vec3 r = Z * Vec3(xy.x(), xy.y(), 1.0) - c0_C;
+      const float s = static_cast<float>(g1_C.dot(r)), t = static_cast<float>(g2_C.dot(r));
+      gv.uv[0] = m.uv[0].x() + s * duv1.x() + t * duv3.x();
+      gv.uv[1] = m.uv[0].y() + s * duv1.y() + t * duv3.y();
+    } else {
+      gv.uv[0] = gv.uv[1] = 0.0f;
+    }
+    vertices_.push_back(gv);
+    points_C_.push_back(Z * Vec3(xy.x(), xy.y(), 1.0));
+  };
+  const auto base = static_cast<std::uint32_t>(vertices_.size());
+  if (mesh == Mesh::kOutline) {
+    for (std::size_t v = 0; v < pieces_.size(); ++v) add_vertex(pieces_[v], outline_px_[v]);
+    for (const int t : triangles_) indices_.push_back(base + static_cast<std::uint32_t>(t));
+    return true;
+  }
   std::size_t k = 0;
   for (int size : sizes_) {
-    const auto base = static_cast<std::uint32_t>(vertices_.size());
-    for (int v = 0; v < size; ++v, ++k) {
-      const Vec2& xy = pieces_[k];
-      const double Z = d_C / n_C.dot(Vec3(xy.x(), xy.y(), 1.0));
-      const Vec2 px = pixel_of(xy);
-      const Eigen::Vector4d clip =
-          P * Eigen::Vector4d((px.x() - cx_s) / fx_s * Z, (px.y() - cy_s) / fy_s * Z, Z, 1.0);
-      GpuVertex gv;
-      for (int c = 0; c < 4; ++c) gv.clip[c] = static_cast<float>(clip[c]);
-      for (int c = 0; c < 3; ++c) gv.rgb[c] = m.rgb[c];
-      if (textured) {
-        const Vec3 r = Z * Vec3(xy.x(), xy.y(), 1.0) - c0_C;
-        const float s = static_cast<float>(g1_C.dot(r)), t = static_cast<float>(g2_C.dot(r));
-        gv.uv[0] = m.uv[0].x() + s * duv1.x() + t * duv3.x();
-        gv.uv[1] = m.uv[0].y() + s * duv1.y() + t * duv3.y();
-      } else {
-        gv.uv[0] = gv.uv[1] = 0.0f;
-      }
-      vertices_.push_back(gv);
-      points_C_.push_back(Z * Vec3(xy.x(), xy.y(), 1.0));
-    }
+    const auto first = static_cast<std::uint32_t>(vertices_.size());
+    for (int v = 0; v < size; ++v, ++k) add_vertex(pieces_[k], pixel_of(pieces_[k]));
     for (int v = 1; v + 1 < size; ++v) {
-      indices_.push_back(base);
-      indices_.push_back(base + static_cast<std::uint32_t>(v));
-      indices_.push_back(base + static_cast<std::uint32_t>(v + 1));
+      indices_.push_back(first);
+      indices_.push_back(first + static_cast<std::uint32_t>(v));
+      indices_.push_back(first + static_cast<std::uint32_t>(v + 1));
     }
   }
+  return true;
 }
 
 }  // namespace shelfcross::render

@@ -39,12 +39,27 @@
 // such a point off the straight chord of the large side (by up to the tolerance), and without
 // it the two sides' drawn edges would differ and leave a sliver of pixel centres uncovered.
 //
+// Faces without texture and without measured corners (the room, shelves, boxes) need none of
+// the grid's interior accuracy where it costs triangles: they are meshed along their own
+// edges (edge_mesh.hpp: each edge cut until its chords meet the edges bound, the outline's
+// image ear-clipped), so a bar crossing ten cells is a handful of triangles, not ten pieces.
+// Where such a face is depth-tested, each of its triangles must still keep the interior
+// bound of the edges grid (edges_interior_bound_px, which the decals' depth offset and the
+// depth order of faces that meet rely on), through the smallest disc around it
+// (LensStats::interior_px); a solid with a triangle beyond it is split along the edges grid
+// for that frame, all its faces alike, so the edges they share get the same points. The room,
+// drawn first without the depth test, takes its outline's triangles whatever their size.
+//
 // Culling: every face is single-sided (drawn only when the camera is strictly on the side
 // its normal points to). The world is made of closed solids, one-sided tags with a backing,
 // and the inside of the room, so this only removes faces that are hidden anyway.
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
+#include <limits>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -83,6 +98,40 @@ struct LensGrid {
   static LensGrid one_cell(double x0, double x1, double y0, double y1);
 };
 
+/// The lens's statistics over the region, for bounds on segments and triangles anywhere in
+/// it, by distance from the optical axis: bin k holds the statistics of every lattice point
+/// of make_lens_grids (4 px pitch) with |(x, y)| < (k + 1) step, so a box is bounded by the
+/// bin of its farthest corner (plus two bins: the lattice points up to one pitch beyond the
+/// box, as for the grids' cells). The lens is nearly radial (the tangential terms are small),
+/// so this costs little over a bound per box, and a look-up is one division.
+struct LensStats {
+  struct Stats {
+    double Mf = 0.0;  ///< max |D''(e, e)| over unit e, pixels per squared normalised unit
+    double Mp = 0.0;  ///< max |n(e) . D''(e, e)|, n(e) the unit normal of J e
+    double Jmin = std::numeric_limits<double>::infinity();  ///< min |J e|
+    void merge(const Stats& o) {
+      Mf = std::max(Mf, o.Mf), Mp = std::max(Mp, o.Mp), Jmin = std::min(Jmin, o.Jmin);
+    }
+  };
+  double step = 0.0;            ///< bin width (the lattice pitch), normalised units
+  std::vector<Stats> by_radius;  ///< bin k: every lattice point with radius < (k + 1) step
+  /// An upper bound on Mf, Mp and a lower bound on Jmin over the box.
+  Stats over(double x0, double x1, double y0, double y1) const {
+    const double rx = std::max(std::abs(x0), std::abs(x1)), ry = std::max(std::abs(y0), std::abs(y1));
+    const double k = std::sqrt(rx * rx + ry * ry) / step + 2.0;
+    const double last = static_cast<double>(by_radius.size() - 1);
+    return by_radius[static_cast<std::size_t>(k < last ? k : last)];
+  }
+  /// Bound (2) of lens_mesh.hpp: how far (output pixels) the image of segment a-b may lie
+  /// across its chord.
+  double across_chord_px(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
+  /// Bound on how far (output pixels) the lens image of a point of triangle a b c may lie from
+  /// the affine interpolation of its corners' images: Mf r^2 / 2, r the radius of the
+  /// smallest disc holding the triangle (Waldron's bound for linear interpolation; r = L / 2
+  /// for a segment gives bound (1)).
+  double interior_px(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) const;
+};
+
 /// The two grids of one lens, over the same region:
 ///   edges     for flat faces: bounds the distance of a segment's image from its chord
 ///             (what decides which pixel centres a face covers), so cells are large;
@@ -96,6 +145,8 @@ struct LensGrids {
   double edges_interior_bound_px = 0.0;
   /// Largest ||D''|| over the region, pixels per squared normalised unit.
   double max_second_derivative_px = 0.0;
+  /// The statistics the grids were built from.
+  LensStats stats;
 };
 
 /// Builds the grids for a tolerance (output pixels). Throws RenderError for invalid
@@ -117,6 +168,11 @@ struct MeshFace {
   Eigen::Vector3d normal_W = Eigen::Vector3d::Zero();  ///< drawn when the camera is on this side
   Eigen::Vector3f rgb = Eigen::Vector3f::Zero();       ///< final sRGB-encoded colour
   std::array<Eigen::Vector2f, 4> uv{};                 ///< atlas coordinates (textured faces)
+  /// Faces of one closed solid (a cuboid, the room) share an id >= 0 and are set one after
+  /// the other; -1: a face alone. The faces of a solid are meshed the same way each frame
+  /// (along their edges, or all along the grid), so that the edges they share get the same
+  /// points.
+  int solid = -1;
 };
 
 /// A vertex as GL receives it: clip coordinates, face colour, texture coordinates.
@@ -128,8 +184,10 @@ struct GpuVertex {
 
 /// Faces in four groups, drawn in this order: the room (the inside of the arena box), the
 /// other flat faces, flat decals (tags: a millimetre off the surface they are stuck on), and
-/// textured decals (markers). Textured faces are split along the interior grid, the others
-/// along the edges grid.
+/// textured decals (markers). Room and flat faces are meshed along their own edges
+/// (edge_mesh.hpp) where the interior bound allows, else like decals along the edges grid;
+/// tags and markers (whose corners and centroids the perception measures) always along a grid:
+/// textured faces the interior grid, tags the edges grid.
 enum FaceGroup { kRoomFaces = 0, kFlatFaces = 1, kDecalFaces = 2, kTexturedFaces = 3, kFaceGroups = 4 };
 
 class LensMesher {
@@ -140,6 +198,10 @@ class LensMesher {
              double tolerance_px);
 
   void set_faces(FaceGroup group, std::vector<MeshFace> faces);
+  /// Whether the group is drawn with the depth test (the default). A group drawn without it
+  /// (the room, drawn first) needs no depth inside its faces: they are meshed along their
+  /// edges alone, however large their triangles.
+  void set_depth_tested(FaceGroup group, bool depth_tested);
 
   /// The triangles of one frame from camera pose X_WC: vertices() and indices(), the
   /// indices of group g at [first_index(g), first_index(g + 1)).
@@ -161,6 +223,9 @@ class LensMesher {
   };
   const std::vector<FaceSpan>& room_spans() const { return room_spans_; }
   const LensGrids& grids() const { return grids_; }
+  /// Solids (or lone faces) of the room and flat groups that the last frame meshed along the
+  /// edges grid because a triangle of their outline exceeded the interior bound.
+  std::size_t grid_solids() const { return grid_solids_; }
   /// The faces of a group, as set.
   std::vector<MeshFace> faces(FaceGroup group) const;
 
@@ -172,24 +237,38 @@ class LensMesher {
     MeshFace face;
     Eigen::Vector3d e1_dual_W, e2_dual_W;  // s = e1_dual . (p - c0), t = e2_dual . (p - c0)
   };
-  void add_face(const Face& f, const Eigen::Isometry3d& X_CW, const Eigen::Vector3d& p_WC,
-                bool textured);
+  // How a face is meshed: along the edges grid, the interior grid (textured), or its own
+  // edges; with kOutline, `interior_px` is the largest interior bound allowed (infinite where
+  // depth does not matter), and add_face returns false, having added a part of the face or
+  // nothing, when a triangle exceeds it.
+  enum class Mesh { kEdgesGrid, kInteriorGrid, kOutline };
+  bool add_face(const Face& f, const Eigen::Isometry3d& X_CW, const Eigen::Vector3d& p_WC, Mesh mesh,
+                double interior_px);
+  // The face in C, dropped if entirely outside the frustum of grid's region, clipped against
+  // the near and far planes, then projected to the normalised plane: poly_n_. False if nothing
+  // is left.
+  bool clip_face(const MeshFace& m, const Eigen::Isometry3d& X_CW, const LensGrid& grid);
 
   CameraIntrinsics K_;
   int s_;
   Eigen::Matrix4d clip_from_camera_;  // gl_clip_from_camera of the rasterised (x s) pinhole
   double near_m_, far_m_;
+  double tolerance_px_;
   LensGrids grids_;
+  LensGrid region_;  // one cell over the grids' region: the clip of faces meshed along their edges
   std::array<std::vector<Face>, kFaceGroups> faces_;
+  std::array<bool, kFaceGroups> depth_tested_{true, true, true, true};
   std::vector<GpuVertex> vertices_;
   std::vector<std::uint32_t> indices_;
   std::vector<Eigen::Vector3d> points_C_;
   std::vector<FaceSpan> room_spans_;
   std::array<std::size_t, kFaceGroups + 1> group_start_{};
+  std::size_t grid_solids_ = 0;
   // scratch
   std::vector<Eigen::Vector3d> poly_C_, clipped_C_;
-  std::vector<Eigen::Vector2d> poly_n_, pieces_;
-  std::vector<int> sizes_;
+  std::vector<Eigen::Vector2d> poly_n_, pieces_, outline_px_;
+  std::vector<int> sizes_, triangles_;
+  std::vector<std::pair<std::size_t, std::size_t>> spans_;  // index range of each face of a solid
 };
 
 }  // namespace shelfcross::render

@@ -153,19 +153,24 @@ class FaceBuilder {
 
   // A quad c0 c1 c2 c3 (in order around its edge), seen from the side n_W points to.
   void face(FaceGroup group, const std::array<Eigen::Vector3d, 4>& c, const Eigen::Vector3d& n_W,
-            const Eigen::Vector3f& rgb, const std::array<Eigen::Vector2f, 4>& uv = kNoTexture) {
+            const Eigen::Vector3f& rgb, const std::array<Eigen::Vector2f, 4>& uv = kNoTexture,
+            int solid = -1) {
     MeshFace f;
     f.corners_W_m = c;
     f.normal_W = n_W;
     f.rgb = rgb;
     f.uv = uv;
+    f.solid = solid;
     faces_[static_cast<std::size_t>(group)].push_back(f);
   }
+  // A new id for the faces of one closed solid (MeshFace::solid).
+  int new_solid() { return next_solid_++; }
 
   // An axis-aligned box [lo, hi] in a frame X_WF: six faces, lit by and seen along their
   // outward normals.
   void cuboid(const Eigen::Isometry3d& X_WF, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
               const Rgb& albedo) {
+    const int solid = new_solid();
     for (int axis = 0; axis < 3; ++axis) {
       const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
       for (int side = 0; side < 2; ++side) {
@@ -181,7 +186,7 @@ class FaceBuilder {
           c[static_cast<size_t>(k)] = X_WF * p;
         }
         const Eigen::Vector3d n_W = X_WF.linear() * n_F;
-        face(kFlatFaces, c, n_W, colour(albedo, shade(n_W)));
+        face(kFlatFaces, c, n_W, colour(albedo, shade(n_W)), kNoTexture, solid);
       }
     }
   }
@@ -193,6 +198,7 @@ class FaceBuilder {
   double light_scale_;
   Eigen::Vector3d light_to_W_;
   std::array<std::vector<MeshFace>, kFaceGroups> faces_;
+  int next_solid_ = 0;
 };
 
 Eigen::Isometry3d interpolate_pose(const Eigen::Isometry3d& X0, const Eigen::Isometry3d& X1,
@@ -294,6 +300,7 @@ void Renderer::Impl::build(const SceneLayout& layout) {
   // Room: floor, ceiling, four walls, as the inside of the arena box (normals inward).
   const Eigen::Vector3d lo = warehouse.arena_min_W_m, hi = warehouse.arena_max_W_m;
   arena = Eigen::AlignedBox3d(lo, hi);
+  const int room_solid = mesh.new_solid();
   auto room_face = [&](int axis, bool high, const Rgb& albedo) {
     // One face of the arena box, lit by and seen along its inward normal.
     const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
@@ -308,7 +315,7 @@ void Renderer::Impl::build(const SceneLayout& layout) {
     }
     Eigen::Vector3d n = Eigen::Vector3d::Zero();
     n[axis] = high ? -1.0 : 1.0;
-    mesh.face(kRoomFaces, c, n, mesh.colour(albedo, mesh.shade(n)));
+    mesh.face(kRoomFaces, c, n, mesh.colour(albedo, mesh.shade(n)), kNoTexture, room_solid);
   };
   room_face(2, false, warehouse.floor_colour);
   room_face(2, true, warehouse.wall_colour);
@@ -329,6 +336,8 @@ void Renderer::Impl::build(const SceneLayout& layout) {
       for (const Eigen::Vector3d& c : f.corners_W_m) room_first = room_first && arena.contains(c);
   for (FaceGroup g : {kRoomFaces, kFlatFaces, kDecalFaces, kTexturedFaces})
     mesher.set_faces(g, std::move(mesh.faces(g)));
+  // Drawn first, without the depth test (draw): the room's faces need no depth inside.
+  mesher.set_depth_tested(kRoomFaces, !room_first);
 
   // ---- GL objects ----
   egl.make_current();
@@ -452,8 +461,9 @@ void Renderer::Impl::draw(const Eigen::Isometry3d& X_WC) {
     draw(kRoomFaces, kDecalFaces);
   }
   // Decals a millimetre off their surface: the depth of a large flat face is interpolated
-  // across its lens cell and may sit up to edges_interior_bound_px pixels' worth of depth
-  // slope off (lens_mesh.hpp), so decals are pulled forward by that much plus one pixel.
+  // across its lens cell or outline triangle and may sit up to edges_interior_bound_px pixels'
+  // worth of depth slope off (lens_mesh.hpp), so decals are pulled forward by that much plus
+  // one pixel.
   glEnable(GL_POLYGON_OFFSET_FILL);
   draw(kDecalFaces, kTexturedFaces);
   glUseProgram(textured_program);

@@ -8,7 +8,8 @@
 // Pipeline of one frame:
 //   1. the static world's faces (each lit per face, ambient + Lambert directional, baked into
 //      its sRGB-encoded colour since both are constant per planar face) are culled, clipped,
-//      split along the lens grid and projected through the lens on the CPU (lens_mesh.hpp):
+//      split along the lens grid (tags, markers) or along their own edges (the room, shelves,
+//      boxes) and projected through the lens on the CPU (lens_mesh.hpp):
 //      every vertex exactly as cv::projectPoints puts it, every drawn edge within
 //      kLensChordTolerance_px of the true (curved) image of the face's edge;
 //   2. rasterised at the output size (x supersample) into colour and depth textures
@@ -47,7 +48,8 @@ namespace shelfcross::render {
 
 /// Largest distance, in output pixels, between a drawn face edge (a chord between two exactly
 /// projected vertices) and the true image of that edge under the lens, by construction of the
-/// lens grid (lens_mesh.hpp); the tests measure it against a 0.25 px tolerance.
+/// lens grid or of the edges' cuts (lens_mesh.hpp); the tests measure it against a 0.25 px
+/// tolerance.
 inline constexpr double kLensChordTolerance_px = 0.25;
 
 struct RenderOptions {

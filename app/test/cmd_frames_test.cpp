@@ -53,7 +53,7 @@ TEST_F(CmdFrames, NominalSequenceRendersAndBothPipelinesDecideTheSame) {
   std::string line;
   int rows = 0;
   std::getline(manifest, line);
-  EXPECT_EQ(line.rfind("# shelfcross bench frames version 3 scenario paper_test_shelf", 0), 0u) << line;
+  EXPECT_EQ(line.rfind("# shelfcross bench frames version 4 scenario paper_test_shelf", 0), 0u) << line;
   std::getline(manifest, line);  // column names
   while (std::getline(manifest, line)) {
     ++rows;
