@@ -12,9 +12,9 @@
 #include <thread>
 
 #include "command_registry.hpp"
-#include "verification/campaign.hpp"
-#include "verification/report.hpp"
-#include "verification/run_process.hpp"
+#include "verification/campaign/campaign.hpp"
+#include "verification/campaign/run_process.hpp"
+#include "verification/report/report.hpp"
 #include "worker_options.hpp"
 #ifdef SHELFCROSS_WITH_MPI
 #include "distributed/mpi_campaign.hpp"
@@ -77,7 +77,7 @@ OpenedCampaign open_campaign(const CampaignOptions& o) {
   return {nominal, verification::ResultsStore::open_or_create(std::filesystem::path(o.out) / "results.sqlite", meta)};
 }
 
-/// Each run in a worker process of this program (verification/run_process.hpp).
+/// Each run in a worker process of this program (verification/campaign/run_process.hpp).
 verification::WorkerFactory worker_factory(std::shared_ptr<const verification::Scenario> nominal,
                                            const CampaignOptions& o) {
   return verification::process_worker_factory(std::move(nominal), o.limits);

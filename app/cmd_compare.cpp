@@ -10,8 +10,8 @@
 #include <thread>
 
 #include "command_registry.hpp"
-#include "verification/compare.hpp"
-#include "verification/run_process.hpp"
+#include "verification/campaign/run_process.hpp"
+#include "verification/report/compare.hpp"
 #include "worker_options.hpp"
 
 namespace shelfcross::app {

@@ -1,5 +1,5 @@
 // shelfcross diff BASE NEW [--out DIR] [--allow-different-scenarios] [--fail-if-worse ALPHA]:
-// two campaigns on the same runs compared pair by pair (verification/paired_diff.hpp): identical
+// two campaigns on the same runs compared pair by pair (verification/report/paired_diff.hpp): identical
 // runs, mission success and contacts with the exact McNemar test, every metric's paired
 // difference, the flipped runs with their replay commands; diff.md, diff.json and plots.
 //
@@ -12,8 +12,8 @@
 #include <sstream>
 
 #include "command_registry.hpp"
-#include "verification/diff_report.hpp"
-#include "verification/paired_diff.hpp"
+#include "verification/report/diff_report.hpp"
+#include "verification/report/paired_diff.hpp"
 
 namespace shelfcross::app {
 namespace {

@@ -4,7 +4,7 @@
 #include <iostream>
 
 #include "command_registry.hpp"
-#include "verification/cosim.hpp"
+#include "verification/cosim/cosim.hpp"
 #include "verification/frames/frame_set.hpp"
 #include "verification/frames/pipeline_check.hpp"
 

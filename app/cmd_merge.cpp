@@ -4,8 +4,8 @@
 #include <iostream>
 
 #include "command_registry.hpp"
-#include "verification/campaign_merge.hpp"
-#include "verification/report.hpp"
+#include "verification/campaign/campaign_merge.hpp"
+#include "verification/report/report.hpp"
 
 namespace shelfcross::app {
 namespace {

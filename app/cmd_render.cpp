@@ -8,7 +8,7 @@
 #include "command_registry.hpp"
 #include "render/ground_truth.hpp"
 #include "render/renderer.hpp"
-#include "verification/scenario.hpp"
+#include "verification/scenario/scenario.hpp"
 
 namespace shelfcross::app {
 namespace {

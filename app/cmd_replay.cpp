@@ -3,10 +3,11 @@
 
 #include "command_registry.hpp"
 #include "run_output.hpp"
-#include "verification/results_store.hpp"
-#include "verification/run_metrics_json.hpp"
-#include "verification/scenario.hpp"
-#include "verification/search.hpp"
+#include "verification/campaign/results_store.hpp"
+#include "verification/campaign/stored_run.hpp"
+#include "verification/cosim/run_metrics_json.hpp"
+#include "verification/scenario/scenario.hpp"
+#include "verification/search/search.hpp"
 
 namespace shelfcross::app {
 namespace {
@@ -39,7 +40,7 @@ const CommandRegistration kReplay{
         for (const auto& rec : store.runs()) {
           if (rec.index == o->run) stored = rec;
         }
-        // A search's runs draw from its proposals (verification/search.hpp): replayed with the
+        // A search's runs draw from its proposals (verification/search/search.hpp): replayed with the
         // stored draws. A campaign's stored draws are its seed's own.
         const bool search = verification::is_search_database(db);
         if (search && !stored) throw UsageError("run " + std::to_string(o->run) + " of this search is not stored yet");

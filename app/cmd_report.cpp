@@ -2,7 +2,7 @@
 #include <iostream>
 
 #include "command_registry.hpp"
-#include "verification/report.hpp"
+#include "verification/report/report.hpp"
 
 namespace shelfcross::app {
 namespace {

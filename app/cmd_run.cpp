@@ -3,7 +3,7 @@
 
 #include "command_registry.hpp"
 #include "run_output.hpp"
-#include "verification/scenario.hpp"
+#include "verification/scenario/scenario.hpp"
 
 namespace shelfcross::app {
 namespace {

@@ -1,8 +1,8 @@
 // shelfcross search --scenario FILE --budget N --seed S --jobs J --out DIR: cross-entropy
 // search for failures over the scenario's dispersions and the importance-sampling estimate of
-// each failure class's probability (verification/search.hpp, docs/search.md); resumable (the
+// each failure class's probability (verification/search/search.hpp, docs/search.md); resumable (the
 // same command again runs only what is missing). Runs happen in worker processes, as a
-// campaign's do (verification/run_process.hpp). Under mpirun (built with SHELFCROSS_MPI), rank
+// campaign's do (verification/campaign/run_process.hpp). Under mpirun (built with SHELFCROSS_MPI), rank
 // 0 plans the rounds and stores, and each round's runs go to the other ranks as a campaign's
 // would (distributed/mpi_campaign.hpp), the round's proposal broadcast before them. No shards:
 // a round's proposal depends on every run of the rounds before it.
@@ -13,9 +13,9 @@
 #include <optional>
 
 #include "command_registry.hpp"
-#include "verification/run_process.hpp"
-#include "verification/search.hpp"
-#include "verification/search_report.hpp"
+#include "verification/campaign/run_process.hpp"
+#include "verification/search/search.hpp"
+#include "verification/search/search_report.hpp"
 #include "worker_options.hpp"
 #ifdef SHELFCROSS_WITH_MPI
 #include "distributed/mpi_campaign.hpp"

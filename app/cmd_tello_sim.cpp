@@ -1,4 +1,4 @@
-// shelfcross tello-sim --scenario FILE [...]: the Tello SDK emulator (verification/tello_emulator.hpp)
+// shelfcross tello-sim --scenario FILE [...]: the Tello SDK emulator (verification/world/tello_emulator.hpp)
 // on UDP, paced by the wall clock, until the simulated drone has landed after flying, a
 // signal (SIGINT, SIGTERM), or --max-seconds. Prints what happened; --report FILE as JSON.
 #include <csignal>
@@ -8,8 +8,8 @@
 #include <opencv2/core.hpp>
 
 #include "command_registry.hpp"
-#include "verification/scenario.hpp"
-#include "verification/tello_emulator.hpp"
+#include "verification/scenario/scenario.hpp"
+#include "verification/world/tello_emulator.hpp"
 
 namespace shelfcross::app {
 namespace {

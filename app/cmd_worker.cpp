@@ -2,7 +2,7 @@
 // run_process.hpp): serves runs on the socket N that its parent `shelfcross campaign`,
 // `compare` or MPI worker rank opened, until the parent closes it.
 #include "command_registry.hpp"
-#include "verification/run_process.hpp"
+#include "verification/campaign/run_process.hpp"
 
 namespace shelfcross::app {
 namespace {

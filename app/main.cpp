@@ -8,7 +8,7 @@
 
 #include "command_registry.hpp"
 #include "config/strict_yaml.hpp"
-#include "verification/results_store.hpp"
+#include "verification/campaign/results_store.hpp"
 
 int main(int argc, char** argv) {
   using namespace shelfcross::app;

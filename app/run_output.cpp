@@ -12,8 +12,8 @@
 #include <opencv2/videoio.hpp>
 
 #include "command_registry.hpp"
-#include "verification/campaign.hpp"
-#include "verification/run_metrics_json.hpp"
+#include "verification/campaign/campaign.hpp"
+#include "verification/cosim/run_metrics_json.hpp"
 
 namespace shelfcross::app {
 namespace {

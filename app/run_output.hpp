@@ -19,7 +19,7 @@
 #include <opencv2/videoio.hpp>
 
 #include "shelfcross/cell_index.hpp"
-#include "verification/cosim.hpp"
+#include "verification/cosim/cosim.hpp"
 
 namespace shelfcross::app {
 

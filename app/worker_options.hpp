@@ -1,10 +1,10 @@
 #pragma once
 // The options `campaign`, `compare` and `search` share for their worker processes' limits
-// (verification/run_process.hpp).
+// (verification/campaign/run_process.hpp).
 
 #include <CLI/CLI.hpp>
 
-#include "verification/run_process.hpp"
+#include "verification/campaign/run_process.hpp"
 
 namespace shelfcross::app {
 

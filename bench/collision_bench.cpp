@@ -4,7 +4,7 @@
 #include <benchmark/benchmark.h>
 
 #include "plant/collision.hpp"
-#include "verification/scenario.hpp"
+#include "verification/scenario/scenario.hpp"
 
 namespace {
 

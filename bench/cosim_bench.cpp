@@ -19,10 +19,10 @@
 #include <opencv2/core/utility.hpp>
 
 #include "shelfcross/random.hpp"
-#include "verification/campaign.hpp"
-#include "verification/cosim.hpp"
-#include "verification/dispersion.hpp"
-#include "verification/scenario.hpp"
+#include "verification/campaign/campaign.hpp"
+#include "verification/cosim/cosim.hpp"
+#include "verification/scenario/dispersion.hpp"
+#include "verification/scenario/scenario.hpp"
 
 namespace {
 

@@ -8,7 +8,7 @@
 // Every benchmark times one call per iteration (manual time: the calling thread's CPU time,
 // see thread_cpu_s), cycling over its frames, so Google Benchmark's real_time is the mean per
 // call; the counters add mean_ms, p50_ms, p99_ms and max_ms over those calls (and min, p10, p25,
-// p75, p90: the quantiles verification/cosim_settings.hpp takes), and frames (distinct frames
+// p75, p90: the quantiles verification/scenario/cosim_settings.hpp takes), and frames (distinct frames
 // used).
 //
 // Frames: SHELFCROSS_BENCH_FRAMES (default <source>/build/bench_frames), generated on first
@@ -34,7 +34,7 @@
 #include <opencv2/tracking/tracking_legacy.hpp>
 
 #include "flight_sw/control.hpp"
-#include "verification/cosim.hpp"
+#include "verification/cosim/cosim.hpp"
 #include "verification/frames/frame_set.hpp"
 
 namespace shelfcross::bench {

@@ -31,7 +31,7 @@ using shelfcross::CameraIntrinsics;
 using shelfcross::render::Renderer;
 using shelfcross::render::RenderOptions;
 
-constexpr double kDefaultNoise = 2.0;  // verification/cosim_settings.hpp render_noise_stddev
+constexpr double kDefaultNoise = 2.0;  // verification/scenario/cosim_settings.hpp render_noise_stddev
 
 Renderer& bench_renderer(int supersample, bool noise) {
   ::setenv("LP_NUM_THREADS", "1", 1);

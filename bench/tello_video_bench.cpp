@@ -25,7 +25,7 @@
 #include "render/test/test_warehouse.hpp"
 #include "sdk/video_framing.hpp"
 #include "shelfcross/random.hpp"
-#include "verification/h264_encoder.hpp"  // the drone's side: a Tello-like stream
+#include "verification/world/h264_encoder.hpp"  // the drone's side: a Tello-like stream
 
 namespace shelfcross::tello {
 namespace {

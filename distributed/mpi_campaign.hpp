@@ -35,8 +35,8 @@
 #include <functional>
 #include <string>
 
-#include "verification/campaign_pool.hpp"
-#include "verification/results_store.hpp"
+#include "verification/campaign/campaign_pool.hpp"
+#include "verification/campaign/results_store.hpp"
 
 namespace shelfcross::distributed {
 

@@ -12,7 +12,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "sdk/video_framing.hpp"
-#include "verification/h264_encoder.hpp"
+#include "verification/world/h264_encoder.hpp"
 
 using namespace shelfcross;
 using Datagrams = std::vector<std::string>;

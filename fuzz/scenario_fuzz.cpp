@@ -7,7 +7,7 @@
 #include <string>
 
 #include "config/strict_yaml.hpp"
-#include "verification/scenario.hpp"
+#include "verification/scenario/scenario.hpp"
 
 using namespace shelfcross;
 

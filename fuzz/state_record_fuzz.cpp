@@ -10,7 +10,7 @@
 #include <fuzzer/FuzzedDataProvider.h>
 
 #include "sdk/state_record.hpp"
-#include "verification/tello_state_format.hpp"
+#include "verification/world/tello_state_format.hpp"
 
 using namespace shelfcross;
 

@@ -8,7 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "verification/dispersion.hpp"
+#include "verification/scenario/dispersion.hpp"
 
 namespace shelfcross::identify {
 namespace {

@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "identify/identification.hpp"
-#include "verification/scenario.hpp"
+#include "verification/scenario/scenario.hpp"
 
 namespace shelfcross::identify {
 

@@ -1,6 +1,6 @@
 #pragma once
 // The simulated Tello's autopilot parameters (plant/params.hpp AutopilotParams, the ones a
-// campaign disperses: verification/dispersion.hpp) identified from one flight record.
+// campaign disperses: verification/scenario/dispersion.hpp) identified from one flight record.
 //
 // Axes (sticks as the SDK names them; the state record in this project's frames):
 //   forward  stick b -> vx_H (state vgx), observed directly

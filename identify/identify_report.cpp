@@ -9,7 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "verification/plot.hpp"
+#include "verification/statistics/plot.hpp"
 
 namespace shelfcross::identify {
 namespace {

@@ -16,7 +16,7 @@
 
 #include "identify/envelope.hpp"
 #include "identify/identification.hpp"
-#include "verification/scenario.hpp"
+#include "verification/scenario/scenario.hpp"
 
 namespace shelfcross::identify {
 

@@ -28,7 +28,7 @@
 
 #include <Eigen/Core>
 
-#include "render/lens_mesh.hpp"
+#include "render/lens_stats.hpp"
 
 namespace shelfcross::render {
 

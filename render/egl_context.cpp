@@ -69,7 +69,7 @@ bool has_extension(const char* list, const char* name) {
 // built on a futex that it cannot see. Campaign runs now live in worker processes, so such
 // a crash costs one run, recorded `crashed`. And a campaign's worker
 // processes set LP_NUM_THREADS=0 (llvmpipe rasterises on the calling thread: no rasteriser
-// threads to race with; verification/run_process.cpp), which also saves CPU time.
+// threads to race with; verification/campaign/run_process.cpp), which also saves CPU time.
 std::mutex g_display_mutex;
 
 bool acquire_display(EGLDisplay d) {

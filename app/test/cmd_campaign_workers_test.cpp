@@ -1,4 +1,4 @@
-// A campaign's runs live in worker processes (verification/run_process.hpp): runs that crash
+// A campaign's runs live in worker processes (verification/campaign/run_process.hpp): runs that crash
 // (cosim.inject_crash_s: a real SIGSEGV) or hang (cosim.inject_hang_s) are recorded as such
 // with their reason and seed (and no CPU figure), the campaign (or search) completes with exit 0
 // and its report lists them with their replay commands; runs that complete give exactly the
@@ -11,7 +11,7 @@
 
 #include "campaign_helpers.hpp"
 #include "shelfcross/random.hpp"
-#include "verification/campaign.hpp"
+#include "verification/campaign/campaign.hpp"
 
 namespace {
 

@@ -1,7 +1,7 @@
 // `shelfcross compare` as a user runs it: three campaigns (one per strategy) with the same
 // seed, the Table 2 markdown and JSON, and the path plots; bad input exits 2. The runs are
 // cut short (the default scenario, 6 s each): the command's plumbing is under test here; the
-// strategies' flights are tested in verification/test/warehouse_test.cpp.
+// strategies' flights are tested in verification/cosim/test/warehouse_test.cpp.
 #include <unistd.h>
 
 #include <filesystem>

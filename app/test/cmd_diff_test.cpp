@@ -7,7 +7,7 @@
 
 #include "campaign_helpers.hpp"
 #include "run_shelfcross.hpp"
-#include "verification/test/paired_campaigns_fixture.hpp"
+#include "verification/report/test/paired_campaigns_fixture.hpp"
 
 namespace shelfcross::app::test {
 namespace {

@@ -16,9 +16,9 @@
 
 #include "../run_output.hpp"
 #include "run_shelfcross.hpp"
-#include "verification/campaign.hpp"
-#include "verification/dispersion.hpp"
-#include "verification/scenario.hpp"
+#include "verification/campaign/campaign.hpp"
+#include "verification/scenario/dispersion.hpp"
+#include "verification/scenario/scenario.hpp"
 
 namespace {
 

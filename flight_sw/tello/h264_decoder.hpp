@@ -1,7 +1,7 @@
 #pragma once
 // H.264 through FFmpeg's libavcodec (Debian): the low-delay decoder the video receiver uses.
 // The drone's side (the libx264 encoder that makes a Tello-like stream) is
-// verification/h264_encoder.hpp; the datagram framing both sides share is
+// verification/world/h264_encoder.hpp; the datagram framing both sides share is
 // sdk/video_framing.hpp.
 
 #include <cstdint>

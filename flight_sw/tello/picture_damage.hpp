@@ -44,7 +44,7 @@
 // neighbour towards a damaged block by a clipped amount; that low-amplitude bleed is not
 // followed (following it would spread a band by a macroblock row per picture). The
 // simulated Tello's stream does not deblock, and there the rows outside the damage are
-// byte-identical to a loss-free decode (verification/test/picture_damage_test.cpp, at 1, 3
+// byte-identical to a loss-free decode (verification/cosim/test/picture_damage_test.cpp, at 1, 3
 // and 5 % datagram loss). Two parts of rule 1 rest on that check rather than on a proof: the
 // decoder's vouching (a slice that lost a whole datagram and still decoded to exactly its
 // macroblocks with no report would escape it) and the slice after a gap.

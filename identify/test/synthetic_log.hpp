@@ -18,11 +18,11 @@
 
 #include "flight_sw/tello/calibration_manoeuvre.hpp"
 #include "identify/identification.hpp"
-#include "shelfcross/rotation.hpp"
 #include "identify/response_fit.hpp"
 #include "plant/params.hpp"
 #include "shelfcross/random.hpp"
-#include "verification/tello_state_format.hpp"
+#include "shelfcross/rotation.hpp"
+#include "verification/world/tello_state_format.hpp"
 
 namespace shelfcross::identify::testing {
 

@@ -16,7 +16,7 @@
 #include "render/renderer.hpp"
 #include "shelfcross/random.hpp"
 #include "shelfcross/rotation.hpp"
-#include "verification/cosim.hpp"
+#include "verification/cosim/cosim.hpp"
 
 namespace shelfcross::frames {
 

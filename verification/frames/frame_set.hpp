@@ -59,7 +59,7 @@
 
 #include "flight_sw/flight_software.hpp"
 #include "shelfcross/cell_index.hpp"
-#include "verification/scenario.hpp"
+#include "verification/scenario/scenario.hpp"
 
 namespace shelfcross::frames {
 

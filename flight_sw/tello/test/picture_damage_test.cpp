@@ -1,5 +1,5 @@
 // The damage map's rules on hand-made evidence (picture_damage.hpp). The same map against
-// the truth, on a real lossy libx264 stream: verification/test/picture_damage_test.cpp.
+// the truth, on a real lossy libx264 stream: verification/cosim/test/picture_damage_test.cpp.
 #include "flight_sw/tello/picture_damage.hpp"
 
 #include <gtest/gtest.h>

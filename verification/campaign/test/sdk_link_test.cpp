@@ -1,0 +1,97 @@
+// The co-simulation's sdk link: tello_pilot's own loop (driver, H.264 receiver, flight
+// software, failsafes) against the simulated Tello over in-memory datagrams. What only the
+// lossy flights found before must now show up in a campaign run.
+#include <gtest/gtest.h>
+
+#include "verification/campaign/campaign.hpp"
+#include "verification/cosim/cosim.hpp"
+#include "verification/cosim/run_metrics_json.hpp"
+
+namespace shelfcross::verification {
+namespace {
+
+const std::string kDefault = std::string(SHELFCROSS_SOURCE_DIR) + "/scenarios/paper_test_shelf.yaml";
+
+RunResult run_once(const Scenario& s, std::uint64_t seed) {
+  const RunSetup setup = disperse(s, seed);
+  render::Renderer renderer(setup.scenario->warehouse, setup.scenario->camera, render_options_for(*setup.scenario));
+  return run_cosimulation(setup, renderer);
+}
+
+std::string events_text(const RunResult& r) {
+  std::string all;
+  for (const std::string& e : r.events) all += e + "\n";
+  return all;
+}
+
+TEST(SdkLink, RunsCarryTheLinksEvidenceAndDamageGrowsWithLoss) {
+  // 6 s: SDK start-up, the stream, take-off. The same seed with 0 % and 10 % video loss.
+  Scenario s = load_scenario(kDefault);
+  s.cosim.timeout_s = 6.0;
+  s.dispersions.erase("video_datagram_loss");
+  s.dispersions.erase("frame_drop_probability");  // a whole frame lost breaks the references too
+  ASSERT_EQ(s.cosim.link.model, "sdk");
+  s.cosim.link.frame_drop_probability = 0.0;
+  s.cosim.link.video_datagram_loss = 0.0;
+  const RunResult clean = run_once(s, 5);
+  s.cosim.link.video_datagram_loss = 0.10;
+  const RunResult lossy = run_once(s, 5);
+  for (const RunResult* r : {&clean, &lossy}) {
+    const LinkMetrics& l = r->metrics.link;
+    EXPECT_EQ(l.model, "sdk");
+    EXPECT_GT(l.video_datagrams, 100) << "5 s of a 30 fps stream in 1460-byte datagrams";
+    EXPECT_GT(l.frames_decoded, 100);
+    EXPECT_GT(l.commands_sent, 3) << "command, streamon, takeoff, rc";
+    EXPECT_NE(events_text(*r).find("send takeoff"), std::string::npos) << events_text(*r);
+  }
+  EXPECT_EQ(clean.metrics.link.video_datagrams_lost, 0);
+  EXPECT_EQ(clean.metrics.link.frames_damaged, 0);
+  EXPECT_GT(lossy.metrics.link.video_datagrams_lost, 0);
+  EXPECT_GT(lossy.metrics.link.frames_damaged, 0) << "lost datagrams give error-concealed pictures, marked";
+  EXPECT_NE(clean.run_hash, lossy.run_hash);
+  // The stored metrics carry the link object.
+  EXPECT_NE(run_metrics_json(lossy.metrics).find("\"video_datagrams_lost\""), std::string::npos);
+}
+
+TEST(SdkLink, IdealModelCarriesWholeFramesWithoutDatagrams) {
+  Scenario s = load_scenario(kDefault);
+  s.cosim.timeout_s = 4.0;
+  s.cosim.link.model = "ideal";
+  const RunResult r = run_once(s, 5);
+  EXPECT_EQ(r.metrics.link.model, "ideal");
+  EXPECT_EQ(r.metrics.link.video_datagrams, 0);
+  EXPECT_GT(r.metrics.link.frames_decoded, 50);
+}
+
+// A lost `land` after the crossing (every land datagram lost) with the wall 1 m behind the
+// landing point. The Tello flies the last sticks it got: without the driver's stop-sticks
+// rule the crossing's forward stick stays on and the vehicle flies into the wall (what the
+// lossy end-to-end flight found, commit a127787); with it, the sticks were centred on the
+// wire before the land, so the vehicle hovers until its watchdog lands it.
+TEST(SdkLink, LostLandWithoutTheStopSticksRuleFliesIntoTheWall) {
+  Scenario s = load_scenario(kDefault);
+  s.dispersions.clear();
+  s.warehouse.arena_max_W_m.x() = 4.9;  // the shelf's back face is at 3.34 m
+  s.cosim.link.lost_command = "land";
+  s.cosim.timeout_s = 90.0;
+  s.cosim.pilot.stop_rc_repeats = 0;
+  const RunResult off = run_once(s, 1);
+  s.cosim.pilot.stop_rc_repeats = 2;
+  const RunResult on = run_once(s, 1);
+
+  EXPECT_EQ(off.outcome, RunOutcome::left_arena) << off.detail << "\n" << events_text(off);
+  ASSERT_TRUE(off.metrics.contact.has_value()) << events_text(off);
+  EXPECT_EQ(off.metrics.contact->element.kind, plant::ElementKind::wall) << off.metrics.contact->element.name;
+  EXPECT_TRUE(off.metrics.crossed_target) << "the crossing itself went well";
+
+  EXPECT_FALSE(on.metrics.contact.has_value()) << on.metrics.contact->element.name << "\n" << events_text(on);
+  EXPECT_TRUE(on.metrics.crossed_target);
+  const std::string log = events_text(on);
+  const size_t land = log.find("send land");
+  ASSERT_NE(land, std::string::npos) << log;
+  const size_t stop = log.rfind("send rc 0 0 0 0", land);
+  ASSERT_NE(stop, std::string::npos) << "the sticks centred on the wire before the land";
+}
+
+}  // namespace
+}  // namespace shelfcross::verification

@@ -1,0 +1,115 @@
+#pragma once
+// What one run of the co-simulation gives: its outcome, its metrics (truth measured by the
+// world, what the link did), its hash, trajectory and event lines. Written by the run
+// (cosim_run.hpp), stored as JSON (run_metrics_json.hpp), read by campaigns and reports.
+
+#include <functional>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "flight_sw/flight_software.hpp"
+#include "plant/collision.hpp"
+#include "shelfcross/camera.hpp"
+#include "shelfcross/cell_index.hpp"
+#include "verification/world/metrics.hpp"
+
+namespace shelfcross::verification {
+
+enum class RunOutcome {
+  success,                    ///< mission done, no contact, exact inventory of every shelf, landed
+                              ///< (through_cells: every shelf crossed face to face, shelf 0 at its target)
+  collision,                  ///< touched a shelf part
+  left_arena,                 ///< touched a wall or the ceiling, or left the arena box
+  timeout,
+  numerical_failure,          ///< the plant diverged (CVODE error, NaN)
+  flight_software_exception,  ///< the flight software threw
+  mission_aborted,            ///< the flight software gave up (its reason is the detail)
+  no_crossing,                ///< landed without crossing every shelf face to face (through_cells),
+                              ///< or without passing the last shelf (over_tops, around_ends)
+  inventory_mismatch,         ///< crossed cleanly but the box list was wrong
+};
+const char* outcome_name(RunOutcome outcome);
+
+/// What the link did in a run (sdk: datagrams through the pilot loop; ideal: whole messages,
+/// so the datagram counts stay 0).
+struct LinkMetrics {
+  std::string model = "sdk";
+  std::int64_t video_datagrams = 0;       ///< sent by the drone, lost ones included
+  std::int64_t video_datagrams_lost = 0;
+  std::int64_t frames_captured = 0;       ///< capture instants while streaming
+  std::int64_t frames_lost = 0;           ///< whole frames lost or stalled (never sent)
+  std::int64_t frames_decoded = 0;        ///< pictures the receiver decoded (ideal: frames delivered)
+  std::int64_t frames_damaged = 0;        ///< of those handed over, error-concealed (sdk only)
+  std::int64_t frames_handed = 0;         ///< handed to the flight software
+  std::int64_t commands_sent = 0;         ///< command datagrams, rc and keep-alives included
+  std::int64_t commands_lost = 0;
+  std::int64_t replies_lost = 0;
+  std::int64_t state_records_lost = 0;
+  std::int64_t command_retries = 0;       ///< the driver's re-sends after a reply timeout
+  std::int64_t stale_replies = 0;         ///< replies the driver dropped as stale
+  std::int64_t injected_errors = 0;       ///< "error Not joystick" / "error No valid imu" answers
+  /// Fraction of video datagrams lost (0 when none was sent).
+  double video_datagram_loss() const {
+    return video_datagrams > 0 ? static_cast<double>(video_datagrams_lost) / static_cast<double>(video_datagrams) : 0.0;
+  }
+};
+
+/// Everything a run measured (JSON form, both ways: run_metrics_json.hpp).
+struct RunMetrics {
+  double mission_time_s = 0.0;     ///< start to the end of the run
+  double path_length_m = 0.0;      ///< of the body origin
+  int floor_touches = 0;           ///< airborne-to-floor contacts (landings included)
+  // First contact (collision or wall)
+  std::optional<plant::Contact> contact;
+  // The mission: its shelves (the scenario's row, mission_shelf_count) and strategy
+  std::string strategy = "through_cells";
+  int shelves = 1;
+  int shelves_crossed = 0;                      ///< shelves crossed face to face through a cell
+  int shelves_crossed_target = 0;               ///< ... through the cell the flight software chose there
+  // Crossing, in shelf 0's frame S
+  std::optional<CellIndex> target;   ///< the flight software's chosen cell
+  std::optional<CellIndex> crossed;  ///< the cell entered and left face to face
+  bool crossed_target = false;
+  std::optional<double> entry_offset_y_m;       ///< body origin - cell centre, at the front face
+  std::optional<double> entry_offset_z_m;
+  std::optional<double> min_clearance_m;        ///< to any shelf part while inside the shelf
+  // Approach responses (paper Fig. 26-28): from the start of the approach to the crossing
+  std::optional<StepResponse> altitude;  ///< body z - cell centre z, m
+  std::optional<StepResponse> heading;   ///< yaw - shelf normal, rad
+  std::optional<StepResponse> lateral;   ///< body y_S - cell centre y_S, m
+  // Inventory
+  InventoryScore inventory;
+  std::string flight_software_result;    ///< outcome and reason of the flight software
+  LinkMetrics link;
+};
+
+/// One sample of the run's trajectory (truth and what the flight software was doing).
+struct TrajectorySample {
+  double t_s = 0.0;
+  Eigen::Vector3d p_WB_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d v_WB_W_mps = Eigen::Vector3d::Zero();
+  double roll_rad = 0.0, pitch_rad = 0.0, yaw_rad = 0.0;
+  std::string phase;
+  std::optional<Eigen::Vector3d> p_est_m;  ///< flight software's body position in its frame
+};
+
+struct RunResult {
+  RunOutcome outcome = RunOutcome::timeout;
+  std::string detail;  ///< e.g. the contact's element, the exception's message
+  RunMetrics metrics;
+  std::string run_hash;
+  std::string inventory_json;
+  std::vector<TrajectorySample> trajectory;  ///< at cosim.trajectory_rate_hz
+  std::optional<double> approach_start_s;    ///< the flight software entered Approach
+  std::optional<double> cross_start_s;       ///< ... and Cross
+  std::vector<std::string> events;           ///< "t_s text" lines: phases, commands, contacts
+};
+
+/// Called with each frame the flight software received, after it handled it (for --video).
+using FrameObserver = std::function<void(const CameraFrame&, const flight_sw::FlightSoftware&)>;
+
+}  // namespace shelfcross::verification

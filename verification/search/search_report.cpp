@@ -1,0 +1,391 @@
+#include "verification/search/search_report.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <sstream>
+
+#include "verification/campaign/results_store.hpp"
+#include "verification/search/search.hpp"
+#include "verification/statistics/plot.hpp"
+#include "verification/statistics/statistics.hpp"
+
+namespace shelfcross::verification {
+namespace {
+
+const cv::Scalar kNominalRound(150, 150, 150), kAdaptRound(200, 120, 40), kEstimateRound(60, 160, 60),
+    kFailure(40, 40, 220);
+
+std::string fmt(double v, const char* format = "%.4g") {
+  if (std::isnan(v)) return "-";
+  char text[64];
+  std::snprintf(text, sizeof text, format, v);
+  return text;
+}
+
+nlohmann::json number_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+
+std::string describe(const Distribution& d) {
+  switch (d.kind) {
+    case Distribution::Kind::uniform: return "uniform [" + fmt(d.min) + ", " + fmt(d.max) + "]";
+    case Distribution::Kind::normal: return "normal " + fmt(d.mean) + " +- " + fmt(d.stddev);
+    case Distribution::Kind::truncated_normal:
+      return "normal " + fmt(d.mean) + " +- " + fmt(d.stddev) + " on [" + fmt(d.min) + ", " + fmt(d.max) + "]";
+    case Distribution::Kind::choice: {
+      std::string s = "choice";
+      double total = 0.0;
+      for (double w : d.weights) total += w;
+      for (size_t i = 0; i < d.values.size(); ++i) {
+        s += ' ';
+        s += fmt(d.values[i]);
+        s += ':';
+        s += fmt(d.weights[i] / total, "%.2f");
+      }
+      return s;
+    }
+  }
+  return "?";
+}
+
+/// One stored run as the report sees it.
+struct Row {
+  const RunRecord* record = nullptr;
+  int round = -1;
+  DrawnValues drawn;
+  RunMargins margins;
+  double log_nominal = 0.0;   ///< log f(x)
+  double log_proposal = 0.0;  ///< log q_round(x)
+};
+
+struct ClassEstimate {
+  IsEstimate is;
+  int round = -1;  ///< the round whose runs it uses
+  IsEstimate every_round;  ///< from every stored run, weighted by mixture_log_weight
+  /// Upper 95 % bounds on p from the same runs, used when none failed (zero_failure_upper_bound).
+  double bound_round = 1.0, bound_every_round = 1.0;
+};
+
+nlohmann::json estimate_json(const IsEstimate& e) {
+  return {{"runs", e.runs}, {"failures", e.failures}, {"p_hat", e.p_hat},
+          {"standard_error", number_or_null(e.standard_error)}, {"confidence", e.confidence},
+          {"lower", e.lower}, {"upper", e.upper}, {"clt_lower", e.clt_lower}, {"clt_upper", e.clt_upper},
+          {"failure_ess", e.failure_ess}, {"mean_weight", e.mean_weight}, {"doubts", estimate_doubts(e)}};
+}
+
+}  // namespace
+
+nlohmann::json write_search_report(const std::filesystem::path& dir, const std::optional<std::filesystem::path>& campaign_dir) {
+  using nlohmann::json;
+  const std::filesystem::path db = dir / "results.sqlite";
+  const SearchStore search = SearchStore::open_existing(db);
+  const ResultsStore store = ResultsStore::open_existing(db);
+  const Scenario nominal = parse_scenario(store.meta().scenario_yaml, db.string());
+  const ParameterDistributions f(nominal.dispersions.begin(), nominal.dispersions.end());
+  const json settings = search.settings_json();
+  const FailureClass target = parse_failure_class(settings.at("target").get<std::string>()).value_or(FailureClass::contact);
+  const std::vector<CeRound> rounds = search.rounds();
+  const std::vector<RunRecord> records = store.runs();
+
+  std::vector<Row> rows;
+  for (const RunRecord& r : records) {
+    Row row;
+    row.record = &r;
+    for (const CeRound& round : rounds) {
+      if (r.index >= round.first_run && r.index < round.first_run + round.runs) row.round = round.index;
+    }
+    if (row.round < 0) continue;  // not a run of a stored round
+    row.drawn = json::parse(r.dispersion_json).get<DrawnValues>();
+    row.margins = record_margins(nominal, r);
+    if (r.outcome == "worker_error") {
+      row.log_nominal = row.log_proposal = std::numeric_limits<double>::quiet_NaN();
+    } else {
+      row.log_nominal = log_density(f, row.drawn);
+      row.log_proposal = log_density(rounds[static_cast<size_t>(row.round)].proposal, row.drawn);
+    }
+    rows.push_back(std::move(row));
+  }
+
+  // The estimate: from the estimation round's runs, or the last round's while adaptation goes on.
+  const int estimate_round = rounds.empty() ? -1 : rounds.back().index;
+  std::map<FailureClass, ClassEstimate> estimates;
+  for (FailureClass c : kFailureClasses) {
+    std::vector<double> log_w;
+    std::vector<bool> failed;
+    for (const Row& row : rows) {
+      if (row.round != estimate_round || std::isnan(row.log_nominal)) continue;
+      log_w.push_back(row.log_nominal - row.log_proposal);
+      failed.push_back(row.margins.failed(c));
+    }
+    estimates[c] = {importance_estimate(log_w, failed), estimate_round, {}};
+  }
+  // And from every stored run: each round's proposal in the mixture by its stored run count.
+  std::vector<std::int64_t> stored_per_round(rounds.size(), 0);
+  for (const Row& row : rows) {
+    if (!std::isnan(row.log_nominal)) ++stored_per_round[static_cast<size_t>(row.round)];
+  }
+  std::vector<double> mixture_log_w;
+  for (const Row& row : rows) {
+    if (!std::isnan(row.log_nominal)) mixture_log_w.push_back(mixture_log_weight(f, rounds, stored_per_round, row.drawn));
+  }
+  // The zero-failure bounds: the estimation round alone, and every round.
+  const double bound_every_round = zero_failure_upper_bound(rounds, stored_per_round);
+  const double bound_round =
+      estimate_round < 0 ? 1.0
+                         : zero_failure_upper_bound({rounds[static_cast<size_t>(estimate_round)]},
+                                                    {stored_per_round[static_cast<size_t>(estimate_round)]});
+  for (FailureClass c : kFailureClasses) {
+    std::vector<bool> failed;
+    for (const Row& row : rows) {
+      if (!std::isnan(row.log_nominal)) failed.push_back(row.margins.failed(c));
+    }
+    estimates[c].every_round = importance_estimate(mixture_log_w, failed);
+    estimates[c].bound_round = bound_round;
+    estimates[c].bound_every_round = bound_every_round;
+  }
+
+  // Plain Monte Carlo from a campaign of the same scenario.
+  struct PlainEstimate {
+    std::int64_t runs = 0, failures = 0, first_failure = -1;
+    double lower = 0.0, upper = 0.0;
+  };
+  std::map<FailureClass, PlainEstimate> plain;
+  if (campaign_dir) {
+    const ResultsStore campaign = ResultsStore::open_existing(*campaign_dir / "results.sqlite");
+    if (campaign.meta().scenario_yaml != store.meta().scenario_yaml) {
+      throw ResultsMismatch((*campaign_dir / "results.sqlite").string() +
+                            " holds a campaign of another scenario than the search's");
+    }
+    for (const RunRecord& r : campaign.runs()) {
+      if (r.outcome == "worker_error") continue;
+      const RunMargins m = record_margins(nominal, r);
+      for (FailureClass c : kFailureClasses) {
+        PlainEstimate& p = plain[c];
+        ++p.runs;
+        if (m.failed(c)) {
+          ++p.failures;
+          if (p.first_failure < 0) p.first_failure = r.index;
+        }
+      }
+    }
+    for (auto& [c, p] : plain) {
+      // Two-sided 95 %: each one-sided bound at 97.5 %.
+      p.lower = p.failures > 0 ? clopper_pearson_lower(p.failures, p.runs, 0.975) : 0.0;
+      p.upper = clopper_pearson_upper(p.failures, p.runs, 0.975);
+    }
+  }
+
+  // Failures of the target class, the first one, the most likely one.
+  std::vector<const Row*> failures;
+  const Row* most_likely = nullptr;
+  for (const Row& row : rows) {
+    if (!row.margins.failed(target)) continue;
+    failures.push_back(&row);
+    if (!most_likely || row.log_nominal > most_likely->log_nominal) most_likely = &row;
+  }
+
+  // margins.csv
+  {
+    std::ofstream csv(dir / "margins.csv");
+    csv << "run,round,outcome,contact_m,crossing_m,mission,log_nominal_density,log_proposal_density";
+    for (const auto& [name, d] : f) csv << "," << name;
+    csv << "\n";
+    for (const Row& row : rows) {
+      csv << row.record->index << "," << row.round << "," << row.record->outcome << "," << fmt(row.margins.contact_m, "%.6g")
+          << "," << fmt(row.margins.crossing_m, "%.6g") << "," << fmt(row.margins.mission, "%.6g") << ","
+          << fmt(row.log_nominal, "%.6g") << "," << fmt(row.log_proposal, "%.6g");
+      for (const auto& [name, d] : f) csv << "," << fmt(row.drawn.at(name), "%.9g");
+      csv << "\n";
+    }
+  }
+
+  // Plots: margin of the target class against each parameter's draw, and against run index.
+  const std::string margin_label = std::string(failure_class_name(target)) + " margin" +
+                                   (target == FailureClass::mission ? "" : " (m)");
+  const auto colour_of = [&](const Row& row) {
+    if (row.margins.failed(target)) return kFailure;
+    if (row.round == 0) return kNominalRound;
+    return rounds[static_cast<size_t>(row.round)].estimation ? kEstimateRound : kAdaptRound;
+  };
+  std::vector<std::string> plots;
+  for (const auto& [name, d] : f) {
+    Chart chart(margin_label + " against " + name, name, margin_label);
+    for (int pass = 0; pass < 2; ++pass) {  // failures drawn last, on top
+      for (const Row& row : rows) {
+        const double m = row.margins.of(target);
+        if (std::isnan(m) || row.margins.failed(target) != (pass == 1)) continue;
+        chart.add_points({row.drawn.at(name)}, {m}, colour_of(row), 4);
+      }
+    }
+    chart.add_hline(0.0, cv::Scalar(0, 0, 0), "failure below");
+    double lo = d.lowest(), hi = d.highest();
+    if (!std::isfinite(lo) || !std::isfinite(hi)) {  // a normal: the range drawn
+      lo = std::numeric_limits<double>::infinity();
+      hi = -lo;
+      for (const Row& row : rows) {
+        lo = std::min(lo, row.drawn.at(name));
+        hi = std::max(hi, row.drawn.at(name));
+      }
+    }
+    if (lo < hi) chart.set_x_limits(lo, hi);
+    const std::string file = "search_margin_" + name + ".png";
+    chart.save_png((dir / file).string());
+    plots.push_back(file);
+  }
+  {
+    Chart chart("Search progress: " + margin_label + " of each run", "run index", margin_label);
+    for (const Row& row : rows) {
+      const double m = row.margins.of(target);
+      if (!std::isnan(m)) chart.add_points({static_cast<double>(row.record->index)}, {m}, colour_of(row), 4);
+    }
+    chart.add_hline(0.0, cv::Scalar(0, 0, 0), "failure below");
+    chart.save_png((dir / "search_progress.png").string());
+  }
+
+  // The summary.
+  json summary;
+  summary["scenario"] = nominal.name;
+  summary["settings"] = settings;
+  summary["runs"] = rows.size();
+  summary["rounds"] = json::array();
+  for (const CeRound& round : rounds) {
+    std::int64_t stored = 0, failed = 0;
+    for (const Row& row : rows) {
+      if (row.round != round.index) continue;
+      ++stored;
+      failed += row.margins.failed(target);
+    }
+    json proposal = json::object();
+    for (const auto& [name, q] : round.proposal) {
+      proposal[name] = {{"shifted", distribution_json(q.shifted)}, {"nominal_share", q.nominal_share}};
+    }
+    summary["rounds"].push_back({{"round", round.index}, {"first_run", round.first_run}, {"runs", round.runs},
+                                 {"stored", stored}, {"estimation", round.estimation},
+                                 {"level", number_or_null(round.level)}, {"elites", round.elites},
+                                 {"failures", failed}, {"proposal", proposal}});
+  }
+  summary["estimates"] = json::object();
+  for (const auto& [c, e] : estimates) {
+    json j = estimate_json(e.is);
+    j["round"] = e.round;
+    j["every_round"] = estimate_json(e.every_round);
+    if (e.is.failures == 0) j["zero_failure_upper_95"] = e.bound_round;
+    if (e.every_round.failures == 0) j["every_round"]["zero_failure_upper_95"] = e.bound_every_round;
+    if (plain.count(c)) {
+      const auto& p = plain.at(c);
+      j["plain_monte_carlo"] = {{"runs", p.runs}, {"failures", p.failures}, {"lower_95", p.lower},
+                                {"upper_95", p.upper}, {"first_failure_run", p.first_failure}};
+    }
+    summary["estimates"][failure_class_name(c)] = j;
+  }
+  summary["failures"] = json::array();
+  for (const Row* row : failures) summary["failures"].push_back(row->record->index);
+  summary["first_failure_run"] = failures.empty() ? json(nullptr) : json(failures.front()->record->index);
+  summary["most_likely_failure_run"] = most_likely ? json(most_likely->record->index) : json(nullptr);
+  std::ofstream(dir / "search_summary.json") << summary.dump(2) << "\n";
+
+  // report.md
+  std::ostringstream md;
+  const std::string dir_text = dir.string();
+  md << "# Rare-event search: " << nominal.name << "\n\n";
+  md << "Cross-entropy search for **" << failure_class_name(target) << "** failures (negative " << margin_label
+     << "; docs/search.md), seed " << settings.at("seed").get<std::string>() << ", budget "
+     << settings.at("budget") << " runs (" << rows.size() << " stored), rounds of " << settings.at("round_runs")
+     << ", elite fraction " << settings.at("elite_fraction") << ", at least " << settings.at("estimation_runs")
+     << " runs kept for the estimate. Every run: `shelfcross replay " << dir_text << " --run K`.\n\n";
+  md << "## Rounds\n\n| round | runs (stored) | fitted to level | elites | " << failure_class_name(target)
+     << " failures | kind |\n|---|---|---|---|---|---|\n";
+  for (const json& r : summary["rounds"]) {
+    md << "| " << r["round"] << " | " << r["runs"] << " (" << r["stored"] << ") | "
+       << (r["level"].is_null() ? std::string("- (nominal)") : fmt(r["level"].get<double>())) << " | " << r["elites"]
+       << " | " << r["failures"] << " | " << (r["estimation"].get<bool>() ? "estimation" : "adaptation") << " |\n";
+  }
+  md << "\nThe proposals (the shifted component; each mixed with the nominal at the share given in the settings):\n\n"
+     << "| parameter | nominal |";
+  for (const CeRound& round : rounds) md << " round " << round.index << " |";
+  md << "\n|---|---|";
+  for (size_t i = 0; i < rounds.size(); ++i) md << "---|";
+  md << "\n";
+  for (const auto& [name, d] : f) {
+    md << "| " << name << " | " << describe(d) << " |";
+    for (const CeRound& round : rounds) {
+      const ProposalDistribution& q = round.proposal.at(name);
+      md << " " << (q.nominal_share >= 1.0 ? std::string("nominal") : describe(q.shifted)) << " |";
+    }
+    md << "\n";
+  }
+  md << "\n## Failure probabilities under the nominal dispersions\n\n"
+     << "Importance sampling from the runs of round " << estimate_round
+     << (rounds.empty() || !rounds.back().estimation ? " (adaptation not finished: the last round's proposal)" : "")
+     << ": p_hat = mean of 1[failed] f(x) / q(x); interval: 95 % CLT on the log scale, p_hat exp(-+1.96 se / p_hat) "
+        "(rare_event.hpp); the plain CLT interval p_hat -+ 1.96 se beside it; ESS: the failures' effective sample "
+        "size (Kish); mean weight: mean f / q over all the round's runs, an unbiased estimate of 1; a mark after "
+        "them says why an interval is not to be trusted (weights uneven: mean weight outside [0.5, 2]; few "
+        "effective failures: ESS below max(2, 0.3 x failures)).";
+  if (campaign_dir) md << " Plain Monte Carlo: the campaign in `" << campaign_dir->string() << "`, failures over runs, two-sided 95 % Clopper-Pearson.";
+  md << " The row \"every round\" weighs every stored run of the search as a draw of the mixture of all "
+        "the rounds' proposals (multiple importance sampling, balance heuristic: w = f(x) / sum_k (n_k / N) q_k(x); "
+        "rare_event.hpp): bounded weights (round 0 is the nominal), and the early rounds cover the edge of a soft "
+        "failure region that the final proposal leaves out. Where no run failed, the interval is the one-sided 95 % "
+        "zero-failure bound: each round k's proposal is at least c_k = prod_j s_kj (the nominal's defensive shares) "
+        "times the nominal everywhere, so a class of nominal probability p fails a run of round k with probability at "
+        "least c_k p; the bound is the p at which prod_k (1 - c_k p)^n_k = 0.05 (rare_event.hpp; for plain Monte "
+        "Carlo 1 - 0.05^(1/n), about 3 / n).";
+  md << "\n\n| class | from | runs | failures | p_hat | 95 % interval | CLT interval | ESS | mean weight |"
+     << (campaign_dir ? " plain Monte Carlo | its 95 % interval | its first failure |" : "") << "\n|---|---|---|---|---|---|---|---|---|"
+     << (campaign_dir ? "---|---|---|" : "") << "\n";
+  // "[lo, hi]", appended piece by piece: GCC 12 misreads "literal" + std::string as an
+  // overlapping copy (-Wrestrict, a false positive in its own <string>).
+  const auto interval = [](double lo, double hi) {
+    std::string text = "[";
+    text += fmt(lo);
+    text += ", ";
+    text += fmt(hi);
+    text += ']';
+    return text;
+  };
+  for (const auto& [c, e] : estimates) {
+    auto row = [&](const IsEstimate& is, const std::string& from, double bound) {
+      md << "| " << failure_class_name(c) << " | " << from << " | " << is.runs << " | " << is.failures << " | " << fmt(is.p_hat) << " | "
+         << (is.failures ? interval(is.lower, is.upper)
+                         : "none sampled: p <= " + fmt(bound) + " (zero-failure bound)")
+         << " | " << (is.failures ? interval(is.clt_lower, is.clt_upper) : std::string("-"))
+         << " | " << fmt(is.failure_ess, "%.1f") << " | " << fmt(is.mean_weight, "%.3g");
+      if (const std::string doubts = estimate_doubts(is); !doubts.empty()) md << " (" << doubts << ")";
+      md << " |";
+      if (campaign_dir) {
+        const auto& p = plain.at(c);
+        md << " " << p.failures << " / " << p.runs << " | [" << fmt(p.lower) << ", " << fmt(p.upper) << "] | "
+           << (p.first_failure >= 0 ? "run " + std::to_string(p.first_failure) : std::string("none")) << " |";
+      }
+      md << "\n";
+    };
+    row(e.is, "round " + std::to_string(e.round), e.bound_round);
+    row(e.every_round, "every round", e.bound_every_round);
+  }
+  md << "\n## Failures found (" << failure_class_name(target) << ")\n\n";
+  if (failures.empty()) {
+    md << "None in " << rows.size() << " runs.\n";
+  } else {
+    md << failures.size() << " of " << rows.size() << " runs; the first is run " << failures.front()->record->index
+       << ".\n\n| run | round | outcome | margin | log nominal density | replay (with its video) |\n|---|---|---|---|---|---|\n";
+    for (const Row* row : failures) {
+      md << "| " << row->record->index << " | " << row->round << " | " << row->record->outcome << " | "
+         << fmt(row->margins.of(target)) << " | " << fmt(row->log_nominal) << " | `shelfcross replay " << dir_text
+         << " --run " << row->record->index << " --video` |\n";
+    }
+    md << "\n### The most likely failure: run " << most_likely->record->index
+       << " (highest nominal density among the failures)\n\n| parameter | drawn | nominal |\n|---|---|---|\n";
+    for (const auto& [name, d] : f) md << "| " << name << " | " << fmt(most_likely->drawn.at(name), "%.6g") << " | " << describe(d) << " |\n";
+  }
+  md << "\n## Margin against each parameter\n\nWhich parameters separate failures from successes: the "
+     << margin_label << " of every run against its draw (grey: round 0, the nominal; blue: adaptation rounds; green: "
+        "the estimation round; red: failed), and against the run index.\n\n![progress](search_progress.png)\n\n";
+  for (const std::string& file : plots) md << "![" << file << "](" << file << ")\n";
+  md << "\nEvery run's margins and draws: `margins.csv`.\n";
+  std::ofstream(dir / "report.md") << md.str();
+  return summary;
+}
+
+}  // namespace shelfcross::verification

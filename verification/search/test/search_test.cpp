@@ -1,0 +1,113 @@
+// The pieces of the search that touch a scenario: disperse() with given draws, the run margins
+// from stored metrics, proposals stored as JSON.
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "verification/scenario/dispersion.hpp"
+#include "verification/scenario/scenario.hpp"
+#include "verification/search/margin.hpp"
+#include "verification/search/rare_event.hpp"
+#include "verification/search/search.hpp"
+
+namespace shelfcross::verification {
+namespace {
+
+const std::string kDefault = std::string(SHELFCROSS_SOURCE_DIR) + "/scenarios/paper_test_shelf.yaml";
+
+TEST(SearchPieces, DisperseWithTheSeedsOwnDrawsIsDisperse) {
+  const Scenario nominal = load_scenario(kDefault);
+  for (std::uint64_t seed : {1ull, 42ull}) {
+    const RunSetup a = disperse(nominal, seed);
+    const RunSetup b = disperse(nominal, seed, draw_dispersions(nominal.dispersions, seed));
+    EXPECT_EQ(a.drawn, b.drawn);
+    EXPECT_EQ(*a.scenario, *b.scenario);
+    EXPECT_EQ(a.believed_camera.cx_px, b.believed_camera.cx_px);
+    // The nominal as a proposal draws the same values (round 0 of a search is a campaign).
+    EXPECT_EQ(draw_dispersions(nominal_proposals({nominal.dispersions.begin(), nominal.dispersions.end()}), seed),
+              a.drawn);
+  }
+  // Given draws are applied: the start 2.6 m in front of the shelf.
+  DrawnValues drawn = draw_dispersions(nominal.dispersions, 1);
+  drawn["start_distance_m"] = 2.6;
+  const RunSetup c = disperse(nominal, 1, drawn);
+  EXPECT_NEAR(nominal.warehouse.shelves[0].origin_W_m.x() - c.scenario->start.p_WB_m.x(), 2.6, 1e-12);
+}
+
+TEST(SearchPieces, DisperseRefusesDrawsThatAreNotTheScenarios) {
+  const Scenario nominal = load_scenario(kDefault);
+  DrawnValues drawn = draw_dispersions(nominal.dispersions, 1);
+  DrawnValues extra = drawn;
+  extra["mass_kg"] = 1.0;
+  EXPECT_THROW(disperse(nominal, 1, extra), std::invalid_argument);
+  DrawnValues missing = drawn;
+  missing.erase("start_distance_m");
+  EXPECT_THROW(disperse(nominal, 1, missing), std::invalid_argument);
+  DrawnValues out_of_range = drawn;
+  out_of_range["start_distance_m"] = 25.0;  // allowed 0.5..20
+  EXPECT_THROW(disperse(nominal, 1, out_of_range), std::invalid_argument);
+}
+
+TEST(SearchPieces, MarginsFromStoredMetrics) {
+  const Scenario s = load_scenario(kDefault);  // columns 0.34/0.48, rows 0.34, bars 0.02, vehicle 0.0925 x 0.041
+  // A clean crossing of level 2 column 2 (0.48 wide), 3 cm left and 1 cm up of its centre.
+  RunMetrics m;
+  m.mission_time_s = 24.0;
+  m.shelves = 1;
+  m.shelves_crossed_target = 1;
+  m.crossed = CellIndex{2, 2};
+  m.target = CellIndex{2, 2};
+  m.entry_offset_y_m = 0.03;
+  m.entry_offset_z_m = -0.01;
+  m.min_clearance_m = 0.09;
+  RunMargins r = run_margins(s, "success", m);
+  EXPECT_DOUBLE_EQ(r.contact_m, 0.09);
+  // y: (0.48 - 0.02) / 2 - 0.0925 / 2 - 0.03 = 0.15375; z: (0.34 - 0.02) / 2 - 0.041 / 2 - 0.01 = 0.1295
+  EXPECT_NEAR(r.crossing_m, 0.1295, 1e-12);
+  EXPECT_NEAR(r.mission, 1.0 - 24.0 / 120.0, 1e-12);
+  EXPECT_FALSE(r.failed(FailureClass::contact) || r.failed(FailureClass::crossing) || r.failed(FailureClass::mission));
+  // Wide off the centre of a narrow column (0.34): y room 0.16 - 0.04625 - 0.13 < 0.
+  m.crossed = CellIndex{2, 1};
+  m.entry_offset_y_m = -0.13;
+  EXPECT_NEAR(run_margins(s, "success", m).crossing_m, 0.16 - 0.04625 - 0.13, 1e-12);
+  // A contact 4 mm deep: contact and mission fail; no crossing: the crossing margin says nothing.
+  RunMetrics hit;
+  hit.mission_time_s = 12.0;
+  hit.contact = plant::Contact{};
+  hit.contact->depth_m = 0.004;
+  hit.min_clearance_m = 0.01;
+  r = run_margins(s, "collision", hit);
+  EXPECT_DOUBLE_EQ(r.contact_m, -0.004);
+  EXPECT_TRUE(std::isnan(r.crossing_m));
+  EXPECT_FALSE(r.failed(FailureClass::crossing));
+  EXPECT_DOUBLE_EQ(r.mission, -1.0);
+  // Touching (depth 0) is still a contact.
+  hit.contact->depth_m = 0.0;
+  EXPECT_LT(run_margins(s, "collision", hit).contact_m, 0.0);
+  // Crossed and then failed (a wrong inventory): mission -0.1; never near a shelf: no contact margin.
+  RunMetrics wrong;
+  wrong.mission_time_s = 30.0;
+  wrong.shelves_crossed_target = 1;
+  r = run_margins(s, "inventory_mismatch", wrong);
+  EXPECT_NEAR(r.mission, -0.1, 1e-12);
+  EXPECT_TRUE(std::isnan(r.contact_m));
+  // A run lost with its worker (no metrics): no contact or crossing margin, the mission failed.
+  r = run_margins(s, "crashed", std::nullopt);
+  EXPECT_TRUE(std::isnan(r.contact_m) && std::isnan(r.crossing_m));
+  EXPECT_DOUBLE_EQ(r.mission, -1.0);
+  EXPECT_EQ(parse_failure_class("crossing"), FailureClass::crossing);
+  EXPECT_FALSE(parse_failure_class("speed"));
+}
+
+TEST(SearchPieces, DistributionsRoundTripThroughJson) {
+  const Scenario s = load_scenario(kDefault);
+  for (const auto& [name, d] : s.dispersions) EXPECT_EQ(distribution_from_json(distribution_json(d)), d) << name;
+  Distribution c;
+  c.kind = Distribution::Kind::choice;
+  c.values = {0.5, 1.0};
+  c.weights = {0.25, 0.75};
+  EXPECT_EQ(distribution_from_json(distribution_json(c)), c);
+}
+
+}  // namespace
+}  // namespace shelfcross::verification

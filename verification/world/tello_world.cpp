@@ -1,0 +1,141 @@
+#include "verification/world/tello_world.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "render/ground_truth.hpp"
+
+namespace shelfcross::verification {
+
+const char* world_end_name(WorldEnd end) {
+  switch (end) {
+    case WorldEnd::none: return "";
+    case WorldEnd::numerical_failure: return "numerical_failure";
+    case WorldEnd::collision: return "collision";
+    case WorldEnd::left_arena: return "left_arena";
+  }
+  return "";
+}
+
+namespace {
+const Scenario& landed_scenario(const RunSetup& setup) {
+  if (!setup.scenario) throw std::invalid_argument("a run setup without a scenario");
+  if (!setup.scenario->start.landed) {
+    throw std::invalid_argument("the simulated Tello starts landed runs only (start.landed: true)");
+  }
+  return *setup.scenario;
+}
+}  // namespace
+
+TelloWorld::TelloWorld(const RunSetup& setup, int monitored_shelves)
+    : scenario_(setup.scenario),
+      sc_(landed_scenario(setup)),
+      world_(sc_.warehouse, sc_.vehicle.size_m, sc_.cosim.vehicle_margin_m),
+      tello_(sc_.vehicle, autopilot_params_for(sc_), sc_.wind, RandomStream(setup.seed, StreamId::wind).next_u64(), {},
+             sc_.start.p_WB_m.x(), sc_.start.p_WB_m.y(), sc_.start.yaw_rad),
+      ground_z_m_(tello_.state().p_WB_m.z()),
+      half_length_m_(0.5 * sc_.vehicle.size_m.x() + sc_.cosim.vehicle_margin_m),
+      X_last_(body_pose(tello_.state())),
+      v_last_(tello_.state().v_WB_W_mps),
+      clocks_{millihertz(sc_.frame_rate_hz), millihertz(sc_.cosim.state_rate_hz), 0, 0,
+              render::camera_pose_W(X_last_, sc_.camera_mount), RandomStream(setup.seed, StreamId::render_noise)} {
+  if (monitored_shelves < 1 || monitored_shelves > static_cast<int>(sc_.warehouse.shelves.size())) {
+    throw std::invalid_argument("monitored shelves must be 1.." + std::to_string(sc_.warehouse.shelves.size()));
+  }
+  monitors_.reserve(static_cast<size_t>(monitored_shelves));
+  for (int i = 0; i < monitored_shelves; ++i) {
+    monitors_.emplace_back(sc_.warehouse.shelves[static_cast<size_t>(i)], X_last_.translation());
+  }
+}
+
+TickReport TelloWorld::tick(TimeNs t) {
+  TickReport r;
+  r.t_ns = t;
+  try {
+    tello_.step_to(t);
+  } catch (const std::exception& e) {
+    r.end = WorldEnd::numerical_failure;
+    r.detail = e.what();
+    return r;
+  }
+  const plant::RigidBodyState& s = tello_.state();
+  if (!s.p_WB_m.allFinite() || !s.v_WB_W_mps.allFinite() || !s.q_WB.coeffs().allFinite()) {
+    r.end = WorldEnd::numerical_failure;
+    r.detail = "non-finite state";
+    return r;
+  }
+  if (tello_.mode() != plant::FlightMode::landed) truth_.flew = true;
+  if (t > t_last_) observe(t, r);
+  return r;
+}
+
+void TelloWorld::observe(TimeNs t, TickReport& r) {
+  const plant::RigidBodyState& s = tello_.state();
+  const Eigen::Isometry3d X = body_pose(s);
+  a_W_ = (s.v_WB_W_mps - v_last_) / ns_to_seconds(t - t_last_);
+  truth_.path_length_m += (X.translation() - X_last_.translation()).norm();
+  if (const auto contact = world_.sweep(X_last_, t_last_, X, t, plant::FloorContacts::ignore)) {
+    truth_.contact = *contact;
+    r.contact = *contact;
+    r.end = plant::is_shelf_part(contact->element.kind) ? WorldEnd::collision : WorldEnd::left_arena;
+    r.detail = contact->element.name;
+    t_last_ = t;  // the contact's tick is the flight's last instant
+    return;
+  }
+  const Eigen::Vector3d& p = s.p_WB_m;
+  if ((p.array() < sc_.warehouse.arena_min_W_m.array()).any() || (p.array() > sc_.warehouse.arena_max_W_m.array()).any()) {
+    r.end = WorldEnd::left_arena;
+    r.detail = "outside the arena";
+    return;
+  }
+  const bool on_floor = p.z() - ground_z_m_ < 1e-4;
+  if (on_floor && !touching_floor_) ++truth_.floor_touches;
+  touching_floor_ = on_floor;
+  // Each mission shelf's crossing, judged on the body origin in that shelf's frame; the
+  // clearance near any of them (a row's shelves share shelf 0's depth).
+  const double depth_m = sc_.warehouse.shelves.front().depth_m;
+  bool near_a_shelf = false;
+  r.faces.reserve(monitors_.size());
+  for (ShelfCrossingMonitor& monitor : monitors_) {
+    r.faces.push_back(monitor.update(p));
+    const double x_S = monitor.p_S_m().x();
+    near_a_shelf = near_a_shelf || (x_S > -half_length_m_ - 0.05 && x_S < depth_m + half_length_m_ + 0.05);
+  }
+  if (near_a_shelf) {
+    const double clearance = world_.clearance_to_shelves(X).distance_m;
+    truth_.min_clearance_m = std::min(truth_.min_clearance_m.value_or(clearance), clearance);
+  }
+  r.observed = true;
+  X_last_ = X;
+  v_last_ = s.v_WB_W_mps;
+  t_last_ = t;
+}
+
+StateRecord TelloWorld::state_record(TimeNs t) const {
+  const plant::Autopilot& firmware = tello_.autopilot();
+  return state_from_truth(tello_.state(), a_W_, ground_z_m_, firmware.battery_pct(), firmware.motor_on_time_s(), t);
+}
+
+std::optional<TelloWorld::Capture> TelloWorld::capture_due(TimeNs t) {
+  Clocks& k = clocks_;
+  if (t < event_time(k.k_frame, k.frame_mhz)) return std::nullopt;
+  Capture c;
+  c.index = k.k_frame;
+  c.t_ns = event_time(k.k_frame, k.frame_mhz);
+  c.period_ns = event_time(k.k_frame + 1, k.frame_mhz) - c.t_ns;
+  c.X_WC_prev = k.X_WC_prev_frame;
+  c.X_WC = render::camera_pose_W(body_pose(tello_.state()), sc_.camera_mount);
+  c.noise_seed = k.render_noise.next_u64();  // one per capture, sent or not
+  k.X_WC_prev_frame = c.X_WC;
+  while (event_time(k.k_frame, k.frame_mhz) <= t) ++k.k_frame;
+  return c;
+}
+
+bool TelloWorld::state_due(TimeNs t) {
+  Clocks& k = clocks_;
+  if (t < event_time(k.k_state, k.state_mhz)) return false;
+  while (event_time(k.k_state, k.state_mhz) <= t) ++k.k_state;
+  return true;
+}
+
+}  // namespace shelfcross::verification
