@@ -131,13 +131,17 @@ std::string cost_section(const CostSummary& c, std::int64_t runs) {
   return md.str();
 }
 
-CampaignSummary write_campaign_report(const std::filesystem::path& dir) {
-  ResultsStore store = ResultsStore::open_existing(dir / "results.sqlite");
-  const Scenario scenario = parse_scenario(store.meta().scenario_yaml, (dir / "results.sqlite").string() + " (scenario)");
-  const std::vector<RunRecord> runs = store.runs();
-  const CampaignSummary summary = summarize_campaign(runs, store.meta().runs_requested);
-  std::ofstream(dir / "summary.json") << json(summary).dump(2) << "\n";
+namespace {
 
+/// What the report says of the runs besides its charts: the failed runs' table rows.
+struct RunsDrawn {
+  int failures = 0;
+  std::ostringstream failed_rows;
+};
+
+/// Every run's trajectory over the shelves (top and side views), its approach responses, and
+/// the distributions of settling times and entry offsets, saved as PNGs in `dir`.
+RunsDrawn draw_runs(const std::filesystem::path& dir, const Scenario& scenario, const std::vector<RunRecord>& runs) {
   // The approach responses are measured on the first shelf (the metrics' target is its cell).
   const ShelfSpec& shelf = scenario.warehouse.shelves.at(0);
   const Eigen::Isometry3d X_WS = shelf_pose_W(shelf);
@@ -169,8 +173,7 @@ CampaignSummary write_campaign_report(const std::filesystem::path& dir) {
   }
 
   std::vector<double> settle_z, settle_yaw, offset_y, offset_z;
-  std::ostringstream failed;
-  int failures = 0;
+  RunsDrawn drawn;
   for (const RunRecord& r : runs) {
     const json trace = json::parse(r.trace_json.empty() ? "{}" : r.trace_json);
     const StoredMetrics stored = stored_metrics(r);
@@ -209,8 +212,8 @@ CampaignSummary write_campaign_report(const std::filesystem::path& dir) {
       if (m.entry_offset_z_m) offset_z.push_back(*m.entry_offset_z_m);
     }
     if (!ok) {
-      ++failures;
-      failed << "| " << r.index << " | " << r.outcome << " | " << stored.detail << " | `shelfcross replay "
+      ++drawn.failures;
+      drawn.failed_rows << "| " << r.index << " | " << r.outcome << " | " << stored.detail << " | `shelfcross replay "
              << dir.string() << " --run " << r.index << "` |\n";
     }
   }
@@ -226,6 +229,19 @@ CampaignSummary write_campaign_report(const std::filesystem::path& dir) {
   histogram_chart(settle_yaw, 20, "Heading settling time", "s").save_png((dir / "settling_heading.png").string());
   histogram_chart(offset_y, 20, "Entry offset from the cell centre, lateral", "m").save_png((dir / "entry_offset_y.png").string());
   histogram_chart(offset_z, 20, "Entry offset from the cell centre, vertical", "m").save_png((dir / "entry_offset_z.png").string());
+  return drawn;
+}
+
+}  // namespace
+
+CampaignSummary write_campaign_report(const std::filesystem::path& dir) {
+  ResultsStore store = ResultsStore::open_existing(dir / "results.sqlite");
+  const Scenario scenario = parse_scenario(store.meta().scenario_yaml, (dir / "results.sqlite").string() + " (scenario)");
+  const std::vector<RunRecord> runs = store.runs();
+  const CampaignSummary summary = summarize_campaign(runs, store.meta().runs_requested);
+  std::ofstream(dir / "summary.json") << json(summary).dump(2) << "\n";
+
+  const RunsDrawn drawn = draw_runs(dir, scenario, runs);
 
   std::ofstream md(dir / "report.md");
   md << "# Crossing campaign: " << scenario.name << "\n\n";
@@ -258,9 +274,9 @@ CampaignSummary write_campaign_report(const std::filesystem::path& dir) {
         "![lateral entry offset](entry_offset_y.png)\n\n![vertical entry offset](entry_offset_z.png)\n\n";
   md << latency_sweep_section(scenario, runs, dir);
   md << link_section(runs, dir);
-  md << "## Failed runs (" << failures << ")\n\n";
-  if (failures) {
-    md << "| run | outcome | detail | replay |\n|---|---|---|---|\n" << failed.str();
+  md << "## Failed runs (" << drawn.failures << ")\n\n";
+  if (drawn.failures) {
+    md << "| run | outcome | detail | replay |\n|---|---|---|---|\n" << drawn.failed_rows.str();
   } else {
     md << "None.\n";
   }

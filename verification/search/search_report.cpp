@@ -74,22 +74,38 @@ nlohmann::json estimate_json(const IsEstimate& e) {
           {"failure_ess", e.failure_ess}, {"mean_weight", e.mean_weight}, {"doubts", estimate_doubts(e)}};
 }
 
-}  // namespace
+/// Plain Monte Carlo over a campaign of the same scenario: its failures of a class over its runs.
+struct PlainEstimate {
+  std::int64_t runs = 0, failures = 0, first_failure = -1;
+  double lower = 0.0, upper = 0.0;  ///< two-sided 95 % Clopper-Pearson
+};
 
-nlohmann::json write_search_report(const std::filesystem::path& dir, const std::optional<std::filesystem::path>& campaign_dir) {
+/// Everything the report says, computed once from the stores. Rows point into `records`.
+struct SearchAnalysis {
+  Scenario nominal;
+  ParameterDistributions f;  ///< the nominal dispersions
+  nlohmann::json settings;
+  FailureClass target = FailureClass::contact;
+  std::string margin_label;
+  std::vector<CeRound> rounds;
+  std::vector<RunRecord> records;
+  std::vector<Row> rows;  ///< the stored runs of the stored rounds
+  int estimate_round = -1;
+  std::map<FailureClass, ClassEstimate> estimates;
+  std::map<FailureClass, PlainEstimate> plain;  ///< empty without a campaign
+  std::vector<const Row*> failures;             ///< of the target class, in run order
+  const Row* most_likely = nullptr;             ///< the failure of highest nominal density
+};
+
+/// Each stored run of a stored round with its draws, margins and log densities (NaN for a
+/// worker_error run, which draws nothing usable).
+std::vector<Row> read_rows(const SearchAnalysis& a) {
   using nlohmann::json;
-  const std::filesystem::path db = dir / "results.sqlite";
-  const SearchStore search = SearchStore::open_existing(db);
-  const ResultsStore store = ResultsStore::open_existing(db);
-  const Scenario nominal = parse_scenario(store.meta().scenario_yaml, db.string());
-  const ParameterDistributions f(nominal.dispersions.begin(), nominal.dispersions.end());
-  const json settings = search.settings_json();
-  const FailureClass target = parse_failure_class(settings.at("target").get<std::string>()).value_or(FailureClass::contact);
-  const std::vector<CeRound> rounds = search.rounds();
-  const std::vector<RunRecord> records = store.runs();
-
+  const std::vector<CeRound>& rounds = a.rounds;
+  const Scenario& nominal = a.nominal;
+  const ParameterDistributions& f = a.f;
   std::vector<Row> rows;
-  for (const RunRecord& r : records) {
+  for (const RunRecord& r : a.records) {
     Row row;
     row.record = &r;
     for (const CeRound& round : rounds) {
@@ -106,9 +122,16 @@ nlohmann::json write_search_report(const std::filesystem::path& dir, const std::
     }
     rows.push_back(std::move(row));
   }
+  return rows;
+}
 
-  // The estimate: from the estimation round's runs, or the last round's while adaptation goes on.
-  const int estimate_round = rounds.empty() ? -1 : rounds.back().index;
+/// Per class, the importance-sampling estimate from the estimation round (or the last round
+/// while adaptation goes on) and from every stored run, with the zero-failure bounds.
+std::map<FailureClass, ClassEstimate> class_estimates(const SearchAnalysis& a) {
+  const std::vector<CeRound>& rounds = a.rounds;
+  const std::vector<Row>& rows = a.rows;
+  const ParameterDistributions& f = a.f;
+  const int estimate_round = a.estimate_round;
   std::map<FailureClass, ClassEstimate> estimates;
   for (FailureClass c : kFailureClasses) {
     std::vector<double> log_w;
@@ -144,65 +167,64 @@ nlohmann::json write_search_report(const std::filesystem::path& dir, const std::
     estimates[c].bound_round = bound_round;
     estimates[c].bound_every_round = bound_every_round;
   }
+  return estimates;
+}
 
-  // Plain Monte Carlo from a campaign of the same scenario.
-  struct PlainEstimate {
-    std::int64_t runs = 0, failures = 0, first_failure = -1;
-    double lower = 0.0, upper = 0.0;
-  };
+/// Plain Monte Carlo from the campaign in `campaign_dir`; refused (ResultsMismatch) when it
+/// holds another scenario than the search's.
+std::map<FailureClass, PlainEstimate> plain_estimates(const SearchAnalysis& a, const std::string& scenario_yaml,
+                                                      const std::filesystem::path& campaign_dir) {
+  const Scenario& nominal = a.nominal;
   std::map<FailureClass, PlainEstimate> plain;
-  if (campaign_dir) {
-    const ResultsStore campaign = ResultsStore::open_existing(*campaign_dir / "results.sqlite");
-    if (campaign.meta().scenario_yaml != store.meta().scenario_yaml) {
-      throw ResultsMismatch((*campaign_dir / "results.sqlite").string() +
-                            " holds a campaign of another scenario than the search's");
-    }
-    for (const RunRecord& r : campaign.runs()) {
-      if (r.outcome == "worker_error") continue;
-      const RunMargins m = record_margins(nominal, r);
-      for (FailureClass c : kFailureClasses) {
-        PlainEstimate& p = plain[c];
-        ++p.runs;
-        if (m.failed(c)) {
-          ++p.failures;
-          if (p.first_failure < 0) p.first_failure = r.index;
-        }
+  const ResultsStore campaign = ResultsStore::open_existing(campaign_dir / "results.sqlite");
+  if (campaign.meta().scenario_yaml != scenario_yaml) {
+    throw ResultsMismatch((campaign_dir / "results.sqlite").string() +
+                          " holds a campaign of another scenario than the search's");
+  }
+  for (const RunRecord& r : campaign.runs()) {
+    if (r.outcome == "worker_error") continue;
+    const RunMargins m = record_margins(nominal, r);
+    for (FailureClass c : kFailureClasses) {
+      PlainEstimate& p = plain[c];
+      ++p.runs;
+      if (m.failed(c)) {
+        ++p.failures;
+        if (p.first_failure < 0) p.first_failure = r.index;
       }
     }
-    for (auto& [c, p] : plain) {
-      // Two-sided 95 %: each one-sided bound at 97.5 %.
-      p.lower = p.failures > 0 ? clopper_pearson_lower(p.failures, p.runs, 0.975) : 0.0;
-      p.upper = clopper_pearson_upper(p.failures, p.runs, 0.975);
-    }
   }
+  for (auto& [c, p] : plain) {
+    // Two-sided 95 %: each one-sided bound at 97.5 %.
+    p.lower = p.failures > 0 ? clopper_pearson_lower(p.failures, p.runs, 0.975) : 0.0;
+    p.upper = clopper_pearson_upper(p.failures, p.runs, 0.975);
+  }
+  return plain;
+}
 
-  // Failures of the target class, the first one, the most likely one.
-  std::vector<const Row*> failures;
-  const Row* most_likely = nullptr;
+void write_margins_csv(const std::filesystem::path& dir, const SearchAnalysis& a) {
+  const ParameterDistributions& f = a.f;
+  const std::vector<Row>& rows = a.rows;
+  std::ofstream csv(dir / "margins.csv");
+  csv << "run,round,outcome,contact_m,crossing_m,mission,log_nominal_density,log_proposal_density";
+  for (const auto& [name, d] : f) csv << "," << name;
+  csv << "\n";
   for (const Row& row : rows) {
-    if (!row.margins.failed(target)) continue;
-    failures.push_back(&row);
-    if (!most_likely || row.log_nominal > most_likely->log_nominal) most_likely = &row;
-  }
-
-  // margins.csv
-  {
-    std::ofstream csv(dir / "margins.csv");
-    csv << "run,round,outcome,contact_m,crossing_m,mission,log_nominal_density,log_proposal_density";
-    for (const auto& [name, d] : f) csv << "," << name;
+    csv << row.record->index << "," << row.round << "," << row.record->outcome << "," << fmt(row.margins.contact_m, "%.6g")
+        << "," << fmt(row.margins.crossing_m, "%.6g") << "," << fmt(row.margins.mission, "%.6g") << ","
+        << fmt(row.log_nominal, "%.6g") << "," << fmt(row.log_proposal, "%.6g");
+    for (const auto& [name, d] : f) csv << "," << fmt(row.drawn.at(name), "%.9g");
     csv << "\n";
-    for (const Row& row : rows) {
-      csv << row.record->index << "," << row.round << "," << row.record->outcome << "," << fmt(row.margins.contact_m, "%.6g")
-          << "," << fmt(row.margins.crossing_m, "%.6g") << "," << fmt(row.margins.mission, "%.6g") << ","
-          << fmt(row.log_nominal, "%.6g") << "," << fmt(row.log_proposal, "%.6g");
-      for (const auto& [name, d] : f) csv << "," << fmt(row.drawn.at(name), "%.9g");
-      csv << "\n";
-    }
   }
+}
 
-  // Plots: margin of the target class against each parameter's draw, and against run index.
-  const std::string margin_label = std::string(failure_class_name(target)) + " margin" +
-                                   (target == FailureClass::mission ? "" : " (m)");
+/// The target class's margin against each parameter's draw (search_margin_<name>.png, whose
+/// names it returns) and against the run index (search_progress.png).
+std::vector<std::string> write_plots(const std::filesystem::path& dir, const SearchAnalysis& a) {
+  const FailureClass target = a.target;
+  const std::vector<CeRound>& rounds = a.rounds;
+  const std::vector<Row>& rows = a.rows;
+  const ParameterDistributions& f = a.f;
+  const std::string& margin_label = a.margin_label;
   const auto colour_of = [&](const Row& row) {
     if (row.margins.failed(target)) return kFailure;
     if (row.round == 0) return kNominalRound;
@@ -242,14 +264,20 @@ nlohmann::json write_search_report(const std::filesystem::path& dir, const std::
     chart.add_hline(0.0, cv::Scalar(0, 0, 0), "failure below");
     chart.save_png((dir / "search_progress.png").string());
   }
+  return plots;
+}
 
-  // The summary.
+/// search_summary.json: the settings, each round, each class's estimates, the failures.
+nlohmann::json summary_json(const SearchAnalysis& a) {
+  using nlohmann::json;
+  const FailureClass target = a.target;
+  const std::vector<Row>& rows = a.rows;
   json summary;
-  summary["scenario"] = nominal.name;
-  summary["settings"] = settings;
+  summary["scenario"] = a.nominal.name;
+  summary["settings"] = a.settings;
   summary["runs"] = rows.size();
   summary["rounds"] = json::array();
-  for (const CeRound& round : rounds) {
+  for (const CeRound& round : a.rounds) {
     std::int64_t stored = 0, failed = 0;
     for (const Row& row : rows) {
       if (row.round != round.index) continue;
@@ -266,28 +294,36 @@ nlohmann::json write_search_report(const std::filesystem::path& dir, const std::
                                  {"failures", failed}, {"proposal", proposal}});
   }
   summary["estimates"] = json::object();
-  for (const auto& [c, e] : estimates) {
+  for (const auto& [c, e] : a.estimates) {
     json j = estimate_json(e.is);
     j["round"] = e.round;
     j["every_round"] = estimate_json(e.every_round);
     if (e.is.failures == 0) j["zero_failure_upper_95"] = e.bound_round;
     if (e.every_round.failures == 0) j["every_round"]["zero_failure_upper_95"] = e.bound_every_round;
-    if (plain.count(c)) {
-      const auto& p = plain.at(c);
+    if (a.plain.count(c)) {
+      const auto& p = a.plain.at(c);
       j["plain_monte_carlo"] = {{"runs", p.runs}, {"failures", p.failures}, {"lower_95", p.lower},
                                 {"upper_95", p.upper}, {"first_failure_run", p.first_failure}};
     }
     summary["estimates"][failure_class_name(c)] = j;
   }
   summary["failures"] = json::array();
-  for (const Row* row : failures) summary["failures"].push_back(row->record->index);
-  summary["first_failure_run"] = failures.empty() ? json(nullptr) : json(failures.front()->record->index);
-  summary["most_likely_failure_run"] = most_likely ? json(most_likely->record->index) : json(nullptr);
-  std::ofstream(dir / "search_summary.json") << summary.dump(2) << "\n";
+  for (const Row* row : a.failures) summary["failures"].push_back(row->record->index);
+  summary["first_failure_run"] = a.failures.empty() ? json(nullptr) : json(a.failures.front()->record->index);
+  summary["most_likely_failure_run"] = a.most_likely ? json(a.most_likely->record->index) : json(nullptr);
+  return summary;
+}
 
-  // report.md
-  std::ostringstream md;
-  const std::string dir_text = dir.string();
+/// report.md's head and its rounds with their proposals.
+void write_rounds_md(std::ostream& md, const SearchAnalysis& a, const nlohmann::json& summary, const std::string& dir_text) {
+  using nlohmann::json;
+  const FailureClass target = a.target;
+  const nlohmann::json& settings = a.settings;
+  const std::vector<CeRound>& rounds = a.rounds;
+  const std::vector<Row>& rows = a.rows;
+  const ParameterDistributions& f = a.f;
+  const std::string& margin_label = a.margin_label;
+  const Scenario& nominal = a.nominal;
   md << "# Rare-event search: " << nominal.name << "\n\n";
   md << "Cross-entropy search for **" << failure_class_name(target) << "** failures (negative " << margin_label
      << "; docs/search.md), seed " << settings.at("seed").get<std::string>() << ", budget "
@@ -315,6 +351,14 @@ nlohmann::json write_search_report(const std::filesystem::path& dir, const std::
     }
     md << "\n";
   }
+}
+
+/// report.md's failure probabilities: importance sampling from the estimation round and from
+/// every round, the zero-failure bound where none failed, plain Monte Carlo beside them.
+void write_estimates_md(std::ostream& md, const SearchAnalysis& a, const std::optional<std::filesystem::path>& campaign_dir) {
+  const std::vector<CeRound>& rounds = a.rounds;
+  const int estimate_round = a.estimate_round;
+  const std::map<FailureClass, PlainEstimate>& plain = a.plain;
   md << "\n## Failure probabilities under the nominal dispersions\n\n"
      << "Importance sampling from the runs of round " << estimate_round
      << (rounds.empty() || !rounds.back().estimation ? " (adaptation not finished: the last round's proposal)" : "")
@@ -345,7 +389,7 @@ nlohmann::json write_search_report(const std::filesystem::path& dir, const std::
     text += ']';
     return text;
   };
-  for (const auto& [c, e] : estimates) {
+  for (const auto& [c, e] : a.estimates) {
     auto row = [&](const IsEstimate& is, const std::string& from, double bound) {
       md << "| " << failure_class_name(c) << " | " << from << " | " << is.runs << " | " << is.failures << " | " << fmt(is.p_hat) << " | "
          << (is.failures ? interval(is.lower, is.upper)
@@ -364,6 +408,18 @@ nlohmann::json write_search_report(const std::filesystem::path& dir, const std::
     row(e.is, "round " + std::to_string(e.round), e.bound_round);
     row(e.every_round, "every round", e.bound_every_round);
   }
+}
+
+/// report.md's failures of the target class (each with its replay command), the most likely
+/// one, and the margin plots.
+void write_failures_md(std::ostream& md, const SearchAnalysis& a, const std::vector<std::string>& plots,
+                       const std::string& dir_text) {
+  const FailureClass target = a.target;
+  const std::vector<Row>& rows = a.rows;
+  const std::vector<const Row*>& failures = a.failures;
+  const Row* most_likely = a.most_likely;
+  const ParameterDistributions& f = a.f;
+  const std::string& margin_label = a.margin_label;
   md << "\n## Failures found (" << failure_class_name(target) << ")\n\n";
   if (failures.empty()) {
     md << "None in " << rows.size() << " runs.\n";
@@ -384,6 +440,43 @@ nlohmann::json write_search_report(const std::filesystem::path& dir, const std::
         "the estimation round; red: failed), and against the run index.\n\n![progress](search_progress.png)\n\n";
   for (const std::string& file : plots) md << "![" << file << "](" << file << ")\n";
   md << "\nEvery run's margins and draws: `margins.csv`.\n";
+}
+
+}  // namespace
+
+nlohmann::json write_search_report(const std::filesystem::path& dir, const std::optional<std::filesystem::path>& campaign_dir) {
+  const std::filesystem::path db = dir / "results.sqlite";
+  const SearchStore search = SearchStore::open_existing(db);
+  const ResultsStore store = ResultsStore::open_existing(db);
+  SearchAnalysis a;
+  a.nominal = parse_scenario(store.meta().scenario_yaml, db.string());
+  a.f = ParameterDistributions(a.nominal.dispersions.begin(), a.nominal.dispersions.end());
+  a.settings = search.settings_json();
+  a.target = parse_failure_class(a.settings.at("target").get<std::string>()).value_or(FailureClass::contact);
+  a.margin_label = std::string(failure_class_name(a.target)) + " margin" + (a.target == FailureClass::mission ? "" : " (m)");
+  a.rounds = search.rounds();
+  a.records = store.runs();
+  a.rows = read_rows(a);
+  // The estimate: from the estimation round's runs, or the last round's while adaptation goes on.
+  a.estimate_round = a.rounds.empty() ? -1 : a.rounds.back().index;
+  a.estimates = class_estimates(a);
+  if (campaign_dir) a.plain = plain_estimates(a, store.meta().scenario_yaml, *campaign_dir);
+  // Failures of the target class, the first one, the most likely one.
+  for (const Row& row : a.rows) {
+    if (!row.margins.failed(a.target)) continue;
+    a.failures.push_back(&row);
+    if (!a.most_likely || row.log_nominal > a.most_likely->log_nominal) a.most_likely = &row;
+  }
+
+  write_margins_csv(dir, a);
+  const std::vector<std::string> plots = write_plots(dir, a);
+  const nlohmann::json summary = summary_json(a);
+  std::ofstream(dir / "search_summary.json") << summary.dump(2) << "\n";
+  std::ostringstream md;
+  const std::string dir_text = dir.string();
+  write_rounds_md(md, a, summary, dir_text);
+  write_estimates_md(md, a, campaign_dir);
+  write_failures_md(md, a, plots, dir_text);
   std::ofstream(dir / "report.md") << md.str();
   return summary;
 }
