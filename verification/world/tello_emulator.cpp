@@ -22,16 +22,6 @@
 namespace shelfcross::verification {
 namespace {
 
-TimeNs ms_to_ns(double ms) { return static_cast<TimeNs>(std::llround(ms * 1e6)); }
-
-/// mean + N(0, sigma) truncated at +-3 sigma, never below 0, in ns. No draw when sigma is 0,
-/// so a channel without jitter draws nothing from its jitter stream.
-TimeNs jittered_ms(RandomStream& stream, double mean_ms, double sigma_ms) {
-  double ms = mean_ms;
-  if (sigma_ms > 0.0) ms += sigma_ms * std::clamp(stream.normal(), -3.0, 3.0);
-  return ms_to_ns(std::max(0.0, ms));
-}
-
 /// A command datagram the firmware may see: 1..max bytes of printable ASCII, optionally
 /// ended by "\r\n" or "\n" (the firmware trims whitespace).
 bool well_formed(const std::string& bytes, std::size_t max_bytes) {
@@ -117,16 +107,7 @@ TelloEmulator::TelloEmulator(RunSetup setup, EmulatorConfig config, EmulatorChan
       inline_renderer_(inline_renderer),
       on_tick_(std::move(on_tick)),
       world_((check_landed(*scenario_), setup_), mission_shelf_count(*scenario_)),
-      command_faults_(mix64(config_.seed ^ 1), StreamId::link_faults),
-      reply_faults_(mix64(config_.seed ^ 2), StreamId::link_faults),
-      state_faults_(mix64(config_.seed ^ 3), StreamId::link_faults),
-      video_faults_(mix64(config_.seed ^ 4), StreamId::link_faults),
-      error_faults_(mix64(config_.seed ^ 5), StreamId::link_faults),
-      frame_faults_(mix64(config_.seed ^ 6), StreamId::link_faults),
-      command_jitter_(mix64(config_.seed ^ 7), StreamId::link_faults),
-      reply_jitter_(mix64(config_.seed ^ 8), StreamId::link_faults),
-      state_jitter_(mix64(config_.seed ^ 9), StreamId::link_faults),
-      video_jitter_(mix64(config_.seed ^ 10), StreamId::link_faults),
+      faults_(config_.faults, config_.seed),
       tick_mhz_(millihertz(scenario_->autopilot.rate_hz)) {
   report_.inventory_truth = true_inventory(*scenario_);
   report_.start_p_W_m = scenario_->start.p_WB_m;
@@ -207,32 +188,19 @@ void TelloEmulator::receive_commands(TimeNs now_ns) {
       ++counters_.commands_malformed;
       continue;
     }
-    // Two draws per datagram, always, so one setting never shifts the other's draws.
-    const bool lost = command_faults_.bernoulli(config_.faults.commands.loss);
-    const bool twice = command_faults_.bernoulli(config_.faults.commands.duplicate);
+    const DatagramFaults::Fate fate = faults_.command();
     const std::string& prefix = config_.faults.lost_command_prefix;
-    if (lost || (!prefix.empty() && d->bytes.rfind(prefix, 0) == 0)) {
+    if (fate.lost || (!prefix.empty() && d->bytes.rfind(prefix, 0) == 0)) {
       ++counters_.commands_dropped;
       continue;
     }
-    const ChannelFaults& f = config_.faults.commands;
-    const TimeNs due = std::max(last_command_due_, now_ns + jittered_ms(command_jitter_, f.delay_ms, f.jitter_ms));
-    last_command_due_ = due;
+    const TimeNs due = faults_.due(DatagramFaults::Channel::command, now_ns);
     incoming_.push({due, seq_++, d->bytes, d->from});
-    if (twice) {
+    if (fate.twice) {
       ++counters_.commands_duplicated;
       incoming_.push({due, seq_++, d->bytes, d->from});
     }
   }
-}
-
-TimeNs TelloEmulator::due_time(Channel channel, TimeNs t) {
-  const EmulatorFaults& f = config_.faults;
-  const ChannelFaults& c = channel == Channel::reply ? f.replies : channel == Channel::state ? f.state : f.video;
-  RandomStream& jitter = channel == Channel::reply ? reply_jitter_ : channel == Channel::state ? state_jitter_ : video_jitter_;
-  TimeNs& last = last_due_[static_cast<int>(channel)];
-  last = std::max(last, t + jittered_ms(jitter, c.delay_ms, c.jitter_ms));
-  return last;
 }
 
 std::int64_t TelloEmulator::key_interval_captures() const {
@@ -266,15 +234,14 @@ void TelloEmulator::tick(TimeNs t, TimeNs now_ns) {
     if (tello.autopilot().sdk_mode() && client_) {
       const std::string text = format_state_record(world_.state_record(t));
       std::lock_guard lock(mutex_);
-      const bool lost = state_faults_.bernoulli(config_.faults.state.loss);
-      const bool twice = state_faults_.bernoulli(config_.faults.state.duplicate);
-      if (lost) {
+      const DatagramFaults::Fate fate = faults_.state();
+      if (fate.lost) {
         ++counters_.state_dropped;
       } else {
-        const TimeNs due = due_time(Channel::state, t);
+        const TimeNs due = faults_.due(DatagramFaults::Channel::state, t);
         const tello::Endpoint to{client_->ip, config_.client_state_port};
         outgoing_.push({due, out_seq_++, Channel::state, to, text});
-        if (twice) {
+        if (fate.twice) {
           ++counters_.state_duplicated;
           outgoing_.push({due, out_seq_++, Channel::state, to, text});
         }
@@ -292,7 +259,7 @@ void TelloEmulator::tick(TimeNs t, TimeNs now_ns) {
                            t < seconds_to_ns(*f.video_stall_start_s + f.video_stall_duration_s);
       std::lock_guard lock(mutex_);
       ++counters_.frames_captured;
-      const bool lost = frame_faults_.bernoulli(config_.faults.video_frame_loss);  // one draw per capture
+      const bool lost = faults_.frame_lost();
       if (stalled) {
         ++counters_.frames_stalled;
       } else if (lost) {
@@ -338,9 +305,8 @@ void TelloEmulator::deliver(TimeNs t, const IncomingCommand& c) {
     ++counters_.commands_delivered;
   }
   if (world_.tello().autopilot().sdk_mode() && refusable(text)) {
-    // Two draws per refusable command, always, so one setting never shifts the other's draws.
-    const bool joystick = error_faults_.bernoulli(config_.faults.not_joystick);
-    const bool imu = error_faults_.bernoulli(config_.faults.no_valid_imu);
+    const DatagramFaults::Refusal refusal = faults_.refusal();
+    const bool joystick = refusal.not_joystick, imu = refusal.no_valid_imu;
     if (joystick || imu) {
       {
         std::lock_guard lock(mutex_);
@@ -375,23 +341,19 @@ void TelloEmulator::deliver(TimeNs t, const IncomingCommand& c) {
 }
 
 void TelloEmulator::send_reply(TimeNs t, const std::string& text, const tello::Endpoint& to) {
-  const EmulatorFaults& f = config_.faults;
   std::lock_guard lock(mutex_);
-  // Three draws per reply, always.
-  const bool lost = reply_faults_.bernoulli(f.replies.loss);
-  const bool late = reply_faults_.bernoulli(f.late_replies);
-  const bool twice = reply_faults_.bernoulli(f.replies.duplicate);
-  if (lost) {
+  const DatagramFaults::Fate fate = faults_.reply();
+  if (fate.lost) {
     ++counters_.replies_dropped;
     return;
   }
-  TimeNs due = due_time(Channel::reply, t);
-  if (late) {
-    due += ms_to_ns(f.late_reply_ms);
+  TimeNs due = faults_.due(DatagramFaults::Channel::reply, t);
+  if (fate.late) {
+    due += faults_.late_reply_hold_ns();
     ++counters_.replies_late;
   }
   outgoing_.push({due, out_seq_++, Channel::reply, to, text});
-  if (twice) {
+  if (fate.twice) {
     ++counters_.replies_duplicated;
     outgoing_.push({due, out_seq_++, Channel::reply, to, text});
   }
@@ -486,9 +448,9 @@ void TelloEmulator::queue_frame_locked(const FrameJob& job, EncodedFrame frame, 
   ++counters_.frames_sent;
   if (frame.key) ++counters_.key_frames;
   // One delay per frame (its datagrams leave back to back).
-  const TimeNs due = due_time(Channel::video, job.t_ns);
+  const TimeNs due = faults_.due(DatagramFaults::Channel::video, job.t_ns);
   for (std::string& d : frame.datagrams) {
-    if (video_faults_.bernoulli(config_.faults.video.loss)) {
+    if (faults_.video_datagram_lost()) {
       ++counters_.video_datagrams_dropped;
     } else {
       outgoing_.push({due, out_seq_++, Channel::video, job.to, std::move(d)});

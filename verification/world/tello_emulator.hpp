@@ -73,38 +73,12 @@
 #include "shelfcross/random.hpp"
 #include "verification/scenario/dispersion.hpp"
 #include "verification/scenario/scenario.hpp"
+#include "verification/world/datagram_faults.hpp"
 #include "verification/world/metrics.hpp"
 #include "verification/world/tello_world.hpp"
 #include "verification/world/vehicle_truth.hpp"
 
 namespace shelfcross::verification {
-
-/// Loss, delay and duplication of one channel's datagrams.
-struct ChannelFaults {
-  double loss = 0.0;       ///< probability that a datagram is dropped, 0..1
-  double delay_ms = 0.0;   ///< added to every datagram of the channel, >= 0
-  /// Standard deviation of a normal jitter added to delay_ms (truncated at +-3 sigma, the
-  /// total never below 0). A channel keeps its order: a datagram never leaves before the one
-  /// queued before it on the same channel (one Wi-Fi hop does not reorder).
-  double jitter_ms = 0.0;
-  double duplicate = 0.0;  ///< probability that a datagram arrives twice (commands, replies, state)
-  bool operator==(const ChannelFaults&) const = default;
-};
-
-struct EmulatorFaults {
-  ChannelFaults commands, replies, state, video;
-  double video_frame_loss = 0.0;   ///< probability that a whole frame (all its datagrams) is lost
-  double late_replies = 0.0;       ///< probability that a reply is held back late_reply_ms more
-  double late_reply_ms = 7500.0;   ///< past a client's 7 s reply timeout
-  double not_joystick = 0.0;       ///< probability of "error Not joystick" for a manoeuvre (1: forced)
-  double no_valid_imu = 0.0;       ///< probability of "error No valid imu" for a manoeuvre (1: forced)
-  /// Fault injection: every command datagram whose text begins with this is lost (e.g.
-  /// "land"); empty: none. Applied after the random draws, so it shifts none of them.
-  std::string lost_command_prefix;
-  std::optional<double> video_stall_start_s;  ///< no frames in [start, start + duration)
-  double video_stall_duration_s = 0.0;
-  bool operator==(const EmulatorFaults&) const = default;
-};
 
 struct EmulatorConfig {
   std::string bind_ip = "127.0.0.1";
@@ -296,9 +270,6 @@ class TelloEmulator {
   static EncodedFrame encode_frame(VideoWorker& video, render::Renderer& renderer, const FrameJob& job);
   /// Queues a frame's datagrams (loss and delay drawn) and sends what is due by t_send (under the mutex).
   void queue_frame_locked(const FrameJob& job, EncodedFrame frame, TimeNs t_send);
-  /// The due time of a datagram of `channel` queued at t: delay + jitter, never before the
-  /// channel's previous one.
-  TimeNs due_time(Channel channel, TimeNs t);
   void start_video();
 
   RunSetup setup_;
@@ -308,10 +279,7 @@ class TelloEmulator {
   render::Renderer* inline_renderer_ = nullptr;  ///< co-simulation: render and encode inline
   TickObserver on_tick_;
   TelloWorld world_;  ///< the plant, the firmware, contacts, crossings, the camera's clocks
-  RandomStream command_faults_, reply_faults_, state_faults_, video_faults_, error_faults_, frame_faults_;
-  RandomStream command_jitter_, reply_jitter_, state_jitter_, video_jitter_;
-  TimeNs last_due_[3] = {0, 0, 0};  ///< per outgoing channel (reply, state, video)
-  TimeNs last_command_due_ = 0;
+  DatagramFaults faults_;  ///< every fault draw and each channel's delivery order
 
   // Main-loop state (the thread that calls advance()).
   std::priority_queue<IncomingCommand, std::vector<IncomingCommand>, std::greater<>> incoming_;

@@ -1,0 +1,85 @@
+#include "verification/world/datagram_faults.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace shelfcross::verification {
+namespace {
+
+TimeNs ms_to_ns(double ms) { return static_cast<TimeNs>(std::llround(ms * 1e6)); }
+
+/// mean + N(0, sigma) truncated at +-3 sigma, never below 0, in ns. No draw when sigma is 0,
+/// so a channel without jitter draws nothing from its jitter stream.
+TimeNs jittered_ms(RandomStream& stream, double mean_ms, double sigma_ms) {
+  double ms = mean_ms;
+  if (sigma_ms > 0.0) ms += sigma_ms * std::clamp(stream.normal(), -3.0, 3.0);
+  return ms_to_ns(std::max(0.0, ms));
+}
+
+}  // namespace
+
+// Each stream's seed is the run's seed mixed with a number of its own (1 to 10): streams apart,
+// and a run's draws fixed by its seed.
+DatagramFaults::DatagramFaults(const EmulatorFaults& faults, std::uint64_t seed)
+    : faults_(faults),
+      command_(mix64(seed ^ 1), StreamId::link_faults),
+      reply_(mix64(seed ^ 2), StreamId::link_faults),
+      state_(mix64(seed ^ 3), StreamId::link_faults),
+      video_(mix64(seed ^ 4), StreamId::link_faults),
+      error_(mix64(seed ^ 5), StreamId::link_faults),
+      frame_(mix64(seed ^ 6), StreamId::link_faults),
+      command_jitter_(mix64(seed ^ 7), StreamId::link_faults),
+      reply_jitter_(mix64(seed ^ 8), StreamId::link_faults),
+      state_jitter_(mix64(seed ^ 9), StreamId::link_faults),
+      video_jitter_(mix64(seed ^ 10), StreamId::link_faults) {}
+
+DatagramFaults::Fate DatagramFaults::command() {
+  Fate f;
+  f.lost = command_.bernoulli(faults_.commands.loss);
+  f.twice = command_.bernoulli(faults_.commands.duplicate);
+  return f;
+}
+
+DatagramFaults::Fate DatagramFaults::reply() {
+  Fate f;
+  f.lost = reply_.bernoulli(faults_.replies.loss);
+  f.late = reply_.bernoulli(faults_.late_replies);
+  f.twice = reply_.bernoulli(faults_.replies.duplicate);
+  return f;
+}
+
+DatagramFaults::Fate DatagramFaults::state() {
+  Fate f;
+  f.lost = state_.bernoulli(faults_.state.loss);
+  f.twice = state_.bernoulli(faults_.state.duplicate);
+  return f;
+}
+
+bool DatagramFaults::frame_lost() { return frame_.bernoulli(faults_.video_frame_loss); }
+
+bool DatagramFaults::video_datagram_lost() { return video_.bernoulli(faults_.video.loss); }
+
+DatagramFaults::Refusal DatagramFaults::refusal() {
+  Refusal r;
+  r.not_joystick = error_.bernoulli(faults_.not_joystick);
+  r.no_valid_imu = error_.bernoulli(faults_.no_valid_imu);
+  return r;
+}
+
+TimeNs DatagramFaults::late_reply_hold_ns() const { return ms_to_ns(faults_.late_reply_ms); }
+
+TimeNs DatagramFaults::due(Channel channel, TimeNs t) {
+  const ChannelFaults& c = channel == Channel::command ? faults_.commands
+                           : channel == Channel::reply ? faults_.replies
+                           : channel == Channel::state ? faults_.state
+                                                       : faults_.video;
+  RandomStream& jitter = channel == Channel::command ? command_jitter_
+                         : channel == Channel::reply ? reply_jitter_
+                         : channel == Channel::state ? state_jitter_
+                                                     : video_jitter_;
+  TimeNs& last = last_due_[static_cast<int>(channel)];
+  last = std::max(last, t + jittered_ms(jitter, c.delay_ms, c.jitter_ms));
+  return last;
+}
+
+}  // namespace shelfcross::verification
