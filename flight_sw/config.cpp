@@ -3,7 +3,7 @@
 #include <stdexcept>
 
 #include "config/strict_yaml.hpp"
-#include "flight_sw/perception.hpp"
+#include "shelfcross/aruco_dictionaries.hpp"
 
 namespace shelfcross::flight_sw {
 namespace {
@@ -50,7 +50,7 @@ void read_shelf(const Map& m, KnownShelf& s) {
   opt(m, "tag_size_m", s.tag_size_m, kPositive);
   opt(m, "tag_offset_m", s.tag_offset_m, kNonNegative);
   opt(m, "aruco_dictionary", s.aruco_dictionary);
-  if (!aruco_dictionary_id(s.aruco_dictionary)) {
+  if (!find_aruco_dictionary(s.aruco_dictionary)) {
     m.fail("aruco_dictionary", "unknown ArUco dictionary '" + s.aruco_dictionary +
                                    "' (an OpenCV predefined name such as DICT_4X4_50)");
   }
@@ -312,7 +312,7 @@ void validate_flight_config(const FlightConfig& c) {
   for (double p : s.row_pitch_m) require(p > s.beam_thickness_m, "row pitch <= beam");
   require(s.tag_size_m > 0.0 && s.marker_size_m > 0.0 && s.depth_m > 0.0,
           "tag, marker sizes and shelf depth must be positive");
-  require(aruco_dictionary_id(s.aruco_dictionary).has_value(),
+  require(find_aruco_dictionary(s.aruco_dictionary) != nullptr,
           "unknown ArUco dictionary '" + s.aruco_dictionary + "'");
   const CameraIntrinsics& k = c.camera;
   require(k.width_px >= 16 && k.height_px >= 16 && k.fx_px > 0.0 && k.fy_px > 0.0,

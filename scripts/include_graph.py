@@ -2,7 +2,7 @@
 """The include graph of the project's own code, checked: no include cycle between components,
 and no include of bench/ from the shipped programs (app/, flight_sw/).
 
-  python3 scripts/include_graph.py [--cycles-only]
+  python3 scripts/include_graph.py [--root DIR]
 
 A component is a header and its source of the same name in one folder (`verification/cosim/
 cosim.hpp` and `cosim.cpp` are the component `verification/cosim/cosim`); it includes another
@@ -25,28 +25,28 @@ INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
 SHIPPED = ("app/", "flight_sw/")
 
 
-def components():
-    """{component: [file, ...]} for every .hpp/.cpp outside test/ folders."""
+def components(root):
+    """{component: [file, ...]} for every .hpp/.cpp outside test/ folders, paths from root."""
     found = {}
     for top in SOURCE_FOLDERS:
-        for folder, dirs, files in os.walk(os.path.join(ROOT, top)):
+        for folder, dirs, files in os.walk(os.path.join(root, top)):
             dirs[:] = [d for d in dirs if d != "test"]
             for name in files:
                 stem, ext = os.path.splitext(name)
                 if ext not in (".hpp", ".cpp"):
                     continue
-                rel = os.path.relpath(os.path.join(folder, name), ROOT)
+                rel = os.path.relpath(os.path.join(folder, name), root)
                 found.setdefault(os.path.splitext(rel)[0], []).append(rel)
     return found
 
 
-def include_edges(comps):
+def include_edges(root, comps):
     """{component: set of components it includes}, and the forbidden includes found."""
     edges, forbidden = {}, []
     for comp, files in comps.items():
         out = set()
         for rel in files:
-            with open(os.path.join(ROOT, rel), encoding="utf-8") as f:
+            with open(os.path.join(root, rel), encoding="utf-8") as f:
                 for target in INCLUDE.findall(f.read()):
                     # The include root is the source root ("plant/dynamics.hpp"); include/ holds
                     # the shared contracts as "shelfcross/....hpp".
@@ -104,10 +104,12 @@ def cycles(edges):
     return result
 
 
-def main():
-    argparse.ArgumentParser(description=__doc__.split("\n\n")[0]).parse_args()
-    comps = components()
-    edges, forbidden = include_edges(comps)
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--root", default=ROOT, help="the source tree (default: this repository)")
+    args = parser.parse_args(argv)
+    comps = components(args.root)
+    edges, forbidden = include_edges(args.root, comps)
     found = cycles(edges)
     for scc in found:
         print("include cycle: " + " <-> ".join(scc))
