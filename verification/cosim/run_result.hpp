@@ -3,6 +3,7 @@
 // world, what the link did), its hash, trajectory and event lines. Written by the run
 // (cosim_run.hpp), stored as JSON (run_metrics_json.hpp), read by campaigns and reports.
 
+#include <cstdint>
 #include <functional>
 #include <optional>
 #include <set>
