@@ -823,17 +823,14 @@ void FlightSoftware::reread_shelf(const std::string& why, const std::optional<st
 // lands) and nothing is returned, else the refusal. `why_now` begins the crossing's event.
 std::optional<std::string> FlightSoftware::cross_if_clear(const std::string& why_now) {
   const ControlGains& g = config_.control;
-  const PoseEstimate& pose = *tracker_.decision_pose_K();
   CrossingGateInput gate;
-  gate.pose_age_s = ns_to_seconds(now_ns_ - tracker_.decision_pose_t_ns());
-  gate.still_for_s = ns_to_seconds(tracker_.decision_pose_t_ns() - lateral_active_ns_);
+  const PoseEstimate pose = crossing_gate_pose(gate);
   gate.identity = tracker_.identity();
   const std::optional<double> cell_centre_h_m = cell_height_.measured_m();
   if (cell_centre_h_m && state_fresh()) {
     gate.height_above_cell_m = state_->height_m - *cell_centre_h_m;
     gate.vz_mps = state_->vz_H_mps;
   }
-  gate.line_hold = line_hold_forecast(pose);
   const std::optional<std::string> refusal = crossing_refusal(config_, *tracker_.target(), pose, gate);
   if (refusal) return refusal;
   // Past the back face by beyond_distance_m, or less where a shelf stands behind
@@ -887,6 +884,7 @@ void FlightSoftware::approach(const Picture& pic) {
   telemetry_.tracker_ok = predicted.tracker_ok;
   const bool found = tracker_.measure(pic, predicted.box_px, tag_detector_, state_);
   if (found) after_measurement();
+  feed_line_hold(found, odometry);
   telemetry_.tracked_box_px = tracker_.box_px();
   const double dt = control_dt_s();
   if (found) {
@@ -900,14 +898,10 @@ void FlightSoftware::approach(const Picture& pic) {
     // Whole pictures only: a guessed band can put a tag beyond the grid's edge or hide one.
     if (tracker_.identity() != CellIdentity::Confirmed && pic.whole() && !check_identity(pic, pose)) return;
     // Decisions rest only on poses from deciding pictures whose corner tags are clear of the
-    // damage (TargetTracker::pose_decides); the others steer. The line-hold monitor takes
-    // every pose of a deciding picture: one from touched tags, accepted, agrees with the
-    // odometry within the jump limit, and can only widen the wander it measures (holding
-    // short longer), while poses from clean tags alone come too seldom over a lossy link for
-    // its quiet span (measured: held short until settle_hold_s gave up, then timed out).
+    // damage (TargetTracker::pose_decides); the others steer. The line-hold monitor measures
+    // on the former, carried by the odometry between them (feed_line_hold, line_hold.hpp).
     const bool decides = tracker_.pose_decides();
     // The laws of eq. 10-15 and Fig. 19 (guidance.hpp); the PI states and the timers here.
-    if (pic.decides) line_hold_.on_pose(now_ns_, pose.p_FB_m(), pose.yaw_rad, quiet_at(now_ns_));
     const ApproachErrors e = approach_errors(config_.camera, tracker_.box_centre_px(), pose);
     VelocityCommand v = approach_steering(e, dt);
     // Held short inside commit_range_m until settled; settling is given up after

@@ -284,6 +284,12 @@ class FlightSoftware {
   // The line-hold gate and the in-crossing watch (line_hold.hpp)
   bool quiet_at(TimeNs t_ns) const;
   LineHoldForecast line_hold_forecast(const PoseEstimate& pose_K);
+  /// The monitor's sample of this approach picture (LineHoldMonitor::on_picture); `found`: the
+  /// target was measured on it.
+  void feed_line_hold(bool found, const std::optional<OdometryFix>& odometry);
+  /// The pose the crossing gate judges, and its age, stillness and line-hold forecast in `gate`
+  /// (mission_line_hold.cpp).
+  PoseEstimate crossing_gate_pose(CrossingGateInput& gate);
   /// Inside commit_range_m: true while the forecast is not yet measured or leaves no room
   /// (hold short); declines the crossing after calm_wait_s of no room.
   bool too_rough_to_cross(const PoseEstimate& pose_K);

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "flight_sw/target_tracker.hpp"
+#include "shelfcross/rotation.hpp"
 
 namespace shelfcross::flight_sw {
 
@@ -22,15 +23,42 @@ double LineRoom::offset_z_m() const { return std::max(std::abs(front_K_m.z()), s
 void LineHoldMonitor::clear() {
   poses_.clear();
   across_mps_.clear();
+  anchor_.reset();
 }
 
 void LineHoldMonitor::on_pose(TimeNs t_ns, const Eigen::Vector3d& p_K_m, double yaw_K_rad, bool quiet) {
+  add(t_ns, p_K_m, yaw_K_rad, quiet, true);
+}
+
+void LineHoldMonitor::on_picture(TimeNs t_ns, const PoseEstimate* clean_K, const std::optional<OdometryFix>& fix,
+                                 bool quiet, double carry_s) {
+  if (clean_K) {
+    add(t_ns, clean_K->p_FB_m(), clean_K->yaw_rad, quiet, true);
+    // Only a quiet pose is carried: while a lateral command acts, the picture's latency
+    // (0.12-0.35 s) puts the pose behind the odometry fix by the sideways speed times it.
+    if (quiet && fix) anchor_ = Anchor{t_ns, *clean_K, *fix};
+    return;
+  }
+  if (!quiet) return clear();
+  if (!fix) return;
+  if (const auto c = carried(t_ns, *fix, carry_s)) add(t_ns, c->first.p_FB_m(), c->first.yaw_rad, true, false);
+}
+
+std::optional<std::pair<PoseEstimate, TimeNs>> LineHoldMonitor::carried(TimeNs t_ns, const OdometryFix& fix,
+                                                                        double carry_s) const {
+  if (!anchor_ || ns_to_seconds(t_ns - anchor_->t_ns) > carry_s) return std::nullopt;
+  const PoseEstimate moved = pose_after_motion(anchor_->pose_K, anchor_->fix.yaw_O_rad, fix.p_O_m - anchor_->fix.p_O_m,
+                                               wrap_pi(fix.yaw_O_rad - anchor_->fix.yaw_O_rad));
+  return std::make_pair(moved, anchor_->t_ns);
+}
+
+void LineHoldMonitor::add(TimeNs t_ns, const Eigen::Vector3d& p_K_m, double yaw_K_rad, bool quiet, bool measured) {
   yaw_K_rad_ = yaw_K_rad;
   if (!quiet) {  // the stretch ends: what came before it was moved on purpose
     clear();
     return;
   }
-  poses_.push_back({t_ns, p_K_m.x(), p_K_m.y(), p_K_m.z(), yaw_K_rad});
+  poses_.push_back({t_ns, p_K_m.x(), p_K_m.y(), p_K_m.z(), yaw_K_rad, measured});
   // Only a window is ever judged; what is older than kKeep_s can go.
   const TimeNs keep_from_ns = t_ns - seconds_to_ns(kKeep_s);
   while (poses_.front().t_ns < keep_from_ns) poses_.pop_front();
@@ -80,7 +108,10 @@ LineWander LineHoldMonitor::wander(TimeNs now_ns, double window_s) const {
   while (first != poses_.end() && first->t_ns < from_ns) ++first;
   if (first == poses_.end()) return w;
   double yaw_sum = 0.0;
-  for (auto it = first; it != poses_.end(); ++it) yaw_sum += it->yaw_rad;
+  for (auto it = first; it != poses_.end(); ++it) {
+    yaw_sum += it->yaw_rad;
+    if (it->measured) ++w.measured;
+  }
   w.poses = static_cast<int>(poses_.end() - first);
   const double yaw = yaw_sum / w.poses, c = std::cos(yaw), s = std::sin(yaw);
   std::vector<double> t, across, up;
@@ -102,7 +133,7 @@ LineWander LineHoldMonitor::wander(TimeNs now_ns, double window_s) const {
 
 LineHoldForecast forecast_line_hold(const MissionParams& m, const LineWander& w, double blind_s) {
   LineHoldForecast f;
-  f.measured = w.poses >= kLineHoldMinPoses && w.span_s >= m.line_hold_min_span_s;
+  f.measured = w.poses >= kLineHoldMinPoses && w.measured >= kLineHoldMinMeasured && w.span_s >= m.line_hold_min_span_s;
   if (!f.measured) return f;
   // Random-walk growth of the spread from the quiet stretch to the blind crossing (never below
   // the spread seen), and the carry of the speed seen (file comment).

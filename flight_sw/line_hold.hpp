@@ -8,11 +8,18 @@
 // crossing may add to the line's offset (docs/method.md section 7, "The line-hold gate"):
 //
 //   across     the target pose's position across the vehicle's heading (the mean yaw of the
-//              stretch), y' = y_K cos(yaw) - x_K sin(yaw), and its height z_K, over the poses
-//              of nearly whole pictures taken while no lateral command acted on the vehicle
-//              (the lateral law quiet for settle_s: more than the video latency plus the
-//              autopilot's velocity lag), within the last line_hold_window_s. Across the
-//              heading, the approach's own forward creep moves nothing;
+//              stretch), y' = y_K cos(yaw) - x_K sin(yaw), and its height z_K, over samples
+//              taken while no lateral command acted on the vehicle (the lateral law quiet for
+//              settle_s: more than the video latency plus the autopilot's velocity lag), within
+//              the last line_hold_window_s. A sample is a pose from corner tags clear of the
+//              damage (measured: TargetTracker::pose_decides), or, on every other picture of
+//              the approach, the last such pose carried to it by the state odometry
+//              (pose_after_motion), for at most coast_s after it. A pose from tags that a
+//              guessed band crosses is no sample: it is accepted anywhere within the jump
+//              limit (6 cm inside 1 m) plus the odometry's drift of the carried pose, and
+//              such poses widened the measured wander to 9-11 cm over a lossy link. What the odometry misses (a creep below the state's 0.05 m/s
+//              rounding) the next measured pose shows, as a step the fit's slope and spread
+//              take in. Across the heading, the approach's own forward creep moves nothing;
 //   drift      the least-squares slope of y' over time: a steady drift nobody commanded (one
 //              below the state record's 0.05 m/s rounding reads 0 there);
 //   wander     half the spread (max - min) / 2 of y' and z_K about their fitted lines;
@@ -29,8 +36,8 @@
 //
 // The gate (crossing_refusal) then requires the line's offset at either face plus the
 // forecast to leave crossing_margin_m inside the opening; a quiet stretch shorter than
-// line_hold_min_span_s, or with fewer than kLineHoldMinPoses poses, measures nothing, and the
-// crossing is refused ("line hold not measured").
+// line_hold_min_span_s, or with fewer than kLineHoldMinPoses samples or kLineHoldMinMeasured
+// measured poses, measures nothing, and the crossing is refused ("line hold not measured").
 //
 // During the crossing (crossing_watch) the state record alone tells where the vehicle is: the
 // odometry's offset from the line and its across-line speed, the height against the cell's.
@@ -51,8 +58,12 @@
 
 namespace shelfcross::flight_sw {
 
-/// Fewer quiet poses than this in the window measure no wander.
+/// Fewer quiet samples than this in the window measure no wander.
 constexpr int kLineHoldMinPoses = 5;
+/// Fewer measured poses than this among them measure no wander either: a line fitted through
+/// two leaves them no residual, so three are the fewest whose spread about it shows anything
+/// the camera saw (the carried samples between them show only what the odometry saw).
+constexpr int kLineHoldMinMeasured = 3;
 /// The crossing gate's refusals for the line's hold (their reasons begin so).
 constexpr const char* kLineHoldNotMeasured = "line hold not measured";
 constexpr const char* kLineCannotBeHeld = "line cannot be held";
@@ -61,7 +72,8 @@ constexpr const char* kCrossingDeclined = "crossing declined: ";
 
 /// What the quiet stretch before the crossing showed.
 struct LineWander {
-  int poses = 0;                ///< quiet poses in the window
+  int poses = 0;                ///< quiet samples in the window
+  int measured = 0;             ///< of them poses measured (the others carried by the odometry)
   double span_s = 0.0;          ///< from the first quiet pose to the last
   double half_spread_y_m = 0.0;  ///< (max - min) / 2 of y' (across the heading) about its fitted line
   double half_spread_z_m = 0.0;  ///< (max - min) / 2 of z_K about its fitted line
@@ -71,7 +83,7 @@ struct LineWander {
 
 /// The forecast of what the blind crossing adds to the line's offset, m (file comment).
 struct LineHoldForecast {
-  bool measured = false;  ///< enough quiet poses over line_hold_min_span_s
+  bool measured = false;  ///< enough quiet samples and measured poses over line_hold_min_span_s
   double y_m = 0.0;
   double z_m = 0.0;
 };
@@ -82,8 +94,16 @@ class LineHoldMonitor {
   void clear();
   /// The target pose of a nearly whole picture: body position p_K_m in the cell frame, taken at
   /// t_ns; `quiet`: no lateral command acted since settle_s before it. A loud pose ends the
-  /// quiet stretch (forgets the poses before it).
+  /// quiet stretch (forgets the poses before it). A measured sample.
   void on_pose(TimeNs t_ns, const Eigen::Vector3d& p_K_m, double yaw_K_rad, bool quiet);
+  /// An approach picture at t_ns with the odometry fix then (none: the state is stale). A pose
+  /// from clean corner tags (`clean_K`) is measured and, taken quiet with a fix, becomes the
+  /// anchor; any other picture's sample is the anchor carried to the fix, for at most carry_s
+  /// after it (file comment). A loud picture forgets the anchor too.
+  void on_picture(TimeNs t_ns, const PoseEstimate* clean_K, const std::optional<OdometryFix>& fix, bool quiet,
+                  double carry_s);
+  /// The anchor carried to `fix` at t_ns, at most carry_s after it, and the anchor's time.
+  std::optional<std::pair<PoseEstimate, TimeNs>> carried(TimeNs t_ns, const OdometryFix& fix, double carry_s) const;
   /// A state record; `quiet` as for poses. Its heading-frame velocity is turned into the cell
   /// frame by the last pose's yaw; only quiet records after the first quiet pose count.
   void on_state(const StateRecord& s, bool quiet);
@@ -94,8 +114,16 @@ class LineHoldMonitor {
   struct Sample {
     TimeNs t_ns;
     double x_m, y_m, z_m, yaw_rad;
+    bool measured;
   };
+  struct Anchor {
+    TimeNs t_ns;
+    PoseEstimate pose_K;
+    OdometryFix fix;
+  };
+  void add(TimeNs t_ns, const Eigen::Vector3d& p_K_m, double yaw_K_rad, bool quiet, bool measured);
   std::deque<Sample> poses_;
+  std::optional<Anchor> anchor_;  ///< the last quiet pose from clean corner tags
   std::deque<std::pair<TimeNs, double>> across_mps_;  ///< quiet state records' across-line speed
   double yaw_K_rad_ = 0.0;
 };

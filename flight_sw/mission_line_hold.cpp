@@ -26,6 +26,40 @@ LineHoldForecast FlightSoftware::line_hold_forecast(const PoseEstimate& pose_K) 
   return telemetry_.line_hold;
 }
 
+void FlightSoftware::feed_line_hold(bool found, const std::optional<OdometryFix>& odometry) {
+  const PoseEstimate* clean = found && tracker_.pose_decides() ? &*tracker_.pose_K() : nullptr;
+  line_hold_.on_picture(now_ns_, clean, odometry, quiet_at(now_ns_), config_.mission.coast_s);
+}
+
+// The crossing is judged on the last pose from a nearly whole picture with clean corner tags
+// (TargetTracker::decision_pose_K). Over a lossy link the picture on which the tags leave the
+// view often comes more than pose_fresh_s after the last such pose; then that pose, if it is
+// the line-hold monitor's anchor (taken quiet, no lateral command since, at most coast_s old),
+// is judged carried to now by the state odometry. The odometry may have missed up to
+// kOdometryDrift_mps (half the state's 0.1 m/s step) of sideways motion per second since: the
+// forecast across grows by that much, so the gate leaves the margin around the worst place the
+// vehicle may be (at 0.4 s old, 2 cm of the 8.4 cm a 34 cm column leaves). The height is the
+// state height's either way (crossing_refusal).
+PoseEstimate FlightSoftware::crossing_gate_pose(CrossingGateInput& gate) {
+  const TimeNs pose_t_ns = tracker_.decision_pose_t_ns();
+  PoseEstimate pose = *tracker_.decision_pose_K();
+  gate.pose_age_s = ns_to_seconds(now_ns_ - pose_t_ns);
+  gate.still_for_s = ns_to_seconds(pose_t_ns - lateral_active_ns_);
+  double carried_s = 0.0;
+  if (gate.pose_age_s > config_.mission.pose_fresh_s && state_fresh()) {
+    const auto c = line_hold_.carried(now_ns_, OdometryFix{odometry_.p_O_m(), state_->yaw_rad}, config_.mission.coast_s);
+    if (c && c->second == pose_t_ns) {
+      pose = c->first;
+      carried_s = gate.pose_age_s;
+      gate.pose_age_s = 0.0;  // where the odometry puts the vehicle now
+    }
+  }
+  gate.line_hold = line_hold_forecast(pose);
+  gate.line_hold.y_m += kOdometryDrift_mps * carried_s;
+  telemetry_.line_hold = gate.line_hold;
+  return pose;
+}
+
 bool FlightSoftware::too_rough_to_cross(const PoseEstimate& pose_K) {
   const MissionParams& m = config_.mission;
   if (-pose_K.p_FB_m().x() > config_.control.commit_range_m || tracker_.identity() != CellIdentity::Confirmed) {

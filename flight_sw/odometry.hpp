@@ -27,6 +27,13 @@ constexpr double kVerticallyStill_mps = 0.05;
 /// constant is unidentified, docs/tello_sdk.md: 0.3 to 0.7 s).
 constexpr double kVelocityLag_s = 0.5;
 
+/// Where the vehicle is by its own state records: StateOdometry's position in the odometry
+/// frame O and the record's yaw (CCW, rad).
+struct OdometryFix {
+  Eigen::Vector3d p_O_m = Eigen::Vector3d::Zero();
+  double yaw_O_rad = 0.0;
+};
+
 /// p_O integrated from the state records' heading-frame velocities.
 class StateOdometry {
  public:

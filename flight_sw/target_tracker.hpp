@@ -144,13 +144,6 @@ std::optional<double> row_height_m(const FlightConfig& config, const std::option
 /// and a video latency newer than the picture), rad: its height is the level check's.
 constexpr double kLevelPitchAgreement_rad = 3.0 * std::numbers::pi / 180.0;
 
-/// Where the vehicle is by its own state records: StateOdometry's position in the odometry
-/// frame O and the record's yaw (CCW, rad).
-struct OdometryFix {
-  Eigen::Vector3d p_O_m = Eigen::Vector3d::Zero();
-  double yaw_O_rad = 0.0;
-};
-
 /// The pose `pose_K` (taken when the state yaw was `yaw_O_at_pose_rad`) carried by the
 /// vehicle's own motion since: moved by `dp_O_m` and turned by `dyaw_rad` in the odometry frame,
 /// its attitude otherwise unchanged. K's heading in O is yaw_O - pose yaw, so
