@@ -5,7 +5,6 @@
 #include <cstdio>
 #include <vector>
 
-#include "flight_sw/target_tracker.hpp"
 #include "shelfcross/rotation.hpp"
 
 namespace shelfcross::flight_sw {

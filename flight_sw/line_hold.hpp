@@ -48,6 +48,7 @@
 #include <deque>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include <Eigen/Core>
 

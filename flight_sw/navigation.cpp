@@ -107,4 +107,23 @@ Eigen::Vector3d optimal_viewpoint_G(const KnownShelf& s, const CameraIntrinsics&
   return p_GC - mount.p_BC_B_m;
 }
 
+PoseEstimate pose_after_motion(const PoseEstimate& pose_K, double yaw_O_at_pose_rad, const Eigen::Vector3d& dp_O_m,
+                               double dyaw_rad) {
+  const double yaw_K_in_O = yaw_O_at_pose_rad - pose_K.yaw_rad;
+  Eigen::Vector3d dp_K = dp_O_m;
+  dp_K.head<2>() = Eigen::Rotation2Dd(-yaw_K_in_O) * dp_O_m.head<2>();
+  PoseEstimate moved = pose_K;
+  moved.X_FB.linear() = Eigen::AngleAxisd(dyaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix() * pose_K.X_FB.linear();
+  moved.X_FB.translation() += dp_K;
+  moved.X_FC = moved.X_FB * (pose_K.X_FB.inverse() * pose_K.X_FC);
+  moved.yaw_rad = wrap_pi(pose_K.yaw_rad + dyaw_rad);
+  return moved;
+}
+
+
+Eigen::Vector3d crossing_direction_K(const KnownShelf& shelf, const PoseEstimate& pose) {
+  const Eigen::Vector3d aim(0.5 * shelf.depth_m, 0.0, 0.0);
+  return (aim - pose.p_FB_m()).normalized();
+}
+
 }  // namespace shelfcross::flight_sw

@@ -69,4 +69,17 @@ Eigen::Vector2d cell_opening_m(const KnownShelf& shelf, CellIndex cell);
 Eigen::Vector3d optimal_viewpoint_G(const KnownShelf& shelf, const CameraIntrinsics& camera,
                                     const CameraMount& mount, double margin);
 
+/// The pose `pose_K` (taken when the state yaw was `yaw_O_at_pose_rad`) carried by the
+/// vehicle's own motion since: moved by `dp_O_m` and turned by `dyaw_rad` in the odometry frame,
+/// its attitude otherwise unchanged. K's heading in O is yaw_O - pose yaw, so
+/// dp_K = R_z(-(yaw_O - yaw_K)) dp_O; X_KB' = (R_z(dyaw) R_KB, p_KB + dp_K); the camera rides
+/// on the body (X_KC' = X_KB' X_KB^-1 X_KC); the yaw grows by dyaw.
+PoseEstimate pose_after_motion(const PoseEstimate& pose_K, double yaw_O_at_pose_rad, const Eigen::Vector3d& dp_O_m,
+                               double dyaw_rad);
+
+/// The crossing line (open loop, docs/method.md section 3): the unit direction in K from the pose's
+/// body position through the cell's centre at mid-depth, so that a residual offset y0 at range r
+/// leaves only y0 (depth/2) / (r + depth/2) at either face.
+Eigen::Vector3d crossing_direction_K(const KnownShelf& shelf, const PoseEstimate& pose_K);
+
 }  // namespace shelfcross::flight_sw

@@ -222,12 +222,6 @@ IdentityCheck check_cell_identity(CellIndex target, const PoseEstimate& pose_K, 
   return out;
 }
 
-Eigen::Vector3d crossing_direction_K(const KnownShelf& shelf, const PoseEstimate& pose) {
-  const Eigen::Vector3d aim(0.5 * shelf.depth_m, 0.0, 0.0);
-  return (aim - pose.p_FB_m()).normalized();
-}
-
-
 std::optional<std::string> crossing_refusal(const FlightConfig& config, CellIndex target, const PoseEstimate& pose,
                                             const CrossingGateInput& input) {
   const MissionParams& m = config.mission;
@@ -340,19 +334,6 @@ void TargetTracker::start_tracker(const cv::Mat& bgr, const cv::Rect2d& box, Tim
     tracker_ = cv::legacy::TrackerMedianFlow::create();
     tracker_->init(bgr, box);
   }
-}
-
-PoseEstimate pose_after_motion(const PoseEstimate& pose_K, double yaw_O_at_pose_rad, const Eigen::Vector3d& dp_O_m,
-                               double dyaw_rad) {
-  const double yaw_K_in_O = yaw_O_at_pose_rad - pose_K.yaw_rad;
-  Eigen::Vector3d dp_K = dp_O_m;
-  dp_K.head<2>() = Eigen::Rotation2Dd(-yaw_K_in_O) * dp_O_m.head<2>();
-  PoseEstimate moved = pose_K;
-  moved.X_FB.linear() = Eigen::AngleAxisd(dyaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix() * pose_K.X_FB.linear();
-  moved.X_FB.translation() += dp_K;
-  moved.X_FC = moved.X_FB * (pose_K.X_FB.inverse() * pose_K.X_FC);
-  moved.yaw_rad = wrap_pi(pose_K.yaw_rad + dyaw_rad);
-  return moved;
 }
 
 std::optional<std::array<cv::Point2d, 4>> corners_seen_from(const FlightConfig& config, CellIndex cell,

@@ -122,11 +122,6 @@ struct CrossingGateInput {
 std::optional<std::string> crossing_refusal(const FlightConfig& config, CellIndex target,
                                             const PoseEstimate& pose_K, const CrossingGateInput& input);
 
-/// The crossing line (open loop, docs/method.md section 3): the unit direction in K from the pose's
-/// body position through the cell's centre at mid-depth, so that a residual offset y0 at range r
-/// leaves only y0 (depth/2) / (r + depth/2) at either face.
-Eigen::Vector3d crossing_direction_K(const KnownShelf& shelf, const PoseEstimate& pose_K);
-
 /// Height above the take-off point of a cell's centre (the origin of K), from a pose that puts
 /// the body z_K_m above it: the state's height h less z_K (K and G are parallel, so a grid pose's
 /// height above the cell centre serves as well). Empty without a state record.
@@ -143,14 +138,6 @@ std::optional<double> row_height_m(const FlightConfig& config, const std::option
 /// The pose's pitch agrees with the state record's within this (whole degrees in the record,
 /// and a video latency newer than the picture), rad: its height is the level check's.
 constexpr double kLevelPitchAgreement_rad = 3.0 * std::numbers::pi / 180.0;
-
-/// The pose `pose_K` (taken when the state yaw was `yaw_O_at_pose_rad`) carried by the
-/// vehicle's own motion since: moved by `dp_O_m` and turned by `dyaw_rad` in the odometry frame,
-/// its attitude otherwise unchanged. K's heading in O is yaw_O - pose yaw, so
-/// dp_K = R_z(-(yaw_O - yaw_K)) dp_O; X_KB' = (R_z(dyaw) R_KB, p_KB + dp_K); the camera rides
-/// on the body (X_KC' = X_KB' X_KB^-1 X_KC); the yaw grows by dyaw.
-PoseEstimate pose_after_motion(const PoseEstimate& pose_K, double yaw_O_at_pose_rad, const Eigen::Vector3d& dp_O_m,
-                               double dyaw_rad);
 
 /// The target cell's four corner tags (cell_corner_tags_K order) as seen from the camera of
 /// `pose_K` (projected with the intrinsics and the distortion). Empty when a tag would lie
