@@ -887,85 +887,99 @@ void FlightSoftware::approach(const Picture& pic) {
   feed_line_hold(found, odometry);
   telemetry_.tracked_box_px = tracker_.box_px();
   const double dt = control_dt_s();
-  if (found) {
-    lost_since_ns_.reset();
-    back_off_since_ns_.reset();
-    tracker_.correct(pic, predicted);
-    const PoseEstimate& pose = *tracker_.pose_K();
-    telemetry_.pose = pose;
-    telemetry_.pose_in_cell_frame = true;
-    // Unidentified (continuity lost): judge this picture; a contradiction ends the approach.
-    // Whole pictures only: a guessed band can put a tag beyond the grid's edge or hide one.
-    if (tracker_.identity() != CellIdentity::Confirmed && pic.whole() && !check_identity(pic, pose)) return;
-    // Decisions rest only on poses from deciding pictures whose corner tags are clear of the
-    // damage (TargetTracker::pose_decides); the others steer. The line-hold monitor measures
-    // on the former, carried by the odometry between them (feed_line_hold, line_hold.hpp).
-    const bool decides = tracker_.pose_decides();
-    // The laws of eq. 10-15 and Fig. 19 (guidance.hpp); the PI states and the timers here.
-    const ApproachErrors e = approach_errors(config_.camera, tracker_.box_centre_px(), pose);
-    VelocityCommand v = approach_steering(e, dt);
-    // Held short inside commit_range_m until settled; settling is given up after
-    // settle_hold_s (the crossing gate then decides).
-    // Also held short while the air leaves the line no room (too_rough_to_cross: declined
-    // after calm_wait_s).
-    const ApproachHold h = approach_hold(config_, e, ns_to_seconds(now_ns_ - lateral_active_ns_), -pose.p_FB_m().x());
-    const bool rough = too_rough_to_cross(pose);
-    if (retreat_until_ns_) return;  // declined just now
-    const bool settling = h.settling || rough;
-    if (!settling) hold_since_ns_.reset();
-    if (settling && !hold_since_ns_) hold_since_ns_ = now_ns_;
-    const bool settle_given_up =
-        hold_since_ns_ && ns_to_seconds(now_ns_ - *hold_since_ns_) > config_.mission.settle_hold_s;
-    const bool hold = !h.in_cone || (settling && !settle_given_up);
-    v.vx_B_mps = approach_forward_mps(g, hold, tracker_.identity() == CellIdentity::Confirmed, -pose.p_FB_m().x(),
-                                      -viewpoint_G_m_.x());  // eq. 10
-    // About to lose the tags: the crossing will be judged on the last nearly whole picture,
-    // so only such pictures move the vehicle now (it hovers on damaged ones), and the last
-    // one before the tags leave is at most a frame old.
-    if (tracker_.near_edge() && !decides) v = {};
-    // Near the border on a nearly whole picture: its pose is the freshest the approach will
-    // get, and the crossing is judged on it now rather than when the tags have left the view
-    // on a later nearly whole picture, which over a lossy link may come a second after the
-    // last one, its pose then too old to cross on (pose_fresh_s). A refusal here only lets
-    // the approach go on.
-    if (tracker_.near_edge() && decides && -pose.p_FB_m().x() <= config_.mission.cross_range_max_m &&
-        !cross_if_clear("corner tags leaving the view")) {
-      return;
-    }
-    set_velocity(v);
-    if (decides) {
-      estimate_forward_gain(pose);
-      sample_cell_height(pose);
-    }
-    telemetry_.e_z_m = e.e_z_m;
-    telemetry_.e_psi_rad = e.e_psi_rad;
-    telemetry_.psi_cell_rad = e.psi_cell_rad;
-    telemetry_.yaw_cell_rad = pose.yaw_rad;
-    telemetry_.lateral_mps = v.vy_B_mps;
-    telemetry_.settled = h.settled;
-    telemetry_.holding_short = hold;
+  if (found) return approach_found(pic, predicted, dt);
+  if (tracker_.hidden_by_damage() && !back_off_since_ns_) return approach_unseen(dt);
+  approach_without_target(pic);
+}
+
+// Eq. 10's forward speed toward the viewpoint from `range_m` out (none while held short).
+double FlightSoftware::approach_forward_speed_mps(bool hold, double range_m) const {
+  return approach_forward_mps(config_.control, hold, tracker_.identity() == CellIdentity::Confirmed, range_m,
+                              -viewpoint_G_m_.x());
+}
+
+// The corner tags measured on this picture: steer on their pose, hold short until settled and
+// calm, and judge the crossing on the last nearly whole picture before the tags leave.
+void FlightSoftware::approach_found(const Picture& pic, const TargetTracker::Prediction& predicted, double dt) {
+  lost_since_ns_.reset();
+  back_off_since_ns_.reset();
+  tracker_.correct(pic, predicted);
+  const PoseEstimate& pose = *tracker_.pose_K();
+  telemetry_.pose = pose;
+  telemetry_.pose_in_cell_frame = true;
+  // Unidentified (continuity lost): judge this picture; a contradiction ends the approach.
+  // Whole pictures only: a guessed band can put a tag beyond the grid's edge or hide one.
+  if (tracker_.identity() != CellIdentity::Confirmed && pic.whole() && !check_identity(pic, pose)) return;
+  // Decisions rest only on poses from deciding pictures whose corner tags are clear of the
+  // damage (TargetTracker::pose_decides); the others steer. The line-hold monitor measures
+  // on the former, carried by the odometry between them (feed_line_hold, line_hold.hpp).
+  const bool decides = tracker_.pose_decides();
+  // The laws of eq. 10-15 and Fig. 19 (guidance.hpp); the PI states and the timers here.
+  const ApproachErrors e = approach_errors(config_.camera, tracker_.box_centre_px(), pose);
+  VelocityCommand v = approach_steering(e, dt);
+  // Held short inside commit_range_m until settled; settling is given up after
+  // settle_hold_s (the crossing gate then decides).
+  // Also held short while the air leaves the line no room (too_rough_to_cross: declined
+  // after calm_wait_s).
+  const ApproachHold h = approach_hold(config_, e, ns_to_seconds(now_ns_ - lateral_active_ns_), -pose.p_FB_m().x());
+  const bool rough = too_rough_to_cross(pose);
+  if (retreat_until_ns_) return;  // declined just now
+  const bool settling = h.settling || rough;
+  if (!settling) hold_since_ns_.reset();
+  if (settling && !hold_since_ns_) hold_since_ns_ = now_ns_;
+  const bool settle_given_up =
+      hold_since_ns_ && ns_to_seconds(now_ns_ - *hold_since_ns_) > config_.mission.settle_hold_s;
+  const bool hold = !h.in_cone || (settling && !settle_given_up);
+  v.vx_B_mps = approach_forward_speed_mps(hold, -pose.p_FB_m().x());  // eq. 10
+  // About to lose the tags: the crossing will be judged on the last nearly whole picture,
+  // so only such pictures move the vehicle now (it hovers on damaged ones), and the last
+  // one before the tags leave is at most a frame old.
+  if (tracker_.near_edge() && !decides) v = {};
+  // Near the border on a nearly whole picture: its pose is the freshest the approach will
+  // get, and the crossing is judged on it now rather than when the tags have left the view
+  // on a later nearly whole picture, which over a lossy link may come a second after the
+  // last one, its pose then too old to cross on (pose_fresh_s). A refusal here only lets
+  // the approach go on.
+  if (tracker_.near_edge() && decides && -pose.p_FB_m().x() <= config_.mission.cross_range_max_m &&
+      !cross_if_clear("corner tags leaving the view")) {
     return;
   }
-  if (tracker_.hidden_by_damage() && !back_off_since_ns_) {
-    // The guessed rows hide the corner tags (or show them where they no longer are): the
-    // target is not lost, only unseen until a picture shows it clear of the damage, which
-    // the next key frame brings; the approach's own time limit bounds the wait. Farther out
-    // than commit_range_m, for at most coast_s after the last pose, the loops steer on that
-    // pose carried by the state odometry (its drift, 5 cm/s, is far inside what the
-    // approach corrects later); closer, where the crossing's last centimetres are judged,
-    // the vehicle holds.
-    const std::optional<TargetTracker::Carried> carried = tracker_.carried_target(now_ns_);
-    if (!carried || -carried->pose_K.p_FB_m().x() <= g.commit_range_m) return hold_or_hover();
-    const PoseEstimate& pose = carried->pose_K;
-    const cv::Rect2d& b = carried->box_px;
-    const ApproachErrors e = approach_errors(config_.camera, {b.x + 0.5 * b.width, b.y + 0.5 * b.height}, pose);
-    VelocityCommand v = approach_steering(e, dt);
-    const ApproachHold h = approach_hold(config_, e, ns_to_seconds(now_ns_ - lateral_active_ns_), -pose.p_FB_m().x());
-    v.vx_B_mps = approach_forward_mps(g, !h.in_cone, tracker_.identity() == CellIdentity::Confirmed,
-                                      -pose.p_FB_m().x(), -viewpoint_G_m_.x());  // eq. 10
-    set_velocity(v);
-    return;
+  set_velocity(v);
+  if (decides) {
+    estimate_forward_gain(pose);
+    sample_cell_height(pose);
   }
+  telemetry_.e_z_m = e.e_z_m;
+  telemetry_.e_psi_rad = e.e_psi_rad;
+  telemetry_.psi_cell_rad = e.psi_cell_rad;
+  telemetry_.yaw_cell_rad = pose.yaw_rad;
+  telemetry_.lateral_mps = v.vy_B_mps;
+  telemetry_.settled = h.settled;
+  telemetry_.holding_short = hold;
+}
+
+// A picture whose guessed rows hide the corner tags (or show them where they no longer are):
+// the target is not lost, only unseen until a picture shows it clear of the damage, which the
+// next key frame brings; the approach's own time limit bounds the wait. Farther out than
+// commit_range_m, for at most coast_s after the last pose, the loops steer on that pose
+// carried by the state odometry (its drift, 5 cm/s, is far inside what the approach corrects
+// later); closer, where the crossing's last centimetres are judged, the vehicle holds.
+void FlightSoftware::approach_unseen(double dt) {
+  const std::optional<TargetTracker::Carried> carried = tracker_.carried_target(now_ns_);
+  if (!carried || -carried->pose_K.p_FB_m().x() <= config_.control.commit_range_m) return hold_or_hover();
+  const PoseEstimate& pose = carried->pose_K;
+  const cv::Rect2d& b = carried->box_px;
+  const ApproachErrors e = approach_errors(config_.camera, {b.x + 0.5 * b.width, b.y + 0.5 * b.height}, pose);
+  VelocityCommand v = approach_steering(e, dt);
+  const ApproachHold h = approach_hold(config_, e, ns_to_seconds(now_ns_ - lateral_active_ns_), -pose.p_FB_m().x());
+  v.vx_B_mps = approach_forward_speed_mps(!h.in_cone, -pose.p_FB_m().x());  // eq. 10
+  set_velocity(v);
+}
+
+// The corner tags neither measured nor hidden: cross if they just left the view close and
+// centred, back off while not centred, else hover and look for the target again.
+void FlightSoftware::approach_without_target(const Picture& pic) {
+  const ControlGains& g = config_.control;
   if (!pic.decides && !back_off_since_ns_) {
     // Not found in a damaged picture: the tags may sit in a guessed band. Nothing is decided
     // (no crossing, no re-acquisition) until a nearly whole picture shows where they are.

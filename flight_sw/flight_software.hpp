@@ -259,12 +259,16 @@ class FlightSoftware {
   void go_to_viewpoint(const Picture& pic, bool view_fresh);
   void take_inventory(const Picture& pic);
   void approach(const Picture& pic);
+  void approach_found(const Picture& pic, const TargetTracker::Prediction& predicted, double dt);
+  void approach_unseen(double dt);
+  void approach_without_target(const Picture& pic);
   std::vector<CellIndex> cells_clear_of_damage(const Picture& pic) const;
   std::optional<std::string> cross_if_clear(const std::string& why_now);
   // Approach helpers
   bool select_target(const cv::Mat& bgr);
   bool reacquire(const Picture& pic);
   VelocityCommand approach_steering(const ApproachErrors& e, double dt);
+  double approach_forward_speed_mps(bool hold, double range_m) const;
   void after_measurement();
   void sample_cell_height(const PoseEstimate& pose);
   bool state_fresh() const;

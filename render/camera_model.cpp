@@ -29,9 +29,13 @@ bool undistort_normalized(const CameraIntrinsics& K, const Eigen::Vector2d& xy_d
   return (distort_normalized(K, p) - xy_d).norm() < 1e-9;
 }
 
-Eigen::Vector2d project_camera_point(const CameraIntrinsics& K, const Eigen::Vector3d& p_C) {
-  const Eigen::Vector2d d = distort_normalized(K, {p_C.x() / p_C.z(), p_C.y() / p_C.z()});
+Eigen::Vector2d pixel_of_normalized(const CameraIntrinsics& K, const Eigen::Vector2d& xy) {
+  const Eigen::Vector2d d = distort_normalized(K, xy);
   return {K.fx_px * d.x() + K.cx_px, K.fy_px * d.y() + K.cy_px};
+}
+
+Eigen::Vector2d project_camera_point(const CameraIntrinsics& K, const Eigen::Vector3d& p_C) {
+  return pixel_of_normalized(K, {p_C.x() / p_C.z(), p_C.y() / p_C.z()});
 }
 
 Eigen::Matrix4d gl_clip_from_camera(double fx, double fy, double cx, double cy, int width,

@@ -23,7 +23,10 @@ Eigen::Vector2d distort_normalized(const CameraIntrinsics& K, const Eigen::Vecto
 bool undistort_normalized(const CameraIntrinsics& K, const Eigen::Vector2d& xy_d,
                           Eigen::Vector2d& xy);
 
-/// Pixel of a camera-frame point (Z must be > 0): distortion then K.
+/// Pixel of normalised coordinates (x, y) = (X/Z, Y/Z): distortion then K.
+Eigen::Vector2d pixel_of_normalized(const CameraIntrinsics& K, const Eigen::Vector2d& xy);
+
+/// Pixel of a camera-frame point (Z must be > 0): pixel_of_normalized(X/Z, Y/Z).
 Eigen::Vector2d project_camera_point(const CameraIntrinsics& K, const Eigen::Vector3d& p_C);
 
 /// The OpenGL clip-from-camera matrix (column-major, for glUniformMatrix4fv) of a pinhole

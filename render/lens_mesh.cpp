@@ -15,11 +15,6 @@ namespace {
 using Vec2 = Eigen::Vector2d;
 using Vec3 = Eigen::Vector3d;
 
-Vec2 pixel_1x(const CameraIntrinsics& K, const Vec2& xy) {
-  const Vec2 d = distort_normalized(K, xy);
-  return {K.fx_px * d.x() + K.cx_px, K.fy_px * d.y() + K.cy_px};
-}
-
 // The point where segment a-b crosses coordinate[axis] = value, computed from the end points
 // in a canonical order (so that a segment shared by two polygons, traversed in opposite
 // directions, gives bit-identical points) and with that coordinate set exactly.
@@ -227,11 +222,11 @@ LensGrids make_lens_grids(const CameraIntrinsics& K, double tolerance_px, double
   for (int j = 0; j < ny; ++j) {
     for (int i = 0; i < nx; ++i) {
       const Vec2 p(ox + i * step, oy + j * step);
-      const Vec2 c = pixel_1x(K, p);
-      const Vec2 xp = pixel_1x(K, p + Vec2(h, 0)), xm = pixel_1x(K, p - Vec2(h, 0));
-      const Vec2 yp = pixel_1x(K, p + Vec2(0, h)), ym = pixel_1x(K, p - Vec2(0, h));
-      const Vec2 pp = pixel_1x(K, p + Vec2(h, h)), pm = pixel_1x(K, p + Vec2(h, -h));
-      const Vec2 mp = pixel_1x(K, p + Vec2(-h, h)), mm = pixel_1x(K, p + Vec2(-h, -h));
+      const Vec2 c = pixel_of_normalized(K, p);
+      const Vec2 xp = pixel_of_normalized(K, p + Vec2(h, 0)), xm = pixel_of_normalized(K, p - Vec2(h, 0));
+      const Vec2 yp = pixel_of_normalized(K, p + Vec2(0, h)), ym = pixel_of_normalized(K, p - Vec2(0, h));
+      const Vec2 pp = pixel_of_normalized(K, p + Vec2(h, h)), pm = pixel_of_normalized(K, p + Vec2(h, -h));
+      const Vec2 mp = pixel_of_normalized(K, p + Vec2(-h, h)), mm = pixel_of_normalized(K, p + Vec2(-h, -h));
       const Vec2 dxx = (xp - 2.0 * c + xm) / (h * h), dyy = (yp - 2.0 * c + ym) / (h * h);
       const Vec2 dxy = (pp - pm - mp + mm) / (4.0 * h * h);
       const Vec2 jx = (xp - xm) / (2.0 * h), jy = (yp - ym) / (2.0 * h);
@@ -344,7 +339,7 @@ LensMesher::LensMesher(const CameraIntrinsics& K, int supersample, double near_m
 }
 
 Eigen::Vector2d LensMesher::pixel_of(const Vec2& xy) const {
-  return s_ * pixel_1x(K_, xy) + Vec2::Constant(0.5 * (s_ - 1));
+  return s_ * pixel_of_normalized(K_, xy) + Vec2::Constant(0.5 * (s_ - 1));
 }
 
 void LensMesher::set_faces(FaceGroup group, std::vector<MeshFace> faces) {

@@ -21,22 +21,17 @@ namespace {
 
 using Vec2 = Eigen::Vector2d;
 
-Vec2 pixel(const CameraIntrinsics& K, const Vec2& xy) {
-  const Vec2 d = distort_normalized(K, xy);
-  return {K.fx_px * d.x() + K.cx_px, K.fy_px * d.y() + K.cy_px};
-}
-
 double signed_area(const Vec2& a, const Vec2& b, const Vec2& c) {
   return 0.5 * ((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x());
 }
 
 // The largest distance across the chord of the lens image of a-b, from 257 points.
 double across_px(const CameraIntrinsics& K, const Vec2& a, const Vec2& b) {
-  const Vec2 pa = pixel(K, a), pb = pixel(K, b), chord = pb - pa;
+  const Vec2 pa = pixel_of_normalized(K, a), pb = pixel_of_normalized(K, b), chord = pb - pa;
   const double len = chord.norm();
   double worst = 0.0;
   for (int k = 1; k < 256 && len > 0; ++k) {
-    const Vec2 c = pixel(K, a + k / 256.0 * (b - a)) - pa;
+    const Vec2 c = pixel_of_normalized(K, a + k / 256.0 * (b - a)) - pa;
     worst = std::max(worst, std::abs(chord.x() * c.y() - chord.y() * c.x()) / len);
   }
   return worst;
@@ -73,7 +68,7 @@ TEST(LensMeshOutline, ChordsWithinAQuarterPixelAndTrianglesTileTheOutline) {
     for (std::size_t i = 0; i < outline.size(); ++i) {
       worst = std::max(worst, across_px(K, outline[i], outline[(i + 1) % outline.size()]));
       ++chords;
-      px.push_back(pixel(K, outline[i]));
+      px.push_back(pixel_of_normalized(K, outline[i]));
     }
     std::vector<int> tri;
     triangulate_polygon(px, tri);
@@ -151,7 +146,7 @@ TEST(LensMeshOutline, CoveredPixelsAreThoseInsideTheTrueImage) {
     if (poly.size() < 3) continue;
     std::vector<Vec2> outline, px;
     bisect_outline(grids.stats, kLensChordTolerance_px, poly, outline);
-    for (const Vec2& xy : outline) px.push_back(pixel(K, xy));
+    for (const Vec2& xy : outline) px.push_back(pixel_of_normalized(K, xy));
     std::vector<int> tri;
     triangulate_polygon(px, tri);
     std::size_t k = 0;

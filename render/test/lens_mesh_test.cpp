@@ -23,11 +23,6 @@ namespace {
 
 using Vec2 = Eigen::Vector2d;
 
-Vec2 pixel(const CameraIntrinsics& K, const Vec2& xy) {
-  const Vec2 d = distort_normalized(K, xy);
-  return {K.fx_px * d.x() + K.cx_px, K.fy_px * d.y() + K.cy_px};
-}
-
 double area(const std::vector<Vec2>& p, std::size_t first, std::size_t n) {
   double a = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
@@ -45,13 +40,13 @@ struct Deviation {
   double across_px = 0.0, along_px = 0.0;
 };
 Deviation deviation(const CameraIntrinsics& K, const Vec2& a, const Vec2& b) {
-  const Vec2 pa = pixel(K, a), pb = pixel(K, b);
+  const Vec2 pa = pixel_of_normalized(K, a), pb = pixel_of_normalized(K, b);
   const Vec2 chord = pb - pa;
   const double len = chord.norm();
   Deviation d;
   for (int k = 1; k < 256; ++k) {
     const double t = k / 256.0;
-    const Vec2 c = pixel(K, a + t * (b - a));
+    const Vec2 c = pixel_of_normalized(K, a + t * (b - a));
     const Vec2 l = pa + t * chord;
     d.along_px = std::max(d.along_px, (c - l).norm());
     if (len > 0) d.across_px = std::max(d.across_px, std::abs(chord.x() * (c - pa).y() - chord.y() * (c - pa).x()) / len);
@@ -132,8 +127,8 @@ long uncovered_pixel_centres(const CameraIntrinsics& K, const LensGrid& grid) {
   std::size_t first = 0;
   for (int size : sizes) {
     for (int v = 1; v + 1 < size; ++v) {
-      const Vec2 p[3] = {pixel(K, pieces[first]), pixel(K, pieces[first + static_cast<std::size_t>(v)]),
-                         pixel(K, pieces[first + static_cast<std::size_t>(v) + 1])};
+      const Vec2 p[3] = {pixel_of_normalized(K, pieces[first]), pixel_of_normalized(K, pieces[first + static_cast<std::size_t>(v)]),
+                         pixel_of_normalized(K, pieces[first + static_cast<std::size_t>(v) + 1])};
       const double area2 = (p[1] - p[0]).x() * (p[2] - p[0]).y() - (p[1] - p[0]).y() * (p[2] - p[0]).x();
       if (area2 == 0.0) continue;
       const int u0 = std::max(0, static_cast<int>(std::floor(std::min({p[0].x(), p[1].x(), p[2].x()}))));
