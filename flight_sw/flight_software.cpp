@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cmath>
+#include <stdexcept>
 
 namespace shelfcross::flight_sw {
 
@@ -17,25 +18,6 @@ constexpr double kLandRefusedWait_s = 0.5;
 // Why an approach that never centred gives up, once the re-reads are spent.
 constexpr const char* kCouldNotCentre = "could not centre on the target cell";
 }  // namespace
-
-const char* phase_name(Phase p) {
-  switch (p) {
-    case Phase::Idle: return "idle";
-    case Phase::EnterSdk: return "enter_sdk";
-    case Phase::StartVideo: return "start_video";
-    case Phase::WaitVideo: return "wait_video";
-    case Phase::TakeOff: return "take_off";
-    case Phase::FindShelf: return "find_shelf";
-    case Phase::GoToViewpoint: return "go_to_viewpoint";
-    case Phase::TakeInventory: return "take_inventory";
-    case Phase::Approach: return "approach";
-    case Phase::Cross: return "cross";
-    case Phase::Transfer: return "transfer";
-    case Phase::Land: return "land";
-    case Phase::Done: return "done";
-  }
-  return "?";
-}
 
 const char* outcome_name(Outcome o) {
   switch (o) {
@@ -76,17 +58,9 @@ std::string format_m(double v) {
 
 FlightSoftware::FlightSoftware(FlightConfig config)
     : config_(validated(std::move(config))),
-      link_(config_.timeouts.command_gap_s),
-      tag_detector_(config_.perception),
-      marker_detector_(config_.shelf.aruco_dictionary),
-      inventory_(0, config_.shelf.levels(), config_.shelf.columns(),
-                 config_.perception.marker_min_agreeing_frames),
-      pi_z_({config_.control.kp_z, config_.control.ki_z, config_.control.z_integral_limit_m_s,
-             config_.control.z_speed_max_mps}),
-      pi_psi_({config_.control.kp_psi, config_.control.ki_psi,
-               config_.control.psi_integral_limit_rad_s, config_.control.yaw_rate_max_radps}),
-      viewpoint_G_m_(optimal_viewpoint_G(config_.shelf, config_.camera, config_.mount,
-                                         config_.mission.viewpoint_margin)),
+      commands_(config_.timeouts),
+      sticks_(config_),
+      survey_(config_),
       tracker_(config_) {}
 
 // ---- Entry points ----
@@ -98,16 +72,14 @@ std::vector<SdkCommand> FlightSoftware::start(TimeNs t_ns) {
   telemetry_.t_ns = t_ns;
   result_.outcome = Outcome::Running;
   enter(Phase::EnterSdk, "entering SDK mode");
-  attempts_ = 0;
-  link_.request("command", config_.timeouts.command_reply_s);
-  link_.poll(now_ns_, out);
+  commands_.poll(now_ns_, out);
   return out;
 }
 
 std::vector<SdkCommand> FlightSoftware::step(const Input& input) {
   out_.clear();
   if (phase_ == Phase::Idle || phase_ == Phase::Done) {
-    if (const auto* r = std::get_if<SdkReply>(&input)) link_.on_reply(*r);  // drained
+    if (const auto* r = std::get_if<SdkReply>(&input)) commands_.on_reply(*r);  // drained
     return out_;
   }
   const TimeNs t = std::visit([](const auto& m) { return m.t_ns; }, input);
@@ -122,12 +94,12 @@ std::vector<SdkCommand> FlightSoftware::step(const Input& input) {
         // ClockTick: only the timers below.
       },
       input);
-  if (auto c = link_.check_timeout(now_ns_)) on_completion(*c);
+  if (auto c = commands_.check_timeout(now_ns_)) on_completion(*c);
   if (phase_ != Phase::Done) supervise();
-  link_.poll(now_ns_, out_);
+  commands_.poll(now_ns_, out_);
   telemetry_.phase = phase_;
-  telemetry_.velocity = velocity_;
-  telemetry_.stale_replies = link_.stale_replies();
+  telemetry_.velocity = sticks_.velocity();
+  telemetry_.stale_replies = commands_.stale_replies();
   telemetry_.video_stalled = video_stalled_;
   const TargetTracker::Counts& counts = tracker_.counts();
   telemetry_.rejected_poses = counts.rejected_poses;
@@ -139,7 +111,7 @@ std::vector<SdkCommand> FlightSoftware::step(const Input& input) {
 }
 
 void FlightSoftware::on_reply(const SdkReply& reply) {
-  if (auto c = link_.on_reply(reply)) on_completion(*c);
+  if (auto c = commands_.on_reply(reply)) on_completion(*c);
 }
 
 void FlightSoftware::on_state(const StateRecord& s) {
@@ -153,7 +125,7 @@ void FlightSoftware::on_state(const StateRecord& s) {
   // The crossing holds the cell centre's height by the state height (no picture shows the cell
   // in there): a drift or a sink the open-loop command would carry into a beam is turned back.
   if (phase_ == Phase::Cross && crossing_height_m_) {
-    velocity_.vz_mps = crossing_vz_mps(config_.control, *crossing_height_m_, s.height_m);
+    sticks_.set_vz(crossing_vz_mps(config_.control, *crossing_height_m_, s.height_m));
     watch_crossing(s);
   }
 }
@@ -190,7 +162,7 @@ void FlightSoftware::on_frame(const CameraFrame& f) {
   const Picture pic{*image, now_ns_, damage, decides, &f.damaged_rows};
   if (!decides && damage > config_.perception.steer_max_damage_events) {
     ++telemetry_.unflown_frames;
-    if (airborne_phase() && phase_ != Phase::Cross && phase_ != Phase::Transfer) hold_or_hover();
+    if (vision_phase(phase_)) hold_or_hover();
     if (phase_ == Phase::WaitVideo) command_takeoff_if_ready();
     else emit_rc(false);
     return;
@@ -205,7 +177,7 @@ void FlightSoftware::on_frame(const CameraFrame& f) {
     case Phase::Approach: approach(pic); break;
     default: break;
   }
-  last_control_ns_ = now_ns_;
+  sticks_.controlled(now_ns_);
   emit_rc(false);
 }
 
@@ -217,9 +189,10 @@ std::optional<cv::Rect2d> FlightSoftware::decision_region_px() const {
     case Phase::FindShelf:
     case Phase::GoToViewpoint:
     case Phase::TakeInventory: {
-      if (!view_.full || view_.tags.empty()) return std::nullopt;
-      cv::Rect region = view_.tags.front().bbox_px;
-      for (const TagBlob& t : view_.tags) region |= t.bbox_px;
+      const ShelfView& view = survey_.view();
+      if (!view.full || view.tags.empty()) return std::nullopt;
+      cv::Rect region = view.tags.front().bbox_px;
+      for (const TagBlob& t : view.tags) region |= t.bbox_px;
       return cv::Rect2d(region);
     }
     case Phase::Approach:
@@ -252,38 +225,31 @@ void FlightSoftware::blank_rows(const CameraFrame& f, cv::Mat& out) {
 
 // ---- SDK command results ----
 
-void FlightSoftware::on_completion(const SdkLink::Completion& c) {
-  const bool retry_left = attempts_ < config_.timeouts.command_retries;
-  auto retry = [&](double timeout_s) {
-    ++attempts_;
-    link_.request(c.command, timeout_s);
+void FlightSoftware::on_completion(const MissionCommands::Completion& c) {
+  // Asked again while retries remain (MissionCommands::retry), the event saying why.
+  auto retried = [&](double timeout_s) {
+    if (!commands_.retry(c, timeout_s)) return false;
     telemetry_.event = "'" + c.command + "' " + (c.timed_out ? "timed out" : "refused: " + c.reply) +
-                       ", retry " + std::to_string(attempts_);
+                       ", retry " + std::to_string(commands_.attempts());
+    return true;
   };
   if (c.command == "command" || c.command == "streamon") {
     if (c.ok) {
-      attempts_ = 0;
       if (c.command == "command") {
         enter(Phase::StartVideo, "SDK mode; starting video");
-        link_.request("streamon", config_.timeouts.command_reply_s);
       } else {
         enter(Phase::WaitVideo, "video on; waiting for the first frame");
       }
-    } else if (retry_left) {
-      retry(config_.timeouts.command_reply_s);
-    } else {
+    } else if (!retried(config_.timeouts.command_reply_s)) {
       abort_on_ground("'" + c.command + "' failed: " + (c.timed_out ? "no reply" : c.reply));
     }
   } else if (c.command == "takeoff") {
     const bool airborne_anyway = c.timed_out && state_ &&
                                  state_->height_m > config_.mission.airborne_height_m;
     if (c.ok || airborne_anyway) {
-      attempts_ = 0;
       airborne_since_ns_ = now_ns_;
       enter(Phase::FindShelf, c.ok ? "airborne" : "airborne (takeoff reply lost)");
-    } else if (retry_left) {
-      retry(config_.timeouts.takeoff_reply_s);
-    } else {
+    } else if (!retried(config_.timeouts.takeoff_reply_s)) {
       abort_on_ground("takeoff failed: " + (c.timed_out ? std::string("no reply") : c.reply));
     }
   } else if (c.command == "land") {
@@ -301,11 +267,9 @@ void FlightSoftware::on_completion(const SdkLink::Completion& c) {
       // fraction of a second and give up on a drone that is coming down; instead wait
       // kLandRefusedWait_s watching the state height (supervise), then ask again, for up to
       // land_reply_s, the longest a landing may take.
-      land_again_at_ns_ = now_ns_ + seconds_to_ns(kLandRefusedWait_s);
+      commands_.ask_again_at("land", config_.timeouts.land_reply_s, now_ns_ + seconds_to_ns(kLandRefusedWait_s));
       telemetry_.event = "'land' refused in the air (" + c.reply + "): waiting for the state height";
-    } else if (c.timed_out && retry_left) {
-      retry(config_.timeouts.land_reply_s);
-    } else {
+    } else if (!(c.timed_out && retried(config_.timeouts.land_reply_s))) {
       result_.reason += "; land not acknowledged";
       finish_landing(false, "land not acknowledged");
     }
@@ -315,7 +279,7 @@ void FlightSoftware::on_completion(const SdkLink::Completion& c) {
 void FlightSoftware::finish_landing(bool landed, const std::string& why) {
   result_.outcome = pending_outcome_;
   result_.landed = landed;
-  land_again_at_ns_.reset();
+  commands_.cancel_wait();
   enter(Phase::Done, why);
 }
 
@@ -346,7 +310,7 @@ void FlightSoftware::supervise() {
     case Phase::Approach:
       if (retreat_until_ns_) {  // a declined crossing: back out, then land clear of the shelf
         if (now_ns_ >= *retreat_until_ns_) return land(Outcome::Aborted, retreat_reason_);
-        set_velocity(back_off_velocity(config_.control));
+        sticks_.set(back_off_velocity(config_.control), now_ns_);
         break;
       }
       if (timed_out(to.approach_s)) return land(Outcome::Aborted, "approach timed out");
@@ -365,10 +329,10 @@ void FlightSoftware::supervise() {
     case Phase::Cross:
       // No fresh state record: no height to hold by; zero vertical stick (the autopilot holds
       // its own height reference) rather than a correction computed on an old height.
-      if (!state_fresh()) velocity_.vz_mps = 0.0;
+      if (!state_fresh()) sticks_.set_vz(0.0);
       if (crossing_flown(crossing_end_, now_ns_ - phase_start_ns_, state_fresh(), odometry_.p_O_m())) {
         if (!last_shelf()) {
-          hover();
+          sticks_.hover();
           return next_shelf("crossed cell " + cell_text(*tracker_.target()) + " of shelf " + std::to_string(shelf_) +
                             ": finding the next shelf");
         }
@@ -377,73 +341,68 @@ void FlightSoftware::supervise() {
       }
       break;
     case Phase::Transfer:
-      if (ns_to_seconds(now_ns_ - leg_start_ns_) > config_.strategy.transfer_leg_s) {
+      if (transfer_.leg_s(now_ns_) > config_.strategy.transfer_leg_s) {
         return land(Outcome::Aborted, "transfer waypoint not reached");
       }
       break;
     case Phase::Land:
       // After a refused `land` (on_completion): down by a fresh state record (low and
       // vertically still: a landing drone passes airborne_height_m still descending), or ask
-      // again.
-      if (land_again_at_ns_) {
-        if (state_fresh() && state_->height_m <= config_.mission.airborne_height_m &&
-            std::abs(state_->vz_H_mps) <= kVerticallyStill_mps) {
-          return finish_landing(true, "landed (`land` refused while landing; the state height says on the ground)");
-        }
-        if (now_ns_ >= *land_again_at_ns_) {
-          land_again_at_ns_.reset();
-          link_.request("land", config_.timeouts.land_reply_s);
-        }
+      // again when the wait is over (MissionCommands::poll).
+      if (commands_.waiting() && state_fresh() && state_->height_m <= config_.mission.airborne_height_m &&
+          std::abs(state_->vz_H_mps) <= kVerticallyStill_mps) {
+        return finish_landing(true, "landed (`land` refused while landing; the state height says on the ground)");
       }
       return;
     default:
       break;
   }
-  if (!airborne_phase()) return;
+  if (!airborne(phase_)) return;
   // Low battery: land now, except in the crossing (finish it, then land beyond the shelf).
   if (phase_ != Phase::Cross && state_ && state_->battery_pct < config_.mission.low_battery_pct) {
     return land(Outcome::Aborted, "low battery (" + std::to_string(state_->battery_pct) + "%)");
   }
   // Video stall: the timers run on whatever input arrives (state records at 10 Hz).
-  if (vision_phase()) {
+  if (vision_phase(phase_)) {
     const TimeNs since_ns = now_ns_ - std::max(last_frame_ns_.value_or(0), airborne_since_ns_);
     if (ns_to_seconds(since_ns) > to.video_land_s) return land(Outcome::Aborted, "video lost");
     if (ns_to_seconds(since_ns) > to.video_hover_s && !video_stalled_) {
       video_stalled_ = true;
       telemetry_.event = "video stalled: hovering";
-      hover();
+      sticks_.hover();
       emit_rc(true);
     }
   }
   // Keep-alive (and the steady rc while frames are missing).
-  if (!last_rc_ns_ || ns_to_seconds(now_ns_ - *last_rc_ns_) >= config_.rc.keepalive_s) emit_rc(true);
-}
-
-bool FlightSoftware::airborne_phase() const {
-  return phase_ == Phase::FindShelf || phase_ == Phase::GoToViewpoint ||
-         phase_ == Phase::TakeInventory || phase_ == Phase::Approach || phase_ == Phase::Cross ||
-         phase_ == Phase::Transfer;
-}
-
-// The crossing (open loop) and the transfer (odometry) need no frames.
-bool FlightSoftware::vision_phase() const {
-  return airborne_phase() && phase_ != Phase::Cross && phase_ != Phase::Transfer;
+  if (sticks_.keepalive_due(now_ns_)) emit_rc(true);
 }
 
 // ---- Actions ----
 
+// Every transition passes here: the table (mission_phases.cpp) says which are allowed; what
+// every phase's start clears, then the phase's own entry (the SDK command it asks for).
 void FlightSoftware::enter(Phase p, const std::string& event) {
+  if (!may_enter(phase_, p)) {
+    throw std::logic_error(std::string("mission: no transition from ") + phase_name(phase_) + " to " + phase_name(p));
+  }
   phase_ = p;
   phase_start_ns_ = now_ns_;
   telemetry_.phase = p;
   telemetry_.event = event;
-  settled_frames_ = 0;
+  survey_.restart_settling();
   lost_since_ns_.reset();
   back_off_since_ns_.reset();
   rough_since_ns_.reset();
   retreat_until_ns_.reset();
-  pi_z_.reset();
-  pi_psi_.reset();
+  sticks_.restart_loops();
+  const Timeouts& to = config_.timeouts;
+  switch (p) {
+    case Phase::EnterSdk: return commands_.ask("command", to.command_reply_s);
+    case Phase::StartVideo: return commands_.ask("streamon", to.command_reply_s);
+    case Phase::TakeOff: return commands_.ask("takeoff", to.takeoff_reply_s);
+    case Phase::Land: return commands_.ask("land", to.land_reply_s);
+    default: return;
+  }
 }
 
 // The first frame proves the video: take off unless the battery is too low.
@@ -451,26 +410,18 @@ void FlightSoftware::command_takeoff_if_ready() {
   if (state_ && state_->battery_pct < config_.mission.takeoff_min_battery_pct) {
     abort_on_ground("battery " + std::to_string(state_->battery_pct) + "% below the take-off minimum");
   } else {
-    command_takeoff();
+    enter(Phase::TakeOff, "taking off");
   }
-}
-
-void FlightSoftware::command_takeoff() {
-  enter(Phase::TakeOff, "taking off");
-  attempts_ = 0;
-  link_.request("takeoff", config_.timeouts.takeoff_reply_s);
 }
 
 void FlightSoftware::land(Outcome outcome, const std::string& reason) {
   // Sticks to zero before "land": no rc goes out while a command is outstanding, so if "land"
   // is lost the Tello would keep the last sticks (the crossing speed, say) until the retry.
-  hover();
+  sticks_.hover();
   emit_rc(true);
   pending_outcome_ = outcome;
   result_.reason = reason;
   enter(Phase::Land, "landing: " + reason);
-  attempts_ = 0;
-  link_.request("land", config_.timeouts.land_reply_s);
 }
 
 void FlightSoftware::abort_on_ground(const std::string& reason) {
@@ -478,170 +429,57 @@ void FlightSoftware::abort_on_ground(const std::string& reason) {
   enter(Phase::Done, "gave up on the ground: " + reason);
 }
 
-void FlightSoftware::set_velocity(const VelocityCommand& v) {
-  velocity_ = v;
-  velocity_set_ns_ = now_ns_;
-}
-
 // A picture that cannot steer (too damaged to fly on, or the target not found in a damaged
-// one): the last command is held over a gap of up to control.unsteered_hold_s, then the
-// vehicle hovers (the PI states are kept for the next usable picture). Snapping to hover on
-// every such picture starts and stops the vehicle with the link's loss: each 0.25 m/s step
-// tips the Tello by a few degrees, and its camera, fixed to the body, swings the shelf by
-// fy * 4 deg ~ 65 px up and down the picture, off the tracker's search window (corner_gate
-// 0.35 of a 160 px box is 57 px), so that the target is lost on the very pictures that could
-// have measured it. Not while the corner tags are leaving the view: there only nearly whole
-// pictures move the vehicle (approach).
+// one): the last command held briefly, then a hover (Sticks::hold_or_hover). Not while the
+// corner tags are leaving the view: there only nearly whole pictures move the vehicle
+// (approach).
 void FlightSoftware::hold_or_hover() {
-  const bool leaving = phase_ == Phase::Approach && tracker_.near_edge();
-  if (leaving || !velocity_set_ns_ || ns_to_seconds(now_ns_ - *velocity_set_ns_) > config_.control.unsteered_hold_s) {
-    velocity_ = {};
-  }
-}
-
-void FlightSoftware::hover() {
-  velocity_ = {};
-  pi_z_.reset();
-  pi_psi_.reset();
+  sticks_.hold_or_hover(now_ns_, phase_ == Phase::Approach && tracker_.near_edge());
 }
 
 void FlightSoftware::emit_rc(bool force) {
-  if (!airborne_phase() || link_.outstanding()) return;
-  if (!force && last_rc_ns_ && ns_to_seconds(now_ns_ - *last_rc_ns_) < config_.rc.rc_period_s) {
-    return;
+  if (!airborne(phase_) || commands_.outstanding()) return;
+  if (const std::optional<RcSticks> rc = sticks_.due(now_ns_, force)) {
+    telemetry_.rc = *rc;
+    out_.push_back({now_ns_, rc->text()});
   }
-  telemetry_.rc = to_rc(velocity_, config_.rc);
-  out_.push_back({now_ns_, telemetry_.rc.text()});
-  last_rc_ns_ = now_ns_;
-}
-
-double FlightSoftware::control_dt_s() {
-  if (!last_control_ns_) return 0.0;
-  return std::min(ns_to_seconds(now_ns_ - *last_control_ns_), config_.control.max_control_dt_s);
-}
-
-void FlightSoftware::update_view_telemetry() {
-  telemetry_.tags.clear();
-  for (size_t i = 0; i < view_.tags.size(); ++i) {
-    const bool classified = view_.grid.valid && i < view_.grid.row.size();
-    telemetry_.tags.push_back({view_.tags[i].centre_px, view_.tags[i].area_px,
-                               classified ? view_.grid.row[i] : -1,
-                               classified ? view_.grid.column[i] : -1});
-  }
-  telemetry_.grid_valid = view_.grid.valid;
-  telemetry_.grid_rows = view_.grid.rows;
-  telemetry_.grid_columns = view_.grid.columns;
-  telemetry_.full_view = view_.full;
-  telemetry_.grid_refusal = view_.grid.refusal;
 }
 
 // ---- Phase behaviours ----
 
+void FlightSoftware::fly(const SurveyStep& step) {
+  if (step.velocity) sticks_.set(*step.velocity, now_ns_);
+  if (step.hover) sticks_.hover();
+}
+
 void FlightSoftware::find_shelf(const Picture& pic) {
-  const cv::Mat& bgr = pic.bgr;
-  analyse_shelf(bgr, tag_detector_, config_, view_);
-  update_view_telemetry();
-  const ControlGains& g = config_.control;
-  if (view_.full && !pic.decides) {  // to be confirmed on a nearly whole picture
-    set_velocity({});
-    return;
-  }
-  if (view_.full) {
+  const bool back_out = reread_back_until_ns_ && now_ns_ < *reread_back_until_ns_;
+  const SurveyStep step = survey_.find_shelf(pic, back_out, telemetry_);
+  fly(step);
+  if (step.next == SurveyStep::Next::WholeShelfInView) {
     enter(Phase::GoToViewpoint, "whole shelf in view");
     go_to_viewpoint(pic, true);
-    return;
   }
-  VelocityCommand v;
-  if (!view_.tags.empty()) {
-    // A fragment: back away (only while the shelf is too close to fit the view) and centre it
-    // until the whole grid fits the view (guidance.hpp).
-    v = fragment_velocity(config_, view_.tags, view_.largest_tag_area_px, -viewpoint_G_m_.x());
-  } else if (reread_back_until_ns_ && now_ns_ < *reread_back_until_ns_) {
-    v.vx_B_mps = -g.back_off_speed_mps;  // a re-read from close: back out first (reread_shelf)
-  } else {
-    v.yaw_rate_radps = g.search_yaw_rate_radps;  // nothing in view: turn and look
-  }
-  set_velocity(v);
 }
 
 void FlightSoftware::go_to_viewpoint(const Picture& pic, bool view_fresh) {
-  const cv::Mat& bgr = pic.bgr;
-  if (!view_fresh) {
-    analyse_shelf(bgr, tag_detector_, config_, view_);
-    update_view_telemetry();
-  }
-  const ControlGains& g = config_.control;
-  const MissionParams& m = config_.mission;
-  if (!view_.full) {
-    hover();
-    if (last_full_view_ns_ && ns_to_seconds(now_ns_ - *last_full_view_ns_) > m.viewpoint_lost_s) {
-      enter(Phase::FindShelf, "shelf out of view: searching");
-    }
-    return;
-  }
-  last_full_view_ns_ = now_ns_;
-  std::vector<cv::Point3d> obj;
-  std::vector<cv::Point2d> img;
-  for (int r = 0; r < view_.grid.rows; ++r) {
-    for (int c = 0; c < view_.grid.columns; ++c) {
-      obj.push_back(grid_tag_G(config_.shelf, c, r));
-      img.push_back(view_.tags[static_cast<size_t>(view_.grid.at(r, c))].centre_px);
-    }
-  }
-  const auto pose = estimate_pose(obj, img, config_.camera, config_.mount);
-  if (!pose) {
-    hover();
-    return;
-  }
-  telemetry_.pose = pose;
-  telemetry_.pose_in_cell_frame = false;
-  pose_G_ = pose;
-  // e1: from the current position to the optimal viewpoint, in G; flown in the body frame.
-  const Eigen::Vector3d e1 = viewpoint_G_m_ - pose->p_FB_m();
-  telemetry_.e1_G_m = e1;
-  set_velocity(viewpoint_velocity(g, e1, pose->yaw_rad));
-  const bool there = e1.norm() < m.viewpoint_position_tolerance_m &&
-                     std::abs(pose->yaw_rad) < m.viewpoint_yaw_tolerance_rad;
-  if (!there) settled_frames_ = 0;
-  else if (pic.decides) ++settled_frames_;  // a damaged picture neither counts nor resets
-  if (settled_frames_ >= m.viewpoint_settle_frames) {
-    hover();
-    enter(Phase::TakeInventory, "at the optimal viewpoint: reading the shelf");
-  }
+  const SurveyStep step = survey_.go_to_viewpoint(pic, now_ns_, view_fresh, telemetry_);
+  fly(step);
+  if (step.next == SurveyStep::Next::ShelfOutOfView) enter(Phase::FindShelf, "shelf out of view: searching");
+  if (step.next == SurveyStep::Next::AtViewpoint) enter(Phase::TakeInventory, "at the optimal viewpoint: reading the shelf");
 }
 
+// The inventory taken: the conventional strategies fly their transfer; through the cells, the
+// target is chosen on the full view just read, or, with no crossable empty cell, it lands.
 void FlightSoftware::take_inventory(const Picture& pic) {
-  const cv::Mat& bgr = pic.bgr;
-  hover();
-  if (!pic.decides) return;  // a guessed band may hold a marker, or shift the grid labels
-  analyse_shelf(bgr, tag_detector_, config_, view_);
-  update_view_telemetry();
-  if (!view_.full) return;
-  markers_.clear();
-  if (fast()) {
-    // Markers only where boxes can be: the cells, i.e. inside the front tags' bounding box.
-    cv::Rect grid = view_.tags.front().bbox_px;
-    for (const TagBlob& t : view_.tags) grid |= t.bbox_px;
-    marker_detector_.detect_in(bgr, grid, config_.shelf.marker_size_m * view_.px_per_m,
-                               config_.perception.marker_area_ratio_threshold, markers_);
-  } else {
-    marker_detector_.detect(bgr, markers_);
-  }
-  telemetry_.markers_seen = static_cast<int>(markers_.size());
-  const std::vector<std::pair<CellIndex, int>> sightings = assign_markers(view_, markers_, config_);
-  if (pic.whole()) {
-    inventory_.observe(sightings, true);
-  } else {
-    inventory_.observe(sightings, cells_clear_of_damage(pic));
-  }
-  // Closed after inventory_frames full views, with enough whole views of every cell without a
-  // box to decide whether it is empty (inventory.hpp); the timeout bounds the wait.
-  if (inventory_.frames() < config_.perception.inventory_frames || !inventory_.empty_decidable()) return;
+  const SurveyStep step = survey_.take_inventory(pic, telemetry_);
+  fly(step);
+  if (step.next != SurveyStep::Next::InventoryTaken) return;
   if (config_.strategy.mode != Strategy::through_cells) {
     start_transfer();
     return;
   }
-  if (!select_target(bgr)) {
+  if (!select_target(pic.bgr)) {
     land(Outcome::NoEmptyCell, "inventory taken; no crossable empty cell");
     return;
   }
@@ -650,37 +488,16 @@ void FlightSoftware::take_inventory(const Picture& pic) {
   hold_since_ns_.reset();
 }
 
-// The cells of the full view whose rows (their corner tags' centres, band_margin_px around:
-// the marker detector's threshold window and the picture's motion) no damaged row touches: a
-// damaged picture's view of them is whole (inventory.hpp).
-std::vector<CellIndex> FlightSoftware::cells_clear_of_damage(const Picture& pic) const {
-  std::vector<CellIndex> out;
-  const double margin = config_.perception.band_margin_px;
-  if (margin < 0.0) return out;
-  for (int l = 1; l <= config_.shelf.levels(); ++l) {
-    for (int c = 1; c <= config_.shelf.columns(); ++c) {
-      const auto q = cell_quad(view_, {l, c});
-      double top = q[0].y, bottom = q[0].y;
-      for (const cv::Point2d& p : q) {
-        top = std::min(top, p.y);
-        bottom = std::max(bottom, p.y);
-      }
-      if (!pic.damaged_rows || !rows_touch(*pic.damaged_rows, top - margin, bottom + margin)) out.push_back({l, c});
-    }
-  }
-  return out;
-}
-
 bool FlightSoftware::select_target(const cv::Mat& bgr) {
   const cv::Point2d centre(config_.camera.cx_px, config_.camera.cy_px);
   // With a shelf after this one: the cell nearest the next shelf's optimal viewpoint. The
   // shelves are parallel and aligned, so that viewpoint is this one moved shelf_spacing_m along
   // x_G; the crossing flies along x_G, so only the (y, z) distance in G counts.
   const Eigen::Vector3d next_viewpoint_G =
-      viewpoint_G_m_ + Eigen::Vector3d(config_.layout.shelf_spacing_m, 0.0, 0.0);
+      survey_.viewpoint_G_m() + Eigen::Vector3d(config_.layout.shelf_spacing_m, 0.0, 0.0);
   std::optional<CellIndex> best;
   double best_d = 0.0;
-  for (const CellIndex& cell : inventory_.empty_cells()) {
+  for (const CellIndex& cell : survey_.inventory().empty_cells()) {
     // Only cells the vehicle fits through, centred and level.
     const Eigen::Vector2d opening = cell_opening_m(config_.shelf, cell);
     const Eigen::Vector3d& size = config_.mission.vehicle_size_m;
@@ -690,7 +507,7 @@ bool FlightSoftware::select_target(const cv::Mat& bgr) {
     }
     double d = 0.0;
     if (last_shelf()) {  // the last (or only) shelf: nearest the image centre
-      const auto q = cell_quad(view_, cell);
+      const auto q = cell_quad(survey_.view(), cell);
       const cv::Point2d c = 0.25 * (q[0] + q[1] + q[2] + q[3]);
       d = cv::norm(c - centre);
     } else {
@@ -705,9 +522,11 @@ bool FlightSoftware::select_target(const cv::Mat& bgr) {
   if (!best) return false;
   // The target's height, from the full view it was chosen on (the grid pose, G parallel to K).
   std::optional<double> height_m;
-  if (pose_G_) height_m = cell_height_m(state_, pose_G_->p_FB_m().z() - cell_centre_G(config_.shelf, *best).z());
+  if (const std::optional<PoseEstimate>& pose_G = survey_.pose_G()) {
+    height_m = cell_height_m(state_, pose_G->p_FB_m().z() - cell_centre_G(config_.shelf, *best).z());
+  }
   // Chosen on a full view, where every cell's grid position is counted from the edges.
-  tracker_.choose(*best, view_, bgr, now_ns_, height_m);
+  tracker_.choose(*best, survey_.view(), bgr, now_ns_, height_m);
   telemetry_.target = best;
   telemetry_.tracked_box_px = tracker_.box_px();
   cell_height_.clear();
@@ -743,9 +562,8 @@ bool FlightSoftware::state_fresh() const {
 // The target lost: the shelf's view analysed anew, the target looked for near its last box
 // (target_tracker.hpp, TargetTracker::reacquire).
 bool FlightSoftware::reacquire(const Picture& pic) {
-  analyse_shelf(pic.bgr, tag_detector_, config_, view_);
-  update_view_telemetry();
-  if (!tracker_.reacquire(pic, view_, tag_detector_, state_)) return false;
+  survey_.analyse(pic.bgr, telemetry_);
+  if (!tracker_.reacquire(pic, survey_.view(), survey_.tag_detector(), state_)) return false;
   after_measurement();
   telemetry_.tracked_box_px = tracker_.box_px();
   return true;
@@ -760,7 +578,7 @@ void FlightSoftware::after_measurement() {
 // The target's identity judged on this picture (target_tracker.hpp): a contradiction, or no
 // confirmation within identity_confirm_s, re-reads the shelf (false: the approach is over).
 bool FlightSoftware::check_identity(const Picture& pic, const PoseEstimate& pose) {
-  const IdentityCheck check = tracker_.check_identity(pic, pose, tag_detector_, marker_detector_, inventory_);
+  const IdentityCheck check = tracker_.check_identity(pic, pose, survey_.tag_detector(), survey_.marker_detector(), survey_.inventory());
   if (check.verdict == CellIdentity::Confirmed) {
     telemetry_.target_identity = tracker_.identity();
     telemetry_.event = "target identity confirmed: " + check.why;
@@ -801,7 +619,7 @@ void FlightSoftware::reread_shelf(const std::string& why, const std::optional<st
   // approach came, to the viewpoint's range (the last pose's range: distance / back-off speed).
   reread_back_until_ns_.reset();
   if (const std::optional<PoseEstimate>& pose_K = tracker_.pose_K()) {
-    const double back_m = std::max(0.0, -viewpoint_G_m_.x() + pose_K->p_FB_m().x());
+    const double back_m = std::max(0.0, -survey_.viewpoint_G_m().x() + pose_K->p_FB_m().x());
     reread_back_until_ns_ = now_ns_ + seconds_to_ns(back_m / config_.control.back_off_speed_mps);
   }
   tracker_.forget();
@@ -811,7 +629,7 @@ void FlightSoftware::reread_shelf(const std::string& why, const std::optional<st
   line_hold_.clear();
   telemetry_.target_identity = tracker_.identity();
   hold_since_ns_.reset();
-  hover();
+  sticks_.hover();
   // FindShelf backs away from a fragment until the whole grid is in view, GoToViewpoint flies
   // to the optimal viewpoint, and TakeInventory (its frames already read) chooses the target
   // anew on a full view.
@@ -859,16 +677,14 @@ std::optional<std::string> FlightSoftware::cross_if_clear(const std::string& why
   // height (on_state), not the line's slope: that slope came from a pose a video latency
   // old, and open loop it flew a vehicle still settling vertically into the beam below.
   crossing_height_m_ = cell_centre_h_m;
-  set_velocity(crossing_velocity(g, plan, crossing_vz_mps(g, *cell_centre_h_m, state_->height_m)));
+  sticks_.set(crossing_velocity(g, plan, crossing_vz_mps(g, *cell_centre_h_m, state_->height_m)), now_ns_);
   return std::nullopt;
 }
 
 // The approach's vertical, heading and lateral laws (eq. 12, eq. 15, Fig. 19) on errors `e`,
 // the PI states stepped by dt; a lateral command restarts the stillness the crossing waits for.
 VelocityCommand FlightSoftware::approach_steering(const ApproachErrors& e, double dt) {
-  VelocityCommand v;
-  v.vz_mps = pi_z_.update(e.e_z_m, dt);                // eq. 12
-  v.yaw_rate_radps = pi_psi_.update(e.e_psi_rad, dt);  // eq. 15
+  VelocityCommand v = sticks_.steer(e.e_z_m, e.e_psi_rad, dt);  // eq. 12, eq. 15
   v.vy_B_mps = approach_lateral_mps(config_.control, e);  // Fig. 19
   if (v.vy_B_mps != 0.0) lateral_active_ns_ = now_ns_;
   return v;
@@ -876,17 +692,17 @@ VelocityCommand FlightSoftware::approach_steering(const ApproachErrors& e, doubl
 
 void FlightSoftware::approach(const Picture& pic) {
   const ControlGains& g = config_.control;
-  if (retreat_until_ns_) return set_velocity(back_off_velocity(g));  // declined: backing out (supervise)
-  forward_gain_.on_command_held(now_ns_, velocity_.vx_B_mps);
+  if (retreat_until_ns_) return sticks_.set(back_off_velocity(g), now_ns_);  // declined: backing out (supervise)
+  forward_gain_.on_command_held(now_ns_, sticks_.velocity().vx_B_mps);
   std::optional<OdometryFix> odometry;
   if (state_fresh()) odometry = OdometryFix{odometry_.p_O_m(), state_->yaw_rad};
   const TargetTracker::Prediction predicted = tracker_.predict(pic, odometry);
   telemetry_.tracker_ok = predicted.tracker_ok;
-  const bool found = tracker_.measure(pic, predicted.box_px, tag_detector_, state_);
+  const bool found = tracker_.measure(pic, predicted.box_px, survey_.tag_detector(), state_);
   if (found) after_measurement();
   feed_line_hold(found, odometry);
   telemetry_.tracked_box_px = tracker_.box_px();
-  const double dt = control_dt_s();
+  const double dt = sticks_.control_dt_s(now_ns_);
   if (found) return approach_found(pic, predicted, dt);
   if (tracker_.hidden_by_damage() && !back_off_since_ns_) return approach_unseen(dt);
   approach_without_target(pic);
@@ -895,7 +711,7 @@ void FlightSoftware::approach(const Picture& pic) {
 // Eq. 10's forward speed toward the viewpoint from `range_m` out (none while held short).
 double FlightSoftware::approach_forward_speed_mps(bool hold, double range_m) const {
   return approach_forward_mps(config_.control, hold, tracker_.identity() == CellIdentity::Confirmed, range_m,
-                              -viewpoint_G_m_.x());
+                              -survey_.viewpoint_G_m().x());
 }
 
 // The corner tags measured on this picture: steer on their pose, hold short until settled and
@@ -944,7 +760,7 @@ void FlightSoftware::approach_found(const Picture& pic, const TargetTracker::Pre
       !cross_if_clear("corner tags leaving the view")) {
     return;
   }
-  set_velocity(v);
+  sticks_.set(v, now_ns_);
   if (decides) {
     estimate_forward_gain(pose);
     sample_cell_height(pose);
@@ -973,7 +789,7 @@ void FlightSoftware::approach_unseen(double dt) {
   VelocityCommand v = approach_steering(e, dt);
   const ApproachHold h = approach_hold(config_, e, ns_to_seconds(now_ns_ - lateral_active_ns_), -pose.p_FB_m().x());
   v.vx_B_mps = approach_forward_speed_mps(!h.in_cone, -pose.p_FB_m().x());  // eq. 10
-  set_velocity(v);
+  sticks_.set(v, now_ns_);
 }
 
 // The corner tags neither measured nor hidden: cross if they just left the view close and
@@ -1006,24 +822,23 @@ void FlightSoftware::approach_without_target(const Picture& pic) {
       back_off_since_ns_ = now_ns_;
       telemetry_.event = "not centred (" + why + "): backing off";
     }
-    set_velocity(back_off_velocity(g));
-    pi_z_.reset();
-    pi_psi_.reset();
+    sticks_.set(back_off_velocity(g), now_ns_);
+    sticks_.restart_loops();
     return;
   }
   if (back_off_since_ns_) {  // keep backing off until the tags are back
-    set_velocity(back_off_velocity(g));
+    sticks_.set(back_off_velocity(g), now_ns_);
     return;
   }
   // Lost: hover, and look for the target among the tags of the whole frame.
   if (!lost_since_ns_) telemetry_.event = "target lost: hovering to re-acquire";
   start_losing_target();
-  hover();
+  sticks_.hover();
   if (reacquire(pic)) {
     lost_since_ns_.reset();
     telemetry_.event = "target re-acquired";
   } else if (pic.decides) {
-    grid_in_view_while_lost_ = view_.grid.valid;
+    grid_in_view_while_lost_ = survey_.view().grid.valid;
   }
 }
 
@@ -1035,61 +850,42 @@ namespace shelfcross::flight_sw {
 
 std::vector<BoxEntry> FlightSoftware::all_boxes() const {
   std::vector<BoxEntry> all;
-  for (const Inventory& inv : finished_) {
+  for (const Inventory& inv : survey_.finished()) {
     const auto b = inv.boxes();
     all.insert(all.end(), b.begin(), b.end());
   }
-  const auto b = inventory_.boxes();
+  const auto b = survey_.inventory().boxes();
   all.insert(all.end(), b.begin(), b.end());
   return all;
 }
 
 std::string FlightSoftware::inventory_json() const {
-  if (config_.layout.shelf_count == 1) return inventory_.to_json();
+  if (config_.layout.shelf_count == 1) return survey_.inventory().to_json();
   std::string j = "{\"shelves\":[";
-  for (const Inventory& inv : finished_) j += inv.to_json() + ",";
-  return j + inventory_.to_json() + "]}";
+  for (const Inventory& inv : survey_.finished()) j += inv.to_json() + ",";
+  return j + survey_.inventory().to_json() + "]}";
 }
 
 void FlightSoftware::next_shelf(const std::string& event) {
-  finished_.push_back(inventory_);
   ++shelf_;
-  inventory_ = Inventory(shelf_, config_.shelf.levels(), config_.shelf.columns(),
-                         config_.perception.marker_min_agreeing_frames);
+  survey_.next_shelf(shelf_);
   tracker_.forget();
   cell_height_.clear();
   crossing_height_m_.reset();
-  pose_G_.reset();
   crossing_refusals_ = 0;
   hold_since_ns_.reset();
-  last_full_view_ns_.reset();
   telemetry_.target.reset();
   telemetry_.tracked_box_px.reset();
   telemetry_.shelf = shelf_;
   enter(Phase::FindShelf, event);
 }
 
-// Waypoints planned in the grid frame G (guidance.hpp, transfer_waypoints_G) and turned into
-// the odometry frame about the vehicle's position, G's x axis lying at heading (state yaw -
-// visual yaw) in O; heights are offsets from the state's.
 void FlightSoftware::start_transfer() {
-  if (!pose_G_ || !state_) return land(Outcome::Aborted, "no pose or state for the transfer");
-  const StrategyParams& st = config_.strategy;
-  const Eigen::Vector3d p = pose_G_->p_FB_m();
-  const std::vector<Eigen::Vector3d> w_G = transfer_waypoints_G(config_, p, viewpoint_G_m_, last_shelf());
-  const double yaw_G_in_O = state_->yaw_rad - pose_G_->yaw_rad;
-  const Eigen::Rotation2Dd R(yaw_G_in_O);
-  waypoints_O_m_.clear();
-  for (const Eigen::Vector3d& w : w_G) {
-    const Eigen::Vector2d d = R * (w - p).head<2>();
-    const Eigen::Vector3d& p_O = odometry_.p_O_m();
-    waypoints_O_m_.push_back({p_O.x() + d.x(), p_O.y() + d.y(), p_O.z() + (w.z() - p.z())});
-  }
-  hold_yaw_O_rad_ = yaw_G_in_O;
-  waypoint_ = 0;
-  leg_start_ns_ = now_ns_;
+  const std::optional<PoseEstimate>& pose_G = survey_.pose_G();
+  if (!pose_G || !state_) return land(Outcome::Aborted, "no pose or state for the transfer");
+  transfer_.plan(config_, *pose_G, state_->yaw_rad, odometry_.p_O_m(), survey_.viewpoint_G_m(), last_shelf(), now_ns_);
   enter(Phase::Transfer, std::string("inventory taken; ") +
-                             (st.mode == Strategy::over_tops ? "over the top" : "around the end") +
+                             (config_.strategy.mode == Strategy::over_tops ? "over the top" : "around the end") +
                              (last_shelf() ? " of the last shelf" : " to the next shelf"));
 }
 
@@ -1097,22 +893,17 @@ void FlightSoftware::start_transfer() {
 // toward it, heading held on the shelf normal (guidance.hpp, transfer_velocity).
 void FlightSoftware::transfer() {
   const StrategyParams& st = config_.strategy;
-  Eigen::Vector3d e = waypoints_O_m_[waypoint_] - odometry_.p_O_m();
-  if (e.norm() < st.waypoint_tolerance_m) {
-    ++waypoint_;
-    leg_start_ns_ = now_ns_;
-    if (waypoint_ == waypoints_O_m_.size()) {
-      hover();
-      if (last_shelf()) {
-        return land(Outcome::Completed, std::string("passed the last shelf ") +
-                                            (st.mode == Strategy::over_tops ? "over the top" : "around the end"));
-      }
-      return next_shelf("transfer done: finding shelf " + std::to_string(shelf_ + 1));
+  const TransferFlight::Progress leg = transfer_.on_state(odometry_.p_O_m(), st.waypoint_tolerance_m, now_ns_);
+  if (leg.arrived) {
+    sticks_.hover();
+    if (last_shelf()) {
+      return land(Outcome::Completed, std::string("passed the last shelf ") +
+                                          (st.mode == Strategy::over_tops ? "over the top" : "around the end"));
     }
-    telemetry_.event = "transfer waypoint " + std::to_string(waypoint_);
-    e = waypoints_O_m_[waypoint_] - odometry_.p_O_m();
+    return next_shelf("transfer done: finding shelf " + std::to_string(shelf_ + 1));
   }
-  set_velocity(transfer_velocity(config_, e, state_->yaw_rad, hold_yaw_O_rad_));
+  if (leg.next_leg) telemetry_.event = "transfer waypoint " + std::to_string(transfer_.waypoint());
+  sticks_.set(transfer_velocity(config_, leg.e_O_m, state_->yaw_rad, transfer_.hold_yaw_O_rad()), now_ns_);
   emit_rc(false);
 }
 

@@ -11,7 +11,8 @@
 // is handled at the latest stamp seen. Nothing here reads a clock or draws a random number:
 // the same inputs give the same commands.
 //
-// Phases (each with a timeout; a timed-out airborne phase lands):
+// Phases (mission_phases.hpp: the table of transitions; each with a timeout; a timed-out
+// airborne phase lands):
 //   EnterSdk --ok--> StartVideo --ok--> WaitVideo --first frame, battery ok--> TakeOff
 //   TakeOff --ok (or reply lost while the height says airborne)--> FindShelf
 //   FindShelf --whole grid in view--> GoToViewpoint --at the optimal viewpoint, settled-->
@@ -107,11 +108,15 @@
 #include "flight_sw/guidance.hpp"
 #include "flight_sw/inventory.hpp"
 #include "flight_sw/line_hold.hpp"
+#include "flight_sw/mission_phases.hpp"
 #include "flight_sw/navigation.hpp"
 #include "flight_sw/odometry.hpp"
 #include "flight_sw/perception.hpp"
-#include "flight_sw/sdk_link.hpp"
+#include "flight_sw/mission_commands.hpp"
+#include "flight_sw/shelf_survey.hpp"
+#include "flight_sw/sticks.hpp"
 #include "flight_sw/target_tracker.hpp"
+#include "flight_sw/transfer_flight.hpp"
 #include "shelfcross/camera.hpp"
 #include "shelfcross/sdk_messages.hpp"
 
@@ -126,23 +131,6 @@ struct ClockTick {
 };
 
 using Input = std::variant<CameraFrame, StateRecord, SdkReply, ClockTick>;
-
-enum class Phase {
-  Idle,
-  EnterSdk,
-  StartVideo,
-  WaitVideo,
-  TakeOff,
-  FindShelf,
-  GoToViewpoint,
-  TakeInventory,
-  Approach,
-  Cross,
-  Transfer,  ///< over_tops / around_ends: flying the planned waypoints on odometry
-  Land,
-  Done
-};
-const char* phase_name(Phase phase);
 
 enum class Outcome {
   Running,
@@ -237,9 +225,9 @@ class FlightSoftware {
   bool finished() const { return phase_ == Phase::Done; }
   MissionResult result() const { return result_; }
   /// The inventory of the current shelf (the only one with a single-shelf layout).
-  const Inventory& inventory() const { return inventory_; }
+  const Inventory& inventory() const { return survey_.inventory(); }
   /// Inventories of the shelves finished before the current one.
-  const std::vector<Inventory>& finished_inventories() const { return finished_; }
+  const std::vector<Inventory>& finished_inventories() const { return survey_.finished(); }
   /// Every decided box of every shelf so far, labelled with its shelf index.
   std::vector<BoxEntry> all_boxes() const;
   /// One shelf: Inventory::to_json. Several: {"shelves":[<Inventory::to_json>, ...]}.
@@ -252,9 +240,10 @@ class FlightSoftware {
   void on_reply(const SdkReply& reply);
   void on_state(const StateRecord& state);
   void on_frame(const CameraFrame& frame);
-  void on_completion(const SdkLink::Completion& c);
+  void on_completion(const MissionCommands::Completion& c);
   void supervise();
   // Phase behaviours on a frame
+  void fly(const SurveyStep& step);
   void find_shelf(const Picture& pic);
   void go_to_viewpoint(const Picture& pic, bool view_fresh);
   void take_inventory(const Picture& pic);
@@ -262,7 +251,6 @@ class FlightSoftware {
   void approach_found(const Picture& pic, const TargetTracker::Prediction& predicted, double dt);
   void approach_unseen(double dt);
   void approach_without_target(const Picture& pic);
-  std::vector<CellIndex> cells_clear_of_damage(const Picture& pic) const;
   std::optional<std::string> cross_if_clear(const std::string& why_now);
   // Approach helpers
   bool select_target(const cv::Mat& bgr);
@@ -305,22 +293,14 @@ class FlightSoftware {
   // Actions
   void enter(Phase phase, const std::string& event);
   void command_takeoff_if_ready();
-  void command_takeoff();
   void land(Outcome outcome, const std::string& reason);
   /// Ends the Land phase (Done) with the pending outcome; `landed` false: not acknowledged.
   void finish_landing(bool landed, const std::string& why);
   /// The Land phase has lasted longer than a landing may take (timeouts.land_reply_s).
   bool land_given_up() const;
   void abort_on_ground(const std::string& reason);
-  void set_velocity(const VelocityCommand& v);
-  void hover();
   void hold_or_hover();
   void emit_rc(bool force);
-  void update_view_telemetry();
-  double control_dt_s();
-  bool airborne_phase() const;
-  bool vision_phase() const;
-  bool fast() const { return config_.perception.pipeline == PerceptionPipeline::fast; }
   // Several shelves and the conventional strategies
   bool last_shelf() const { return shelf_ + 1 >= config_.layout.shelf_count; }
   void next_shelf(const std::string& event);
@@ -328,36 +308,22 @@ class FlightSoftware {
   void transfer();
 
   FlightConfig config_;
-  SdkLink link_;
-  TagDetector tag_detector_;
+  MissionCommands commands_;  ///< the non-rc commands, their retries and re-asks
+  Sticks sticks_;  ///< the velocity flown, its PI loops and its rc datagrams
+  ShelfSurvey survey_;  ///< FindShelf, GoToViewpoint, TakeInventory; the inventories
+  TransferFlight transfer_;  ///< the conventional strategies' waypoints
   cv::Mat masked_bgr_;  ///< a damaged picture with its damaged rows blanked (on_frame)
-  MarkerDetector marker_detector_;
-  Inventory inventory_;
-  PiController pi_z_, pi_psi_;
 
   Phase phase_ = Phase::Idle;
   TimeNs now_ns_ = 0;
   TimeNs phase_start_ns_ = 0;
-  int attempts_ = 0;  ///< attempts of the current non-rc command
   MissionResult result_;
   Outcome pending_outcome_ = Outcome::Aborted;  ///< the outcome a Land phase ends in
-  std::optional<TimeNs> land_again_at_ns_;  ///< after a refused `land`: when to ask again
   std::optional<StateRecord> state_;
   std::optional<TimeNs> last_frame_ns_;
   TimeNs airborne_since_ns_ = 0;  ///< video-stall timer floor: frames are needed from here
-  std::optional<TimeNs> last_rc_ns_;
-  std::optional<TimeNs> last_control_ns_;
-  VelocityCommand velocity_;
-  std::optional<TimeNs> velocity_set_ns_;  ///< when set_velocity last set velocity_ (hold_or_hover)
   bool video_stalled_ = false;
 
-  // Perception state (buffers reused frame to frame)
-  ShelfView view_;
-  std::vector<MarkerSighting> markers_;
-  // Viewpoint
-  Eigen::Vector3d viewpoint_G_m_;
-  int settled_frames_ = 0;
-  std::optional<TimeNs> last_full_view_ns_;
   // Target (target_tracker.hpp): the cell, its corner tags tracked, its pose, its identity.
   TargetTracker tracker_;
   std::optional<TimeNs> reread_back_until_ns_;  ///< a re-read from close backs out until then
@@ -383,15 +349,8 @@ class FlightSoftware {
   std::optional<double> crossing_height_m_;   ///< the height the crossing holds, h's frame
   // Shelves
   int shelf_ = 0;
-  std::vector<Inventory> finished_;
-  std::optional<PoseEstimate> pose_G_;  ///< last pose in the grid frame (at the viewpoint)
   // Odometry frame O (odometry.hpp): the state's velocities integrated, its height.
   StateOdometry odometry_;
-  // Transfer
-  std::vector<Eigen::Vector3d> waypoints_O_m_;
-  size_t waypoint_ = 0;
-  double hold_yaw_O_rad_ = 0.0;
-  TimeNs leg_start_ns_ = 0;
 
   Telemetry telemetry_;
   std::vector<SdkCommand> out_;  ///< the commands of the input being handled

@@ -99,9 +99,8 @@ void FlightSoftware::back_out_and_land(const std::string& reason, double flown_i
   retreat_until_ns_ = now_ns_ + seconds_to_ns(std::max(0.0, back_m) / config_.control.back_off_speed_mps);
   retreat_reason_ = reason;
   telemetry_.event = retreat_reason_ + ": backing out to land clear of the shelf";
-  pi_z_.reset();
-  pi_psi_.reset();
-  set_velocity(back_off_velocity(config_.control));
+  sticks_.restart_loops();
+  sticks_.set(back_off_velocity(config_.control), now_ns_);
 }
 
 // On each state record of the crossing: the watch's verdict (line_hold.hpp); a drift seen while
@@ -118,7 +117,7 @@ void FlightSoftware::watch_crossing(const StateRecord& s) {
   crossing_height_m_.reset();
   line_hold_.clear();
   lateral_active_ns_ = now_ns_;  // stillness to be shown anew
-  set_velocity(back_off_velocity(config_.control));
+  sticks_.set(back_off_velocity(config_.control), now_ns_);
   if (++crossing_refusals_ >= config_.mission.crossing_attempts) {
     back_out_and_land(std::string(kCrossingDeclined) + kLineCannotBeHeld + ": " + why, (odometry_.p_O_m().head<2>() - crossing_end_.start_O_m).dot(crossing_end_.axis_O));
   } else {

@@ -1,0 +1,167 @@
+#include "flight_sw/shelf_survey.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "flight_sw/flight_software.hpp"
+#include "flight_sw/guidance.hpp"
+
+namespace shelfcross::flight_sw {
+
+namespace {
+using Step = SurveyStep;
+Step fly(const VelocityCommand& v) {
+  Step step;
+  step.velocity = v;
+  return step;
+}
+Step hover(Step::Next next = Step::Next::Stay) {
+  Step step;
+  step.next = next;
+  step.hover = true;
+  return step;
+}
+}  // namespace
+
+ShelfSurvey::ShelfSurvey(const FlightConfig& config)
+    : config_(config),
+      tag_detector_(config_.perception),
+      marker_detector_(config_.shelf.aruco_dictionary),
+      inventory_(0, config_.shelf.levels(), config_.shelf.columns(), config_.perception.marker_min_agreeing_frames),
+      viewpoint_G_m_(optimal_viewpoint_G(config_.shelf, config_.camera, config_.mount, config_.mission.viewpoint_margin)) {}
+
+SurveyStep ShelfSurvey::find_shelf(const Picture& pic, bool back_out, Telemetry& telemetry) {
+  analyse(pic.bgr, telemetry);
+  if (view_.full && !pic.decides) return fly({});  // to be confirmed on a nearly whole picture
+  if (view_.full) {
+    Step step;
+    step.next = Step::Next::WholeShelfInView;
+    return step;
+  }
+  VelocityCommand v;
+  if (!view_.tags.empty()) {
+    // A fragment: back away (only while the shelf is too close to fit the view) and centre it
+    // until the whole grid fits the view (guidance.hpp).
+    v = fragment_velocity(config_, view_.tags, view_.largest_tag_area_px, -viewpoint_G_m_.x());
+  } else if (back_out) {
+    v.vx_B_mps = -config_.control.back_off_speed_mps;  // a re-read from close: back out first
+  } else {
+    v.yaw_rate_radps = config_.control.search_yaw_rate_radps;  // nothing in view: turn and look
+  }
+  return fly(v);
+}
+
+SurveyStep ShelfSurvey::go_to_viewpoint(const Picture& pic, TimeNs now_ns, bool view_fresh, Telemetry& telemetry) {
+  if (!view_fresh) analyse(pic.bgr, telemetry);
+  const MissionParams& m = config_.mission;
+  if (!view_.full) {
+    const bool lost = last_full_view_ns_ && ns_to_seconds(now_ns - *last_full_view_ns_) > m.viewpoint_lost_s;
+    return hover(lost ? Step::Next::ShelfOutOfView : Step::Next::Stay);
+  }
+  last_full_view_ns_ = now_ns;
+  std::vector<cv::Point3d> obj;
+  std::vector<cv::Point2d> img;
+  for (int r = 0; r < view_.grid.rows; ++r) {
+    for (int c = 0; c < view_.grid.columns; ++c) {
+      obj.push_back(grid_tag_G(config_.shelf, c, r));
+      img.push_back(view_.tags[static_cast<size_t>(view_.grid.at(r, c))].centre_px);
+    }
+  }
+  const auto pose = estimate_pose(obj, img, config_.camera, config_.mount);
+  if (!pose) return hover();
+  telemetry.pose = pose;
+  telemetry.pose_in_cell_frame = false;
+  pose_G_ = pose;
+  // e1: from the current position to the optimal viewpoint, in G; flown in the body frame.
+  const Eigen::Vector3d e1 = viewpoint_G_m_ - pose->p_FB_m();
+  telemetry.e1_G_m = e1;
+  const bool there = e1.norm() < m.viewpoint_position_tolerance_m && std::abs(pose->yaw_rad) < m.viewpoint_yaw_tolerance_rad;
+  if (!there) settled_frames_ = 0;
+  else if (pic.decides) ++settled_frames_;  // a damaged picture neither counts nor resets
+  const VelocityCommand v = viewpoint_velocity(config_.control, e1, pose->yaw_rad);
+  Step step = fly(v);
+  if (settled_frames_ >= m.viewpoint_settle_frames) {  // flown, then a hover: set now, at rest
+    step.next = Step::Next::AtViewpoint;
+    step.hover = true;
+  }
+  return step;
+}
+
+SurveyStep ShelfSurvey::take_inventory(const Picture& pic, Telemetry& telemetry) {
+  if (!pic.decides) return hover();  // a guessed band may hold a marker, or shift the grid labels
+  analyse(pic.bgr, telemetry);
+  if (!view_.full) return hover();
+  read_markers(pic.bgr);
+  telemetry.markers_seen = static_cast<int>(markers_.size());
+  const std::vector<std::pair<CellIndex, int>> sightings = assign_markers(view_, markers_, config_);
+  if (pic.whole()) {
+    inventory_.observe(sightings, true);
+  } else {
+    inventory_.observe(sightings, cells_clear_of_damage(pic));
+  }
+  // Closed after inventory_frames full views, with enough whole views of every cell without a
+  // box to decide whether it is empty (inventory.hpp); the timeout bounds the wait.
+  if (inventory_.frames() < config_.perception.inventory_frames || !inventory_.empty_decidable()) return hover();
+  return hover(Step::Next::InventoryTaken);
+}
+
+void ShelfSurvey::read_markers(const cv::Mat& bgr) {
+  markers_.clear();
+  if (config_.perception.pipeline == PerceptionPipeline::fast) {
+    // Markers only where boxes can be: the cells, i.e. inside the front tags' bounding box.
+    cv::Rect grid = view_.tags.front().bbox_px;
+    for (const TagBlob& t : view_.tags) grid |= t.bbox_px;
+    marker_detector_.detect_in(bgr, grid, config_.shelf.marker_size_m * view_.px_per_m,
+                               config_.perception.marker_area_ratio_threshold, markers_);
+  } else {
+    marker_detector_.detect(bgr, markers_);
+  }
+}
+
+void ShelfSurvey::analyse(const cv::Mat& bgr, Telemetry& telemetry) {
+  analyse_shelf(bgr, tag_detector_, config_, view_);
+  update_view_telemetry(telemetry);
+}
+
+// The cells' rows are their corner tags' centres, band_margin_px around (the marker detector's
+// threshold window and the picture's motion).
+std::vector<CellIndex> ShelfSurvey::cells_clear_of_damage(const Picture& pic) const {
+  std::vector<CellIndex> out;
+  const double margin = config_.perception.band_margin_px;
+  if (margin < 0.0) return out;
+  for (int l = 1; l <= config_.shelf.levels(); ++l) {
+    for (int c = 1; c <= config_.shelf.columns(); ++c) {
+      const auto q = cell_quad(view_, {l, c});
+      double top = q[0].y, bottom = q[0].y;
+      for (const cv::Point2d& p : q) {
+        top = std::min(top, p.y);
+        bottom = std::max(bottom, p.y);
+      }
+      if (!pic.damaged_rows || !rows_touch(*pic.damaged_rows, top - margin, bottom + margin)) out.push_back({l, c});
+    }
+  }
+  return out;
+}
+
+void ShelfSurvey::next_shelf(int shelf) {
+  finished_.push_back(inventory_);
+  inventory_ = Inventory(shelf, config_.shelf.levels(), config_.shelf.columns(), config_.perception.marker_min_agreeing_frames);
+  pose_G_.reset();
+  last_full_view_ns_.reset();
+}
+
+void ShelfSurvey::update_view_telemetry(Telemetry& t) const {
+  t.tags.clear();
+  for (size_t i = 0; i < view_.tags.size(); ++i) {
+    const bool classified = view_.grid.valid && i < view_.grid.row.size();
+    t.tags.push_back({view_.tags[i].centre_px, view_.tags[i].area_px, classified ? view_.grid.row[i] : -1,
+                      classified ? view_.grid.column[i] : -1});
+  }
+  t.grid_valid = view_.grid.valid;
+  t.grid_rows = view_.grid.rows;
+  t.grid_columns = view_.grid.columns;
+  t.full_view = view_.full;
+  t.grid_refusal = view_.grid.refusal;
+}
+
+}  // namespace shelfcross::flight_sw
