@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "flight_sw/flight_software.hpp"
+#include "flight_sw/telemetry.hpp"
 #include "flight_sw/guidance.hpp"
 
 namespace shelfcross::flight_sw {
