@@ -22,7 +22,7 @@
 //      must lie in that cell as the pose projects it. One agreeing marker confirms; one
 //      disagreeing contradicts.
 // The row is also checked against the state height on every pose (target_pose.hpp,
-// pose_on_another_level).
+// judge_pose).
 //
 // Frames: the hypothesis' cell frame K (navigation.hpp): x into the shelf, y left, z up, origin
 // the cell centre on the front bars' plane. The pose X_KC is the camera in K (OpenCV camera
