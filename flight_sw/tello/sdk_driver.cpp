@@ -21,10 +21,6 @@ std::string trim_reply(const std::string& raw) {
   return raw.substr(b, e - b);
 }
 
-bool ok_reply(const std::string& s) {
-  return s.size() == 2 && (s[0] == 'o' || s[0] == 'O') && (s[1] == 'k' || s[1] == 'K');
-}
-
 bool printable(const std::string& s) {
   return std::all_of(s.begin(), s.end(), [](char c) { return c >= 0x20 && c <= 0x7e; });
 }
@@ -72,6 +68,7 @@ SdkDriver::SdkDriver(DriverConfig config, const Clock& clock)
 SdkDriver::SdkDriver(DriverConfig config, const Clock& clock, std::unique_ptr<DatagramChannel> command_channel,
                      std::unique_ptr<DatagramChannel> state_channel)
     : config_(std::move(config)),
+      pacer_(config_.command_gap_ns),
       clock_(clock),
       drone_command_{config_.drone_ip, config_.drone_command_port},
       command_channel_(std::move(command_channel)),
@@ -119,11 +116,10 @@ bool SdkDriver::submit(const std::string& text, const CommandOptions& options) {
     return false;
   }
   if (options.urgent) {
-    if (outstanding_) {
+    if (const Pending* o = pacer_.outstanding()) {
       ++counters_.abandoned;
-      event(DriverEvent::Kind::Abandoned, outstanding_->text, "", outstanding_->attempt,
-            outstanding_->options.tag);
-      outstanding_.reset();
+      event(DriverEvent::Kind::Abandoned, o->text, "", o->attempt, o->options.tag);
+      pacer_.complete();
       // Its reply may still come: the guard keeps it from answering the urgent command as
       // long as the gap allows; what arrives later is drained as stale.
     }
@@ -179,27 +175,27 @@ void SdkDriver::read_replies(TimeNs now) {
     const std::string text = trim_reply(d->bytes);
     if (text.empty() || text.size() > kMaxReplyBytes || !printable(text)) {
       ++counters_.bad_replies;
-      event(DriverEvent::Kind::BadReply, outstanding_ ? outstanding_->text : "",
+      event(DriverEvent::Kind::BadReply, outstanding() ? pacer_.outstanding()->text : "",
             std::to_string(d->bytes.size()) + " bytes");
       continue;
     }
     // Nothing outstanding, or a refused command waiting to be re-sent: no reply is expected.
-    if (!outstanding_ || outstanding_->resend_ns) {
+    Pending* current = pacer_.outstanding();
+    if (!current || current->resend_ns) {
       ++counters_.stale_replies;
       event(DriverEvent::Kind::StaleReply, "", text);
       continue;
     }
-    Pending& p = *outstanding_;
-    if (p.options.retry_unless_ok && !ok_reply(text) && p.attempt <= p.retries) {
+    Pending& p = *current;
+    if (p.options.retry_unless_ok && !flight_sw::is_ok_reply(text) && p.attempt <= p.retries) {
       ++counters_.refusals;
       event(DriverEvent::Kind::Refused, p.text, text, p.attempt, p.options.tag);
       p.resend_ns = now + config_.refusal_retry_ns;
       continue;
     }
     ++counters_.replies;
-    event(DriverEvent::Kind::Reply, outstanding_->text, text, outstanding_->attempt,
-          outstanding_->options.tag);
-    outstanding_.reset();
+    event(DriverEvent::Kind::Reply, p.text, text, p.attempt, p.options.tag);
+    pacer_.complete();
   }
 }
 
@@ -231,13 +227,12 @@ void SdkDriver::read_states(TimeNs now) {
 }
 
 void SdkDriver::resend(TimeNs now) {
-  Pending& p = *outstanding_;
+  Pending& p = *pacer_.outstanding();
   ++counters_.retries;
   ++p.attempt;
   p.resend_ns.reset();
   event(DriverEvent::Kind::Retry, p.text, "", p.attempt, p.options.tag);
-  p.sent_ns = now;
-  last_command_ns_ = now;
+  pacer_.resent(now);
   if (transmit(now, p.text)) {
     ++counters_.commands_sent;
     event(DriverEvent::Kind::Sent, p.text, "", p.attempt, p.options.tag);
@@ -245,26 +240,26 @@ void SdkDriver::resend(TimeNs now) {
 }
 
 void SdkDriver::check_timeout(TimeNs now) {
-  if (!outstanding_) return;
-  if (outstanding_->resend_ns) {
-    if (now >= *outstanding_->resend_ns) resend(now);
+  Pending* current = pacer_.outstanding();
+  if (!current) return;
+  if (current->resend_ns) {
+    if (now >= *current->resend_ns) resend(now);
     return;
   }
-  if (now - outstanding_->sent_ns < outstanding_->timeout_ns) return;
-  Pending& p = *outstanding_;
+  if (!pacer_.overdue(now)) return;
+  Pending& p = *current;
   if (p.attempt <= p.retries) {
     resend(now);
     return;
   }
   ++counters_.failed;
   event(DriverEvent::Kind::Failed, p.text, "", p.attempt, p.options.tag);
-  outstanding_.reset();
+  pacer_.complete();
   guard_until_ns_ = now + config_.stale_guard_ns;
 }
 
 void SdkDriver::send_next(TimeNs now) {
-  if (outstanding_ || queue_.empty()) return;
-  if (last_command_ns_ && now - *last_command_ns_ < config_.command_gap_ns) return;
+  if (queue_.empty() || !pacer_.may_send(now)) return;
   if (now < guard_until_ns_) return;
   const bool motion = sdk::classify_command(queue_.front().text) == sdk::CommandKind::Motion;
   if (motion) {
@@ -282,19 +277,18 @@ void SdkDriver::send_next(TimeNs now) {
   Pending p = std::move(queue_.front());
   queue_.pop_front();
   p.attempt = 1;
-  p.sent_ns = now;
-  if (transmit(now, p.text)) {
+  const TimeNs timeout_ns = p.timeout_ns;
+  // Outstanding even if the OS refuses the send: the timeout and retries deal with it.
+  const Pending& sent = pacer_.send(now, std::move(p), timeout_ns);
+  if (transmit(now, sent.text)) {
     ++counters_.commands_sent;
-    event(DriverEvent::Kind::Sent, p.text, "", p.attempt, p.options.tag);
+    event(DriverEvent::Kind::Sent, sent.text, "", sent.attempt, sent.options.tag);
   }
-  // Outstanding even if the OS refused the send: the timeout and retries deal with it.
-  last_command_ns_ = now;
-  outstanding_ = std::move(p);
 }
 
 void SdkDriver::send_rc(TimeNs now) {
   const bool gap_ok = !last_rc_ns_ || now - *last_rc_ns_ >= config_.rc_min_gap_ns;
-  if (rc_setpoint_ && !outstanding_ && gap_ok) {
+  if (rc_setpoint_ && !outstanding() && gap_ok) {
     if (now - rc_set_ns_ >= config_.rc_hold_ns && *rc_setpoint_ != kHoverRc) {
       // Not renewed: the submitter stopped steering. Hover rather than fly on blind.
       rc_setpoint_ = kHoverRc;

@@ -8,10 +8,12 @@
 // Command rules it enforces:
 //  - every outgoing text is validated (sdk::classify_command): an unknown command or an argument
 //    out of the SDK's range is refused locally and never sent;
-//  - one non-rc command outstanding at a time, queued commands wait for its reply or timeout;
-//    at least command_gap_ns between two non-rc commands;
-//  - each non-rc command waits for its reply (ReplyTimeouts: 7 s, 20 s for takeoff) and is
-//    re-sent up to `retries` times when none comes; then it fails;
+//  - the SDK's rules for non-rc commands, kept by flight_sw::CommandPacer (the flight
+//    software's SdkLink keeps them with the same pacer): one outstanding at a time, queued
+//    commands wait for its reply or timeout; at least command_gap_ns between two sends;
+//    each waits for its reply (ReplyTimeouts: 7 s, 20 s for takeoff);
+//  - the driver's own: a command is re-sent up to `retries` times when no reply comes; then
+//    it fails;
 //  - a refusal ("error", "error Not joystick", "error No valid imu", ...: any reply but "ok")
 //    completes the command (Reply event) unless CommandOptions::retry_unless_ok: then it is a
 //    failed attempt (Refused event) and the command is re-sent refusal_retry_ns later while
@@ -45,6 +47,7 @@
 #include <string>
 #include <vector>
 
+#include "flight_sw/command_pacer.hpp"
 #include "flight_sw/tello/clock.hpp"
 #include "flight_sw/tello/udp_socket.hpp"
 #include "sdk/command.hpp"
@@ -158,8 +161,8 @@ class SdkDriver {
   /// Events since the last call, in the order they happened.
   std::vector<DriverEvent> take_events();
 
-  bool outstanding() const { return outstanding_.has_value(); }
-  bool idle() const { return !outstanding_ && queue_.empty(); }
+  bool outstanding() const { return pacer_.outstanding() != nullptr; }
+  bool idle() const { return !outstanding() && queue_.empty(); }
   std::optional<TimeNs> last_state_ns() const { return last_state_ns_; }
   const DriverCounters& counters() const { return counters_; }
   const DriverConfig& config() const { return config_; }
@@ -172,10 +175,9 @@ class SdkDriver {
   struct Pending {
     std::string text;
     CommandOptions options;
-    TimeNs timeout_ns = 0;
+    TimeNs timeout_ns = 0;  ///< the reply timeout it is sent with
     int retries = 0;
     int attempt = 0;
-    TimeNs sent_ns = 0;
     std::optional<TimeNs> resend_ns;  ///< refused: re-send at this time
   };
   void event(DriverEvent::Kind kind, const std::string& command, const std::string& reply = "",
@@ -190,13 +192,12 @@ class SdkDriver {
   bool transmit(TimeNs now, const std::string& text);
 
   DriverConfig config_;
+  flight_sw::CommandPacer<Pending> pacer_;  ///< the outstanding command; the gap, the timeout
   const Clock& clock_;
   Endpoint drone_command_;
   std::unique_ptr<DatagramChannel> command_channel_;
   std::unique_ptr<DatagramChannel> state_channel_;
   std::deque<Pending> queue_;
-  std::optional<Pending> outstanding_;
-  std::optional<TimeNs> last_command_ns_;  ///< last non-rc send
   std::optional<TimeNs> last_any_ns_;      ///< last datagram of any kind sent
   TimeNs guard_until_ns_ = 0;
   // rc setpoint
