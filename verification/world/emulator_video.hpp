@@ -40,7 +40,8 @@ class EmulatorVideo {
   /// A capture due at the tick t (now_ns: the time the main loop has reached); `to`: the
   /// client's video port while the stream is on, nullopt while it is off (the next capture
   /// streamed is then a key frame). Draws the frame-loss fault of every streamed capture.
-  void capture(const TelloWorld::Capture& capture, TimeNs t, TimeNs now_ns, const std::optional<tello::Endpoint>& to);
+  void capture(const TelloWorld::Capture& capture, TimeNs t, TimeNs now_ns,
+               const std::optional<tello::Endpoint>& to);
   /// Why the worker could not render or encode a frame ("video: ..."), empty while it can.
   /// Requires the outbox's lock.
   const std::string& error_locked() const;
