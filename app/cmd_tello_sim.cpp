@@ -127,9 +127,9 @@ const CommandRegistration kTelloSim{
         std::signal(SIGINT, on_stop_signal);
         std::signal(SIGTERM, on_stop_signal);
         std::cout << "tello-sim " << scenario.name << " seed " << o->config.seed << ": commands on "
-                  << o->config.bind_ip << ":" << emulator.command_port() << ", state from port "
-                  << emulator.state_source_port() << " to port " << o->config.client_state_port
-                  << ", video from port " << emulator.video_source_port() << " to port "
+                  << o->config.bind_ip << ":" << emulator.ports().command << ", state from port "
+                  << emulator.ports().state_source << " to port " << o->config.client_state_port
+                  << ", video from port " << emulator.ports().video_source << " to port "
                   << o->config.client_video_port << "\n"
                   << (o->nominal ? "nominal scenario (no dispersion)\n" : "");
         if (!setup.drawn.empty()) {

@@ -1,48 +1,30 @@
 #include "flight_sw/sdk_link.hpp"
 
-#include <cctype>
-
 namespace shelfcross::flight_sw {
 
-bool is_ok_reply(const std::string& text) {
-  size_t b = 0, e = text.size();
-  while (b < e && std::isspace(static_cast<unsigned char>(text[b]))) ++b;
-  while (e > b && std::isspace(static_cast<unsigned char>(text[e - 1]))) --e;
-  return e - b == 2 && std::tolower(static_cast<unsigned char>(text[b])) == 'o' &&
-         std::tolower(static_cast<unsigned char>(text[b + 1])) == 'k';
-}
-
 void SdkLink::request(std::string text, double reply_timeout_s) {
-  queued_ = Pending{std::move(text), seconds_to_ns(reply_timeout_s), 0};
+  queued_ = Queued{std::move(text), seconds_to_ns(reply_timeout_s)};
 }
 
 void SdkLink::poll(TimeNs now_ns, std::vector<SdkCommand>& out) {
-  if (!queued_ || outstanding_) return;
-  if (last_sent_ns_ && now_ns - *last_sent_ns_ < gap_ns_) return;
-  outstanding_ = std::move(queued_);
+  if (!queued_ || !pacer_.may_send(now_ns)) return;
+  Queued q = std::move(*queued_);
   queued_.reset();
-  outstanding_->sent_ns = now_ns;
-  last_sent_ns_ = now_ns;
-  out.push_back({now_ns, outstanding_->text});
+  out.push_back({now_ns, pacer_.send(now_ns, std::move(q.text), q.timeout_ns)});
 }
 
 std::optional<SdkLink::Completion> SdkLink::on_reply(const SdkReply& reply) {
-  if (!outstanding_) {
+  std::optional<std::string> command = pacer_.complete();
+  if (!command) {
     ++stale_replies_;
     return std::nullopt;
   }
-  Completion c{outstanding_->text, reply.text, is_ok_reply(reply.text), false};
-  outstanding_.reset();
-  return c;
+  return Completion{std::move(*command), reply.text, is_ok_reply(reply.text), false};
 }
 
 std::optional<SdkLink::Completion> SdkLink::check_timeout(TimeNs now_ns) {
-  if (!outstanding_ || now_ns - outstanding_->sent_ns < outstanding_->timeout_ns) {
-    return std::nullopt;
-  }
-  Completion c{outstanding_->text, "", false, true};
-  outstanding_.reset();
-  return c;
+  if (!pacer_.overdue(now_ns)) return std::nullopt;
+  return Completion{std::move(*pacer_.complete()), "", false, true};
 }
 
 }  // namespace shelfcross::flight_sw

@@ -1,13 +1,15 @@
 #pragma once
-// The command side of the Tello SDK as docs/tello_sdk.md describes it: one non-rc command
-// outstanding at a time (replies carry no tag), a gap between non-rc commands, a reply
-// timeout per command; rc commands need no reply and go out at once. Time is the stamp of
-// the input being handled; nothing here reads a clock.
+// The flight software's side of the Tello SDK's command rules (docs/tello_sdk.md): the rules
+// themselves (one non-rc command outstanding, the gap, the reply timeout) are CommandPacer's
+// (command_pacer.hpp); this link holds the one command waiting to go and says how each ended.
+// rc commands need no reply and go out at once, not through here. Time is the stamp of the
+// input being handled; nothing here reads a clock.
 
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "flight_sw/command_pacer.hpp"
 #include "shelfcross/sdk_messages.hpp"
 
 namespace shelfcross::flight_sw {
@@ -22,7 +24,7 @@ class SdkLink {
     bool timed_out = false;
   };
 
-  explicit SdkLink(double gap_s = 0.1) : gap_ns_(seconds_to_ns(gap_s)) {}
+  explicit SdkLink(double gap_s = 0.1) : pacer_(seconds_to_ns(gap_s)) {}
 
   /// Queues a non-rc command; it goes out once no command is outstanding and the gap since
   /// the last non-rc command has passed. A queued command not yet sent is replaced.
@@ -35,24 +37,18 @@ class SdkLink {
   /// The outstanding command, if its reply is overdue.
   std::optional<Completion> check_timeout(TimeNs now_ns);
 
-  bool outstanding() const { return outstanding_.has_value(); }
-  bool idle() const { return !outstanding_ && !queued_; }
+  bool outstanding() const { return pacer_.outstanding() != nullptr; }
+  bool idle() const { return !outstanding() && !queued_; }
   int stale_replies() const { return stale_replies_; }
 
  private:
-  struct Pending {
+  struct Queued {
     std::string text;
     TimeNs timeout_ns = 0;
-    TimeNs sent_ns = 0;
   };
-  TimeNs gap_ns_;
-  std::optional<Pending> queued_;
-  std::optional<Pending> outstanding_;
-  std::optional<TimeNs> last_sent_ns_;
+  CommandPacer<std::string> pacer_;  ///< the outstanding command's text
+  std::optional<Queued> queued_;
   int stale_replies_ = 0;
 };
-
-/// "ok" in any case, blanks around it ignored.
-bool is_ok_reply(const std::string& text);
 
 }  // namespace shelfcross::flight_sw

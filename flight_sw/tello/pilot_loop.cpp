@@ -1,33 +1,17 @@
 #include "flight_sw/tello/pilot_loop.hpp"
 
 #include <algorithm>
-#include <cstdio>
 #include <filesystem>
 #include <ostream>
 #include <sstream>
 #include <variant>
 
-#include <opencv2/imgcodecs.hpp>
+#include "flight_sw/tello/drone_watch.hpp"
+#include "flight_sw/tello/pilot_log.hpp"
+#include "flight_sw/tello/stick_program.hpp"
 
 namespace shelfcross::tello {
 namespace {
-
-enum Tag : int { kTagFlightSoftware = 1, kTagPilot = 2 };
-
-const char* origin_name(int tag) {
-  switch (tag) {
-    case kTagFlightSoftware: return "fsw";
-    case kTagPilot: return "pilot";
-    default: return "driver";
-  }
-}
-
-// Picture rows a frame's damage may cover (the log's measure of how much is guesswork).
-int damaged_row_count(const VideoFrame& f) {
-  int rows = 0;
-  for (const RowSpan& r : f.damaged_rows) rows += r.v_end_px - r.v_begin_px;
-  return rows;
-}
 
 DriverConfig driver_config(const PilotLoopConfig& c) {
   DriverConfig dc = c.driver;
@@ -38,12 +22,61 @@ DriverConfig driver_config(const PilotLoopConfig& c) {
   return dc;
 }
 
+// The order in which the flight software gets its inputs: by their clock stamps, which never
+// go backwards; and the flight computer's timer: with nothing else to hand over, a tick every
+// 50 ms lets the flight software's timeouts and retries fire (a lost first "command" is resent).
+class InputFeed {
+ public:
+  static constexpr TimeNs kTickPeriodNs = kNsPerSecond / 20;
+
+  void start(TimeNs now) { last_tick_ns_ = now; }
+  /// Adds a tick to empty `inputs` when one is due at now; sorts them by stamp.
+  void prepare(std::vector<flight_sw::Input>& inputs, TimeNs now) {
+    if (inputs.empty() && now - last_tick_ns_ >= kTickPeriodNs) {
+      last_tick_ns_ = now;
+      inputs.emplace_back(flight_sw::ClockTick{now});
+    }
+    std::stable_sort(inputs.begin(), inputs.end(), [](const auto& a, const auto& b) { return stamp(a) < stamp(b); });
+  }
+  /// Raises the input's stamp to the last one fed (a frame decoded on the receiver thread may
+  /// be stamped just before a state record read earlier in this loop).
+  void monotonic(flight_sw::Input& in) {
+    std::visit([&](auto& m) { m.t_ns = std::max(m.t_ns, last_fed_ns_); }, in);
+    last_fed_ns_ = stamp(in);
+  }
+
+ private:
+  static TimeNs stamp(const flight_sw::Input& in) {
+    return std::visit([](const auto& m) { return m.t_ns; }, in);
+  }
+  TimeNs last_fed_ns_ = 0;
+  TimeNs last_tick_ns_ = 0;
+};
+
+// The program's failsafes' state: when the loop started (the state-start timeout counts from
+// it), the video hover, the signals seen, and the program's own landing and how it ends.
+struct FailsafeState {
+  TimeNs started_ns = 0;
+  bool hover_override = false;  ///< video stalled: hovering, the flight software's sticks ignored
+  int signals_seen = 0;
+  bool landing = false;         ///< the program's land is under way
+  bool land_done = false;       ///< ... and acknowledged, failed, or not needed
+  bool land_ok = false;         ///< ... with the drone down
+  int exit_code = 0;            ///< the loop's exit code once landed
+  std::string reason;           ///< why the program landed (empty when it did not)
+};
+
 }  // namespace
 
 class PilotLoop::Impl {
  public:
   Impl(const PilotLoopConfig& o, const Clock& clock, PilotChannels channels)
-      : o_(o), clock_(clock), log_(o.log_path), fsw_(o.flight) {
+      : o_(o),
+        clock_(clock),
+        log_(o.log_path, o.console),
+        fsw_(o.flight),
+        drone_(fsw_.config().mission.airborne_height_m),
+        program_(o.stick_program, o.mode, log_, o.console, clock) {
     if (channels.command || channels.state) {
       driver_ = std::make_unique<SdkDriver>(driver_config(o_), clock_, std::move(channels.command),
                                             std::move(channels.state));
@@ -56,9 +89,10 @@ class PilotLoop::Impl {
 
   void start() {
     if (!o_.record_dir.empty()) std::filesystem::create_directories(o_.record_dir);
-    start_ns_ = clock_.now_ns();
-    last_tick_ns_ = start_ns_;
-    log_.write(start_ns_, "start",
+    const TimeNs start_ns = clock_.now_ns();
+    safe_.started_ns = start_ns;
+    feed_.start(start_ns);
+    log_.write(start_ns, "start",
                {{"drone", o_.driver.drone_ip + ":" + std::to_string(o_.driver.drone_command_port)},
                 {"local_command_port", driver_->local_command_port()},
                 {"state_port", driver_->local_state_port()},
@@ -67,7 +101,7 @@ class PilotLoop::Impl {
                 {"mode", o_.mode},
                 {"flight_config", o_.flight_config_path},
                 {"calibration", o_.calibration_path}});
-    submit_fsw(fsw_.start(start_ns_));
+    submit_fsw(fsw_.start(start_ns));
   }
 
   std::optional<int> step(int signals) {
@@ -83,45 +117,27 @@ class PilotLoop::Impl {
   void step_flight_software() {
     std::vector<flight_sw::Input> inputs;
     for (DriverEvent& e : driver_->take_events()) {
-      log_event(e);
+      log_.driver_event(e);
+      drone_.on_event(e);
       using K = DriverEvent::Kind;
       if (e.kind == K::State && e.state) {
-        last_state_ns_ = e.t_ns;
-        battery_pct_ = e.state->battery_pct;
-        last_height_m_ = e.state->height_m;
         inputs.emplace_back(*e.state);
-      } else if (e.kind == K::Sent && e.command == "takeoff") {
-        if (!airborne_) airborne_since_ns_ = e.t_ns;
-        airborne_ = true;
       } else if (e.kind == K::Reply || e.kind == K::Failed) {
-        const bool ok = e.kind == K::Reply && flight_sw::is_ok_reply(e.reply);
-        // A `land` whose `ok` was lost: repeated, it finds the drone on the ground and gets
-        // `error`, or times out; the state height says whether it is down.
-        if (e.command == "land" && (ok || grounded())) airborne_ = false;
-        // A refused takeoff ("error No valid imu", ...) left the drone on the ground, unless
-        // the state stream says otherwise.
-        if (e.command == "takeoff" && e.kind == K::Reply && !ok &&
-            !(last_height_m_ && *last_height_m_ > airborne_height_m())) {
-          airborne_ = false;
-        }
         if (e.tag == kTagFlightSoftware && e.kind == K::Reply) inputs.emplace_back(SdkReply{e.t_ns, e.reply});
         if (e.tag == kTagPilot && e.command == "land") {
-          land_done_ = true;
-          land_ok_ = ok || grounded();
+          safe_.land_done = true;
+          safe_.land_ok = accepted(e) || drone_.grounded();
         }
       }
     }
     std::optional<VideoFrame> f = video_->take_latest();
     if (f) {
       const TimeNs taken = clock_.now_ns();
-      log_.write(taken, "frame", {{"index", f->index}, {"rx_ns", f->t_ns}, {"handed_ns", f->handed_ns},
-                                  {"damaged", f->damaged}, {"key_group", f->key_group},
-                                  {"damage_events", f->damage_events}, {"damaged_rows", damaged_row_count(*f)},
-                                  {"rows", f->bgr.rows}, {"cols", f->bgr.cols}});
-      last_frame_ns_ = f->handed_ns;
-      if (!o_.record_dir.empty()) record(*f);
-      if (hover_override_) {
-        hover_override_ = false;
+      log_.frame(taken, *f);
+      drone_.on_frame(f->handed_ns);
+      if (!o_.record_dir.empty()) log_.record(*f, o_.record_dir, clock_);
+      if (safe_.hover_override) {
+        safe_.hover_override = false;
         log_.write(taken, "failsafe", {{"event", "video back: control returned to the flight software"}});
       }
       // Damaged (error-concealed) pictures go through, marked: the flight software knows
@@ -129,82 +145,17 @@ class PilotLoop::Impl {
       inputs.emplace_back(CameraFrame{f->handed_ns, f->index, std::move(f->bgr), f->damaged, f->damage_events,
                                       std::move(f->damaged_rows)});
     }
-    // The flight computer's timer: with nothing else to hand over, a tick every 50 ms lets
-    // the flight software's timeouts and retries fire (a lost first "command" is resent).
-    if (inputs.empty()) {
-      const TimeNs now = clock_.now_ns();
-      if (now - last_tick_ns_ >= kTickPeriodNs) {
-        last_tick_ns_ = now;
-        inputs.emplace_back(flight_sw::ClockTick{now});
-      }
-    }
-    auto stamp = [](const flight_sw::Input& in) { return std::visit([](const auto& m) { return m.t_ns; }, in); };
-    std::stable_sort(inputs.begin(), inputs.end(),
-                     [&](const auto& a, const auto& b) { return stamp(a) < stamp(b); });
+    feed_.prepare(inputs, clock_.now_ns());
     for (auto& in : inputs) {
       if (fsw_.finished()) break;
-      // Stamps never go backwards (a frame decoded on the receiver thread may be stamped
-      // just before a state record read earlier in this loop).
-      std::visit([&](auto& m) { m.t_ns = std::max(m.t_ns, last_fed_ns_); }, in);
-      last_fed_ns_ = stamp(in);
+      feed_.monotonic(in);
       submit_fsw(fsw_.step(in));
-      log_telemetry();
-      start_stick_program();
+      log_.telemetry(fsw_.telemetry(), clock_);
+      program_.start_when_airborne(fsw_.phase());
       if (const auto* frame = std::get_if<CameraFrame>(&in)) {
-        log_approach_view();
+        log_.approach_view(fsw_.telemetry(), clock_);
         if (o_.on_frame) o_.on_frame(*frame, fsw_);
       }
-    }
-  }
-
-  // The stick program starts when the flight software has the drone airborne (FindShelf:
-  // its takeoff acknowledged, or the height saying so when the reply was lost).
-  void start_stick_program() {
-    if (!o_.stick_program || program_start_ns_ || program_done_ || fsw_.phase() != flight_sw::Phase::FindShelf) return;
-    program_start_ns_ = clock_.now_ns();
-    log_.write(*program_start_ns_, "stick_program", {{"event", "started"}, {"mode", o_.mode}});
-    if (o_.console) *o_.console << "tello_pilot: " << o_.mode << " started" << std::endl;
-  }
-
-  // One pass of the stick program while airborne; true when it ended the flight (landing).
-  bool fly_stick_program(TimeNs now) {
-    if (!program_start_ns_) return false;
-    const flight_sw::Phase phase = fsw_.phase();
-    if (phase == flight_sw::Phase::Land || phase == flight_sw::Phase::Done) {
-      // The flight software's own failsafe is landing the drone: the program stops.
-      stop_stick_program(now, "stopped: the flight software lands (" + fsw_.telemetry().event + ")");
-      return false;
-    }
-    if (!fsw_.telemetry().tags.empty()) {
-      stop_stick_program(now, "stopped: shelf tags in view");
-      begin_land(o_.mode + " stopped: shelf tags in view (an obstacle near: fly it in open space)", 1);
-      return true;
-    }
-    const std::optional<std::string> rc = o_.stick_program(now - *program_start_ns_);
-    if (!rc) {
-      stop_stick_program(now, "complete");
-      begin_land(o_.mode + " complete", 0);
-      return true;
-    }
-    if (!hover_override_) {
-      CommandOptions opt;
-      opt.tag = kTagPilot;
-      driver_->submit(*rc, opt);
-    }
-    return false;
-  }
-
-  void stop_stick_program(TimeNs now, const std::string& event) {
-    program_start_ns_.reset();
-    program_done_ = true;
-    log_.write(now, "stick_program", {{"event", event}});
-  }
-
-  void record(const VideoFrame& f) {
-    char name[64];
-    std::snprintf(name, sizeof name, "frame_%06lld%s.png", static_cast<long long>(f.index), f.damaged ? "_damaged" : "");
-    if (!cv::imwrite((std::filesystem::path(o_.record_dir) / name).string(), f.bgr, {cv::IMWRITE_PNG_COMPRESSION, 1})) {
-      log_.write(clock_.now_ns(), "failsafe", {{"event", "cannot record frame " + std::string(name)}});
     }
   }
 
@@ -214,14 +165,15 @@ class PilotLoop::Impl {
       const TimeNs now = clock_.now_ns();
       // No takeoff without a live state stream: the program's failsafes need it in the air
       // (and the flight software's battery check needs it before). Its own timeout retries.
+      const std::optional<TimeNs> last_state_ns = drone_.last_state_ns();
       const bool blind_takeoff =
           c.text == "takeoff" &&
-          (!last_state_ns_ || now - *last_state_ns_ > seconds_to_ns(o_.failsafes.state_timeout_s));
-      if (rc && program_start_ns_) continue;  // the stick program flies (its rc lines say what)
-      if (landing_ || (rc && hover_override_) || blind_takeoff) {
+          (!last_state_ns || now - *last_state_ns > seconds_to_ns(o_.failsafes.state_timeout_s));
+      if (rc && program_.flying()) continue;  // the stick program flies (its rc lines say what)
+      if (safe_.landing || (rc && safe_.hover_override) || blind_takeoff) {
         log_.write(now, "fsw_command_ignored",
                    {{"text", c.text},
-                    {"why", landing_         ? "program failsafe landing"
+                    {"why", safe_.landing    ? "program failsafe landing"
                             : blind_takeoff ? "no recent state record: takeoff withheld"
                                             : "program failsafe hover"}});
         continue;
@@ -238,70 +190,19 @@ class PilotLoop::Impl {
     }
   }
 
-  void log_event(const DriverEvent& e) {
-    nlohmann::json j = nlohmann::json::object();
-    if (!e.command.empty()) j["command"] = e.command;
-    if (e.kind == DriverEvent::Kind::State) {
-      j["raw"] = e.reply;
-      j["battery_pct"] = e.state->battery_pct;
-      j["height_m"] = e.state->height_m;
-    } else if (!e.reply.empty()) {
-      j["reply"] = e.reply;
-    }
-    if (e.attempt) j["attempt"] = e.attempt;
-    if (e.tag) j["origin"] = origin_name(e.tag);
-    if (e.synthetic) j["synthetic"] = true;
-    log_.write(e.t_ns, event_kind_name(e.kind), std::move(j));
-  }
-
-  void log_telemetry() {
-    const auto& tm = fsw_.telemetry();
-    if (tm.phase == logged_phase_ && tm.event == logged_event_) return;
-    logged_phase_ = tm.phase;
-    logged_event_ = tm.event;
-    log_.write(clock_.now_ns(), "fsw", {{"phase", flight_sw::phase_name(tm.phase)}, {"event", tm.event},
-                                        {"battery_pct", tm.battery_pct}, {"height_m", tm.height_m}});
-    if (o_.console) {
-      *o_.console << "[" << ns_to_seconds(clock_.now_ns()) << " s] " << flight_sw::phase_name(tm.phase) << ": "
-                  << tm.event << std::endl;
-    }
-  }
-
-  // What the flight software made of each frame of the approach: where it believes it is
-  // relative to the target cell (frame K: x toward the shelf, y left, z up; origin at the
-  // cell's centre on the front face), so that a flight can be understood afterwards.
-  void log_approach_view() {
-    const auto& tm = fsw_.telemetry();
-    if (tm.phase != flight_sw::Phase::Approach) return;
-    nlohmann::json j = {{"tracker_ok", tm.tracker_ok}, {"e_z_m", tm.e_z_m}, {"e_psi_rad", tm.e_psi_rad},
-                        {"settled", tm.settled}, {"holding_short", tm.holding_short},
-                        {"rejected_poses", tm.rejected_poses}, {"wrong_level_poses", tm.wrong_level_poses},
-                        {"damaged_frames", tm.damaged_frames}, {"band_decided_frames", tm.band_decided_frames},
-                        {"unflown_frames", tm.unflown_frames}};
-    if (tm.pose && tm.pose_in_cell_frame) {
-      const Eigen::Vector3d p = tm.pose->p_FB_m();
-      j["p_KB_m"] = {p.x(), p.y(), p.z()};
-      j["yaw_K_rad"] = tm.pose->yaw_rad;
-    }
-    if (tm.tracked_box_px) {
-      const cv::Rect2d& b = *tm.tracked_box_px;
-      j["box_px"] = {b.x, b.y, b.width, b.height};
-    }
-    log_.write(clock_.now_ns(), "fsw_view", std::move(j));
-  }
-
   // Starts the program's landing; the program then exits with `code` (once landed).
   void begin_land(const std::string& reason, int code) {
-    if (landing_) return;
-    landing_ = true;
-    stop_code_ = code;
+    if (safe_.landing) return;
+    safe_.landing = true;
+    safe_.exit_code = code;
     const TimeNs now = clock_.now_ns();
-    log_.write(now, "failsafe", {{"event", "land"}, {"reason", reason}, {"airborne", airborne_}});
-    failsafe_reason_ = reason;
-    if (o_.console) *o_.console << "tello_pilot: " << reason << (airborne_ ? ": landing" : "") << std::endl;
-    if (!airborne_) {
-      land_done_ = true;
-      land_ok_ = true;
+    const bool airborne = drone_.airborne();
+    log_.write(now, "failsafe", {{"event", "land"}, {"reason", reason}, {"airborne", airborne}});
+    safe_.reason = reason;
+    if (o_.console) *o_.console << "tello_pilot: " << reason << (airborne ? ": landing" : "") << std::endl;
+    if (!airborne) {
+      safe_.land_done = true;
+      safe_.land_ok = true;
       return;
     }
     CommandOptions opt;
@@ -317,28 +218,13 @@ class PilotLoop::Impl {
   std::optional<int> supervise(int signals) {
     const TimeNs now = clock_.now_ns();
     const Failsafes& f = o_.failsafes;
-    if (landing_) {
-      if (signals > signals_seen_) {
-        signals_seen_ = signals;
-        log_.write(now, "failsafe", {{"event", "signal while landing: still waiting for the land reply"}});
-      }
-      if (!land_done_) return std::nullopt;
-      if (!land_ok_) {
-        if (o_.console) {
-          *o_.console << "tello_pilot: land not acknowledged; the drone's own watchdog lands it within 15 s "
-                         "of the last command"
-                      << std::endl;
-        }
-        return 1;
-      }
-      return stop_code_;
-    }
+    if (safe_.landing) return landing_outcome(now, signals);
     if (signals > 0) {
-      signals_seen_ = signals;
-      begin_land("stopped by a signal", airborne_ ? 0 : 130);
+      safe_.signals_seen = signals;
+      begin_land("stopped by a signal", drone_.airborne() ? 0 : 130);
       return std::nullopt;
     }
-    if (!last_state_ns_ && now - start_ns_ > seconds_to_ns(f.state_start_timeout_s)) {
+    if (!drone_.last_state_ns() && now - safe_.started_ns > seconds_to_ns(f.state_start_timeout_s)) {
       if (o_.console) {
         *o_.console << "tello_pilot: no state record from " << o_.driver.drone_ip << " within "
                     << f.state_start_timeout_s << " s: is the computer on the Tello's Wi-Fi, UDP port "
@@ -348,47 +234,82 @@ class PilotLoop::Impl {
       begin_land("no state record since the start", 1);
       return std::nullopt;
     }
-    if (airborne_) {
-      if (last_state_ns_ && now - *last_state_ns_ > seconds_to_ns(f.state_timeout_s)) {
-        begin_land("no state record for " + std::to_string(f.state_timeout_s) + " s", 1);
-        return std::nullopt;
-      }
-      if (battery_pct_ >= 0 && battery_pct_ <= f.critical_battery_pct) {
-        begin_land("battery critical (" + std::to_string(battery_pct_) + "%)", 1);
-        return std::nullopt;
-      }
-      if (now - airborne_since_ns_ > seconds_to_ns(f.max_flight_s)) {
-        begin_land("maximum flight time reached", 1);
-        return std::nullopt;
-      }
-      const TimeNs since_frame = now - std::max(last_frame_ns_.value_or(0), airborne_since_ns_);
-      if (since_frame > seconds_to_ns(f.video_land_s)) {
-        begin_land("no video frame for " + std::to_string(f.video_land_s) + " s", 1);
-        return std::nullopt;
-      }
-      if (since_frame > seconds_to_ns(f.video_hover_s)) {
-        if (!hover_override_) {
-          hover_override_ = true;
-          log_.write(now, "failsafe", {{"event", "video stalled: hovering"}});
-        }
-        CommandOptions opt;
-        opt.tag = kTagPilot;
-        driver_->submit("rc 0 0 0 0", opt);
-      }
-      if (fly_stick_program(now)) return std::nullopt;
-    }
+    if (drone_.airborne() && supervise_airborne(now)) return std::nullopt;
     if (fsw_.finished()) {
       const int code = fsw_.result().outcome == flight_sw::Outcome::Aborted ? 1 : 0;
       // The flight software found the drone down by the state height (its `land` reply lost):
       // the program agrees when its own newest height does.
-      if (airborne_ && fsw_.result().landed && grounded()) airborne_ = false;
-      if (airborne_) {
+      if (fsw_.result().landed) drone_.landed_if_grounded();
+      if (drone_.airborne()) {
         begin_land("the flight software ended while airborne", code);
         return std::nullopt;
       }
       return code;
     }
     return std::nullopt;
+  }
+
+  // While the program lands: the exit code once its land is acknowledged or given up.
+  std::optional<int> landing_outcome(TimeNs now, int signals) {
+    if (signals > safe_.signals_seen) {
+      safe_.signals_seen = signals;
+      log_.write(now, "failsafe", {{"event", "signal while landing: still waiting for the land reply"}});
+    }
+    if (!safe_.land_done) return std::nullopt;
+    if (!safe_.land_ok) {
+      if (o_.console) {
+        *o_.console << "tello_pilot: land not acknowledged; the drone's own watchdog lands it within 15 s "
+                       "of the last command"
+                    << std::endl;
+      }
+      return 1;
+    }
+    return safe_.exit_code;
+  }
+
+  // The failsafes of the air: state, battery, flight time, video (hover, then land); then the
+  // stick program's pass (its sticks, unless hovering). True when a landing began.
+  bool supervise_airborne(TimeNs now) {
+    const Failsafes& f = o_.failsafes;
+    const std::optional<TimeNs> last_state_ns = drone_.last_state_ns();
+    if (last_state_ns && now - *last_state_ns > seconds_to_ns(f.state_timeout_s)) {
+      begin_land("no state record for " + std::to_string(f.state_timeout_s) + " s", 1);
+      return true;
+    }
+    const int battery_pct = drone_.battery_pct();
+    if (battery_pct >= 0 && battery_pct <= f.critical_battery_pct) {
+      begin_land("battery critical (" + std::to_string(battery_pct) + "%)", 1);
+      return true;
+    }
+    if (now - drone_.airborne_since_ns() > seconds_to_ns(f.max_flight_s)) {
+      begin_land("maximum flight time reached", 1);
+      return true;
+    }
+    const TimeNs since_frame = now - std::max(drone_.last_frame_ns().value_or(0), drone_.airborne_since_ns());
+    if (since_frame > seconds_to_ns(f.video_land_s)) {
+      begin_land("no video frame for " + std::to_string(f.video_land_s) + " s", 1);
+      return true;
+    }
+    if (since_frame > seconds_to_ns(f.video_hover_s)) {
+      if (!safe_.hover_override) {
+        safe_.hover_override = true;
+        log_.write(now, "failsafe", {{"event", "video stalled: hovering"}});
+      }
+      CommandOptions opt;
+      opt.tag = kTagPilot;
+      driver_->submit("rc 0 0 0 0", opt);
+    }
+    const StickProgramRun::Pass pass = program_.step(now, fsw_);
+    if (pass.land_reason) {
+      begin_land(*pass.land_reason, pass.exit_code);
+      return true;
+    }
+    if (pass.rc && !safe_.hover_override) {
+      CommandOptions opt;
+      opt.tag = kTagPilot;
+      driver_->submit(*pass.rc, opt);
+    }
+    return false;
   }
 
   std::string finish(int code) {
@@ -424,42 +345,20 @@ class PilotLoop::Impl {
   const flight_sw::FlightSoftware& fsw() const { return fsw_; }
   const SdkDriver& driver() const { return *driver_; }
   const VideoReceiver& video() const { return *video_; }
-  bool airborne() const { return airborne_; }
-  /// The newest state record puts the drone on the ground: at or below the flight software's
-  /// own airborne height (mission.airborne_height_m), so that the two agree on "down".
-  bool grounded() const { return last_height_m_ && *last_height_m_ <= airborne_height_m(); }
-  double airborne_height_m() const { return fsw_.config().mission.airborne_height_m; }
-  const std::string& failsafe_reason() const { return failsafe_reason_; }
+  bool airborne() const { return drone_.airborne(); }
+  const std::string& failsafe_reason() const { return safe_.reason; }
 
  private:
   const PilotLoopConfig& o_;
   const Clock& clock_;
-  FlightLog log_;
+  PilotLog log_;
   flight_sw::FlightSoftware fsw_;
   std::unique_ptr<SdkDriver> driver_;
   std::unique_ptr<VideoReceiver> video_;
-
-  TimeNs start_ns_ = 0;
-  TimeNs last_fed_ns_ = 0;
-  TimeNs last_tick_ns_ = 0;
-  static constexpr TimeNs kTickPeriodNs = kNsPerSecond / 20;
-  std::optional<TimeNs> last_state_ns_;
-  std::optional<TimeNs> last_frame_ns_;
-  int battery_pct_ = -1;
-  std::optional<double> last_height_m_;
-  bool airborne_ = false;
-  TimeNs airborne_since_ns_ = 0;
-  bool hover_override_ = false;
-  std::optional<TimeNs> program_start_ns_;  ///< the stick program flies since
-  bool program_done_ = false;
-  bool landing_ = false;
-  bool land_done_ = false;
-  bool land_ok_ = false;
-  int stop_code_ = 0;
-  int signals_seen_ = 0;
-  std::string failsafe_reason_;
-  flight_sw::Phase logged_phase_ = flight_sw::Phase::Idle;
-  std::string logged_event_;
+  DroneWatch drone_;
+  StickProgramRun program_;
+  InputFeed feed_;
+  FailsafeState safe_;
 };
 
 PilotLoop::PilotLoop(const PilotLoopConfig& config, const Clock& clock, PilotChannels channels)

@@ -83,7 +83,7 @@ void IdealLink::send_commands(const std::vector<SdkCommand>& commands) {
 void IdealLink::step_fsw(const flight_sw::Input& input, TimeNs t) {
   std::vector<SdkCommand> commands;
   try {
-    if (run_.injected_fault_due(t)) throw std::runtime_error("injected fault (cosim.inject_flight_software_exception_s)");
+    if (injected_fault_due(run_.cs, t)) throw std::runtime_error("injected fault (cosim.inject_flight_software_exception_s)");
     commands = fsw_.step(input);
   } catch (const std::exception& e) {
     run_.flight_software_threw(t, e.what());
@@ -177,7 +177,7 @@ RunResult IdealLink::fly() {
       run_.time_out();
       break;
     }
-    run_.inject_process_faults(t);
+    inject_process_faults(run_.cs, t);
 
     // 1. The world to t: plant and autopilot, the motion checked for contacts.
     run_.observe(world_.tick(t), world_);

@@ -131,11 +131,11 @@ void RunContext::flight_software_threw(TimeNs t, const std::string& what) {
   log_event(t, "flight software threw: " + what);
 }
 
-bool RunContext::injected_fault_due(TimeNs t) const {
+bool injected_fault_due(const CosimSettings& cs, TimeNs t) {
   return cs.inject_flight_software_exception_s >= 0.0 && t >= seconds_to_ns(cs.inject_flight_software_exception_s);
 }
 
-void RunContext::inject_process_faults(TimeNs t) const {
+void inject_process_faults(const CosimSettings& cs, TimeNs t) {
   if (cs.inject_crash_s >= 0.0 && t >= seconds_to_ns(cs.inject_crash_s)) {
     // Past any handler (AddressSanitizer's would turn the signal into exit code 1): the
     // process dies by SIGSEGV, as a driver's fault kills a release build.

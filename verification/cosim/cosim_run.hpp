@@ -72,11 +72,6 @@ class RunContext {
   /// the chosen cells kept.
   void after_fsw_step(const flight_sw::FlightSoftware& fsw, TimeNs t);
   void flight_software_threw(TimeNs t, const std::string& what);
-  /// cosim.inject_flight_software_exception_s has come.
-  bool injected_fault_due(TimeNs t) const;
-  /// Faults of the run's process itself (cosim.inject_crash_s, cosim.inject_hang_s), for
-  /// verifying that a campaign survives them: a real SIGSEGV, and a hang that never returns.
-  void inject_process_faults(TimeNs t) const;
   /// Past cosim.timeout_s: the run's outcome.
   void time_out();
   /// The phase the flight software starts in, logged.
@@ -104,6 +99,13 @@ class RunContext {
     std::vector<std::optional<CellIndex>> targets;
   } fsw_log_;
 };
+
+/// cosim.inject_flight_software_exception_s has come by t.
+bool injected_fault_due(const CosimSettings& cs, TimeNs t);
+/// Faults of the run's process itself (cosim.inject_crash_s, cosim.inject_hang_s), for
+/// verifying that a campaign survives them: past its time, a real SIGSEGV, and a hang that
+/// never returns.
+void inject_process_faults(const CosimSettings& cs, TimeNs t);
 
 /// The sdk link: the simulated Tello (TelloEmulator on in-memory datagrams) against
 /// tello_pilot's loop, in simulated time. Flies the run and returns its verdict.

@@ -143,7 +143,7 @@ struct SdkLink {
   /// when the flight software threw.
   bool step_pilot(RunContext& run, TimeNs t, TimeNs compute_ns) {
     pilot_clock.set(t);
-    if (run.injected_fault_due(t)) {
+    if (injected_fault_due(run.cs, t)) {
       run.flight_software_threw(t, "injected fault (cosim.inject_flight_software_exception_s)");
       return false;
     }
@@ -187,7 +187,7 @@ RunResult fly_sdk_link(RunContext& run) {
       run.time_out();
       break;
     }
-    run.inject_process_faults(t);
+    inject_process_faults(run.cs, t);
     while (!link.to_drone.empty() && link.to_drone.top().t_ns <= t) {
       w.dc->deliver({link.to_drone.top().payload, kPilotCommand});
       link.to_drone.pop();
@@ -220,7 +220,7 @@ RunResult fly_sdk_link(RunContext& run) {
     if (!link.pilot_exit && (delivered || poll_due) && !link.step_pilot(run, t, compute_ns)) break;
     // Over when the pilot has ended and the vehicle rests (a pilot that ended in the air
     // leaves it to the drone's own 15 s watchdog).
-    if (link.pilot_exit && link.drone.tello().mode() == plant::FlightMode::landed && link.to_drone.empty()) break;
+    if (link.pilot_exit && link.drone.world().tello().mode() == plant::FlightMode::landed && link.to_drone.empty()) break;
   }
   run.t_end_ns = std::max(run.t_end_ns, std::min(t, run.timeout_ns));
   run.result.metrics.link = link_metrics(run.result.metrics.link, link.drone.report().counters, *link.pilot);

@@ -26,7 +26,6 @@
 namespace shelfcross::verification {
 namespace {
 
-using config::Bounds;
 using config::ConfigError;
 
 // Each visit_* function below lists the keys of one section once: their names, ranges and

@@ -101,24 +101,21 @@ struct SearchAnalysis {
 /// worker_error run, which draws nothing usable).
 std::vector<Row> read_rows(const SearchAnalysis& a) {
   using nlohmann::json;
-  const std::vector<CeRound>& rounds = a.rounds;
-  const Scenario& nominal = a.nominal;
-  const ParameterDistributions& f = a.f;
   std::vector<Row> rows;
   for (const RunRecord& r : a.records) {
     Row row;
     row.record = &r;
-    for (const CeRound& round : rounds) {
+    for (const CeRound& round : a.rounds) {
       if (r.index >= round.first_run && r.index < round.first_run + round.runs) row.round = round.index;
     }
     if (row.round < 0) continue;  // not a run of a stored round
     row.drawn = json::parse(r.dispersion_json).get<DrawnValues>();
-    row.margins = record_margins(nominal, r);
+    row.margins = record_margins(a.nominal, r);
     if (r.outcome == "worker_error") {
       row.log_nominal = row.log_proposal = std::numeric_limits<double>::quiet_NaN();
     } else {
-      row.log_nominal = log_density(f, row.drawn);
-      row.log_proposal = log_density(rounds[static_cast<size_t>(row.round)].proposal, row.drawn);
+      row.log_nominal = log_density(a.f, row.drawn);
+      row.log_proposal = log_density(a.rounds[static_cast<size_t>(row.round)].proposal, row.drawn);
     }
     rows.push_back(std::move(row));
   }
@@ -128,39 +125,35 @@ std::vector<Row> read_rows(const SearchAnalysis& a) {
 /// Per class, the importance-sampling estimate from the estimation round (or the last round
 /// while adaptation goes on) and from every stored run, with the zero-failure bounds.
 std::map<FailureClass, ClassEstimate> class_estimates(const SearchAnalysis& a) {
-  const std::vector<CeRound>& rounds = a.rounds;
-  const std::vector<Row>& rows = a.rows;
-  const ParameterDistributions& f = a.f;
-  const int estimate_round = a.estimate_round;
   std::map<FailureClass, ClassEstimate> estimates;
   for (FailureClass c : kFailureClasses) {
     std::vector<double> log_w;
     std::vector<bool> failed;
-    for (const Row& row : rows) {
-      if (row.round != estimate_round || std::isnan(row.log_nominal)) continue;
+    for (const Row& row : a.rows) {
+      if (row.round != a.estimate_round || std::isnan(row.log_nominal)) continue;
       log_w.push_back(row.log_nominal - row.log_proposal);
       failed.push_back(row.margins.failed(c));
     }
-    estimates[c] = {importance_estimate(log_w, failed), estimate_round, {}};
+    estimates[c] = {importance_estimate(log_w, failed), a.estimate_round, {}};
   }
   // And from every stored run: each round's proposal in the mixture by its stored run count.
-  std::vector<std::int64_t> stored_per_round(rounds.size(), 0);
-  for (const Row& row : rows) {
+  std::vector<std::int64_t> stored_per_round(a.rounds.size(), 0);
+  for (const Row& row : a.rows) {
     if (!std::isnan(row.log_nominal)) ++stored_per_round[static_cast<size_t>(row.round)];
   }
   std::vector<double> mixture_log_w;
-  for (const Row& row : rows) {
-    if (!std::isnan(row.log_nominal)) mixture_log_w.push_back(mixture_log_weight(f, rounds, stored_per_round, row.drawn));
+  for (const Row& row : a.rows) {
+    if (!std::isnan(row.log_nominal)) mixture_log_w.push_back(mixture_log_weight(a.f, a.rounds, stored_per_round, row.drawn));
   }
   // The zero-failure bounds: the estimation round alone, and every round.
-  const double bound_every_round = zero_failure_upper_bound(rounds, stored_per_round);
+  const double bound_every_round = zero_failure_upper_bound(a.rounds, stored_per_round);
   const double bound_round =
-      estimate_round < 0 ? 1.0
-                         : zero_failure_upper_bound({rounds[static_cast<size_t>(estimate_round)]},
-                                                    {stored_per_round[static_cast<size_t>(estimate_round)]});
+      a.estimate_round < 0 ? 1.0
+                           : zero_failure_upper_bound({a.rounds[static_cast<size_t>(a.estimate_round)]},
+                                                      {stored_per_round[static_cast<size_t>(a.estimate_round)]});
   for (FailureClass c : kFailureClasses) {
     std::vector<bool> failed;
-    for (const Row& row : rows) {
+    for (const Row& row : a.rows) {
       if (!std::isnan(row.log_nominal)) failed.push_back(row.margins.failed(c));
     }
     estimates[c].every_round = importance_estimate(mixture_log_w, failed);
@@ -174,7 +167,6 @@ std::map<FailureClass, ClassEstimate> class_estimates(const SearchAnalysis& a) {
 /// holds another scenario than the search's.
 std::map<FailureClass, PlainEstimate> plain_estimates(const SearchAnalysis& a, const std::string& scenario_yaml,
                                                       const std::filesystem::path& campaign_dir) {
-  const Scenario& nominal = a.nominal;
   std::map<FailureClass, PlainEstimate> plain;
   const ResultsStore campaign = ResultsStore::open_existing(campaign_dir / "results.sqlite");
   if (campaign.meta().scenario_yaml != scenario_yaml) {
@@ -183,7 +175,7 @@ std::map<FailureClass, PlainEstimate> plain_estimates(const SearchAnalysis& a, c
   }
   for (const RunRecord& r : campaign.runs()) {
     if (r.outcome == "worker_error") continue;
-    const RunMargins m = record_margins(nominal, r);
+    const RunMargins m = record_margins(a.nominal, r);
     for (FailureClass c : kFailureClasses) {
       PlainEstimate& p = plain[c];
       ++p.runs;
@@ -202,17 +194,15 @@ std::map<FailureClass, PlainEstimate> plain_estimates(const SearchAnalysis& a, c
 }
 
 void write_margins_csv(const std::filesystem::path& dir, const SearchAnalysis& a) {
-  const ParameterDistributions& f = a.f;
-  const std::vector<Row>& rows = a.rows;
   std::ofstream csv(dir / "margins.csv");
   csv << "run,round,outcome,contact_m,crossing_m,mission,log_nominal_density,log_proposal_density";
-  for (const auto& [name, d] : f) csv << "," << name;
+  for (const auto& [name, d] : a.f) csv << "," << name;
   csv << "\n";
-  for (const Row& row : rows) {
+  for (const Row& row : a.rows) {
     csv << row.record->index << "," << row.round << "," << row.record->outcome << "," << fmt(row.margins.contact_m, "%.6g")
         << "," << fmt(row.margins.crossing_m, "%.6g") << "," << fmt(row.margins.mission, "%.6g") << ","
         << fmt(row.log_nominal, "%.6g") << "," << fmt(row.log_proposal, "%.6g");
-    for (const auto& [name, d] : f) csv << "," << fmt(row.drawn.at(name), "%.9g");
+    for (const auto& [name, d] : a.f) csv << "," << fmt(row.drawn.at(name), "%.9g");
     csv << "\n";
   }
 }
@@ -220,23 +210,18 @@ void write_margins_csv(const std::filesystem::path& dir, const SearchAnalysis& a
 /// The target class's margin against each parameter's draw (search_margin_<name>.png, whose
 /// names it returns) and against the run index (search_progress.png).
 std::vector<std::string> write_plots(const std::filesystem::path& dir, const SearchAnalysis& a) {
-  const FailureClass target = a.target;
-  const std::vector<CeRound>& rounds = a.rounds;
-  const std::vector<Row>& rows = a.rows;
-  const ParameterDistributions& f = a.f;
-  const std::string& margin_label = a.margin_label;
   const auto colour_of = [&](const Row& row) {
-    if (row.margins.failed(target)) return kFailure;
+    if (row.margins.failed(a.target)) return kFailure;
     if (row.round == 0) return kNominalRound;
-    return rounds[static_cast<size_t>(row.round)].estimation ? kEstimateRound : kAdaptRound;
+    return a.rounds[static_cast<size_t>(row.round)].estimation ? kEstimateRound : kAdaptRound;
   };
   std::vector<std::string> plots;
-  for (const auto& [name, d] : f) {
-    Chart chart(margin_label + " against " + name, name, margin_label);
+  for (const auto& [name, d] : a.f) {
+    Chart chart(a.margin_label + " against " + name, name, a.margin_label);
     for (int pass = 0; pass < 2; ++pass) {  // failures drawn last, on top
-      for (const Row& row : rows) {
-        const double m = row.margins.of(target);
-        if (std::isnan(m) || row.margins.failed(target) != (pass == 1)) continue;
+      for (const Row& row : a.rows) {
+        const double m = row.margins.of(a.target);
+        if (std::isnan(m) || row.margins.failed(a.target) != (pass == 1)) continue;
         chart.add_points({row.drawn.at(name)}, {m}, colour_of(row), 4);
       }
     }
@@ -245,7 +230,7 @@ std::vector<std::string> write_plots(const std::filesystem::path& dir, const Sea
     if (!std::isfinite(lo) || !std::isfinite(hi)) {  // a normal: the range drawn
       lo = std::numeric_limits<double>::infinity();
       hi = -lo;
-      for (const Row& row : rows) {
+      for (const Row& row : a.rows) {
         lo = std::min(lo, row.drawn.at(name));
         hi = std::max(hi, row.drawn.at(name));
       }
@@ -256,9 +241,9 @@ std::vector<std::string> write_plots(const std::filesystem::path& dir, const Sea
     plots.push_back(file);
   }
   {
-    Chart chart("Search progress: " + margin_label + " of each run", "run index", margin_label);
-    for (const Row& row : rows) {
-      const double m = row.margins.of(target);
+    Chart chart("Search progress: " + a.margin_label + " of each run", "run index", a.margin_label);
+    for (const Row& row : a.rows) {
+      const double m = row.margins.of(a.target);
       if (!std::isnan(m)) chart.add_points({static_cast<double>(row.record->index)}, {m}, colour_of(row), 4);
     }
     chart.add_hline(0.0, cv::Scalar(0, 0, 0), "failure below");
@@ -270,19 +255,17 @@ std::vector<std::string> write_plots(const std::filesystem::path& dir, const Sea
 /// search_summary.json: the settings, each round, each class's estimates, the failures.
 nlohmann::json summary_json(const SearchAnalysis& a) {
   using nlohmann::json;
-  const FailureClass target = a.target;
-  const std::vector<Row>& rows = a.rows;
   json summary;
   summary["scenario"] = a.nominal.name;
   summary["settings"] = a.settings;
-  summary["runs"] = rows.size();
+  summary["runs"] = a.rows.size();
   summary["rounds"] = json::array();
   for (const CeRound& round : a.rounds) {
     std::int64_t stored = 0, failed = 0;
-    for (const Row& row : rows) {
+    for (const Row& row : a.rows) {
       if (row.round != round.index) continue;
       ++stored;
-      failed += row.margins.failed(target);
+      failed += row.margins.failed(a.target);
     }
     json proposal = json::object();
     for (const auto& [name, q] : round.proposal) {
@@ -317,20 +300,13 @@ nlohmann::json summary_json(const SearchAnalysis& a) {
 /// report.md's head and its rounds with their proposals.
 void write_rounds_md(std::ostream& md, const SearchAnalysis& a, const nlohmann::json& summary, const std::string& dir_text) {
   using nlohmann::json;
-  const FailureClass target = a.target;
-  const nlohmann::json& settings = a.settings;
-  const std::vector<CeRound>& rounds = a.rounds;
-  const std::vector<Row>& rows = a.rows;
-  const ParameterDistributions& f = a.f;
-  const std::string& margin_label = a.margin_label;
-  const Scenario& nominal = a.nominal;
-  md << "# Rare-event search: " << nominal.name << "\n\n";
-  md << "Cross-entropy search for **" << failure_class_name(target) << "** failures (negative " << margin_label
-     << "; docs/search.md), seed " << settings.at("seed").get<std::string>() << ", budget "
-     << settings.at("budget") << " runs (" << rows.size() << " stored), rounds of " << settings.at("round_runs")
-     << ", elite fraction " << settings.at("elite_fraction") << ", at least " << settings.at("estimation_runs")
+  md << "# Rare-event search: " << a.nominal.name << "\n\n";
+  md << "Cross-entropy search for **" << failure_class_name(a.target) << "** failures (negative " << a.margin_label
+     << "; docs/search.md), seed " << a.settings.at("seed").get<std::string>() << ", budget "
+     << a.settings.at("budget") << " runs (" << a.rows.size() << " stored), rounds of " << a.settings.at("round_runs")
+     << ", elite fraction " << a.settings.at("elite_fraction") << ", at least " << a.settings.at("estimation_runs")
      << " runs kept for the estimate. Every run: `shelfcross replay " << dir_text << " --run K`.\n\n";
-  md << "## Rounds\n\n| round | runs (stored) | fitted to level | elites | " << failure_class_name(target)
+  md << "## Rounds\n\n| round | runs (stored) | fitted to level | elites | " << failure_class_name(a.target)
      << " failures | kind |\n|---|---|---|---|---|---|\n";
   for (const json& r : summary["rounds"]) {
     md << "| " << r["round"] << " | " << r["runs"] << " (" << r["stored"] << ") | "
@@ -339,13 +315,13 @@ void write_rounds_md(std::ostream& md, const SearchAnalysis& a, const nlohmann::
   }
   md << "\nThe proposals (the shifted component; each mixed with the nominal at the share given in the settings):\n\n"
      << "| parameter | nominal |";
-  for (const CeRound& round : rounds) md << " round " << round.index << " |";
+  for (const CeRound& round : a.rounds) md << " round " << round.index << " |";
   md << "\n|---|---|";
-  for (size_t i = 0; i < rounds.size(); ++i) md << "---|";
+  for (size_t i = 0; i < a.rounds.size(); ++i) md << "---|";
   md << "\n";
-  for (const auto& [name, d] : f) {
+  for (const auto& [name, d] : a.f) {
     md << "| " << name << " | " << describe(d) << " |";
-    for (const CeRound& round : rounds) {
+    for (const CeRound& round : a.rounds) {
       const ProposalDistribution& q = round.proposal.at(name);
       md << " " << (q.nominal_share >= 1.0 ? std::string("nominal") : describe(q.shifted)) << " |";
     }
@@ -356,12 +332,9 @@ void write_rounds_md(std::ostream& md, const SearchAnalysis& a, const nlohmann::
 /// report.md's failure probabilities: importance sampling from the estimation round and from
 /// every round, the zero-failure bound where none failed, plain Monte Carlo beside them.
 void write_estimates_md(std::ostream& md, const SearchAnalysis& a, const std::optional<std::filesystem::path>& campaign_dir) {
-  const std::vector<CeRound>& rounds = a.rounds;
-  const int estimate_round = a.estimate_round;
-  const std::map<FailureClass, PlainEstimate>& plain = a.plain;
   md << "\n## Failure probabilities under the nominal dispersions\n\n"
-     << "Importance sampling from the runs of round " << estimate_round
-     << (rounds.empty() || !rounds.back().estimation ? " (adaptation not finished: the last round's proposal)" : "")
+     << "Importance sampling from the runs of round " << a.estimate_round
+     << (a.rounds.empty() || !a.rounds.back().estimation ? " (adaptation not finished: the last round's proposal)" : "")
      << ": p_hat = mean of 1[failed] f(x) / q(x); interval: 95 % CLT on the log scale, p_hat exp(-+1.96 se / p_hat) "
         "(rare_event.hpp); the plain CLT interval p_hat -+ 1.96 se beside it; ESS: the failures' effective sample "
         "size (Kish); mean weight: mean f / q over all the round's runs, an unbiased estimate of 1; a mark after "
@@ -399,7 +372,7 @@ void write_estimates_md(std::ostream& md, const SearchAnalysis& a, const std::op
       if (const std::string doubts = estimate_doubts(is); !doubts.empty()) md << " (" << doubts << ")";
       md << " |";
       if (campaign_dir) {
-        const auto& p = plain.at(c);
+        const auto& p = a.plain.at(c);
         md << " " << p.failures << " / " << p.runs << " | [" << fmt(p.lower) << ", " << fmt(p.upper) << "] | "
            << (p.first_failure >= 0 ? "run " + std::to_string(p.first_failure) : std::string("none")) << " |";
       }
@@ -414,29 +387,23 @@ void write_estimates_md(std::ostream& md, const SearchAnalysis& a, const std::op
 /// one, and the margin plots.
 void write_failures_md(std::ostream& md, const SearchAnalysis& a, const std::vector<std::string>& plots,
                        const std::string& dir_text) {
-  const FailureClass target = a.target;
-  const std::vector<Row>& rows = a.rows;
-  const std::vector<const Row*>& failures = a.failures;
-  const Row* most_likely = a.most_likely;
-  const ParameterDistributions& f = a.f;
-  const std::string& margin_label = a.margin_label;
-  md << "\n## Failures found (" << failure_class_name(target) << ")\n\n";
-  if (failures.empty()) {
-    md << "None in " << rows.size() << " runs.\n";
+  md << "\n## Failures found (" << failure_class_name(a.target) << ")\n\n";
+  if (a.failures.empty()) {
+    md << "None in " << a.rows.size() << " runs.\n";
   } else {
-    md << failures.size() << " of " << rows.size() << " runs; the first is run " << failures.front()->record->index
+    md << a.failures.size() << " of " << a.rows.size() << " runs; the first is run " << a.failures.front()->record->index
        << ".\n\n| run | round | outcome | margin | log nominal density | replay (with its video) |\n|---|---|---|---|---|---|\n";
-    for (const Row* row : failures) {
+    for (const Row* row : a.failures) {
       md << "| " << row->record->index << " | " << row->round << " | " << row->record->outcome << " | "
-         << fmt(row->margins.of(target)) << " | " << fmt(row->log_nominal) << " | `shelfcross replay " << dir_text
+         << fmt(row->margins.of(a.target)) << " | " << fmt(row->log_nominal) << " | `shelfcross replay " << dir_text
          << " --run " << row->record->index << " --video` |\n";
     }
-    md << "\n### The most likely failure: run " << most_likely->record->index
+    md << "\n### The most likely failure: run " << a.most_likely->record->index
        << " (highest nominal density among the failures)\n\n| parameter | drawn | nominal |\n|---|---|---|\n";
-    for (const auto& [name, d] : f) md << "| " << name << " | " << fmt(most_likely->drawn.at(name), "%.6g") << " | " << describe(d) << " |\n";
+    for (const auto& [name, d] : a.f) md << "| " << name << " | " << fmt(a.most_likely->drawn.at(name), "%.6g") << " | " << describe(d) << " |\n";
   }
   md << "\n## Margin against each parameter\n\nWhich parameters separate failures from successes: the "
-     << margin_label << " of every run against its draw (grey: round 0, the nominal; blue: adaptation rounds; green: "
+     << a.margin_label << " of every run against its draw (grey: round 0, the nominal; blue: adaptation rounds; green: "
         "the estimation round; red: failed), and against the run index.\n\n![progress](search_progress.png)\n\n";
   for (const std::string& file : plots) md << "![" << file << "](" << file << ")\n";
   md << "\nEvery run's margins and draws: `margins.csv`.\n";

@@ -1,7 +1,7 @@
 // The emulator's settings checked, and its report written: what `shelfcross tello-sim`
 // reads and prints, apart from the simulation itself (tello_emulator.cpp).
 
-#include "verification/world/tello_emulator.hpp"
+#include "verification/world/tello_emulator_settings.hpp"
 
 #include <cmath>
 #include <set>

@@ -35,16 +35,15 @@ TelloWorld::TelloWorld(const RunSetup& setup, int monitored_shelves)
              sc_.start.p_WB_m.x(), sc_.start.p_WB_m.y(), sc_.start.yaw_rad),
       ground_z_m_(tello_.state().p_WB_m.z()),
       half_length_m_(0.5 * sc_.vehicle.size_m.x() + sc_.cosim.vehicle_margin_m),
-      X_last_(body_pose(tello_.state())),
-      v_last_(tello_.state().v_WB_W_mps),
+      last_{0, body_pose(tello_.state()), tello_.state().v_WB_W_mps},
       clocks_{millihertz(sc_.frame_rate_hz), millihertz(sc_.cosim.state_rate_hz), 0, 0,
-              render::camera_pose_W(X_last_, sc_.camera_mount), RandomStream(setup.seed, StreamId::render_noise)} {
+              render::camera_pose_W(last_.X_WB, sc_.camera_mount), RandomStream(setup.seed, StreamId::render_noise)} {
   if (monitored_shelves < 1 || monitored_shelves > static_cast<int>(sc_.warehouse.shelves.size())) {
     throw std::invalid_argument("monitored shelves must be 1.." + std::to_string(sc_.warehouse.shelves.size()));
   }
   monitors_.reserve(static_cast<size_t>(monitored_shelves));
   for (int i = 0; i < monitored_shelves; ++i) {
-    monitors_.emplace_back(sc_.warehouse.shelves[static_cast<size_t>(i)], X_last_.translation());
+    monitors_.emplace_back(sc_.warehouse.shelves[static_cast<size_t>(i)], last_.X_WB.translation());
   }
 }
 
@@ -65,21 +64,21 @@ TickReport TelloWorld::tick(TimeNs t) {
     return r;
   }
   if (tello_.mode() != plant::FlightMode::landed) truth_.flew = true;
-  if (t > t_last_) observe(t, r);
+  if (t > last_.t_ns) observe(t, r);
   return r;
 }
 
 void TelloWorld::observe(TimeNs t, TickReport& r) {
   const plant::RigidBodyState& s = tello_.state();
   const Eigen::Isometry3d X = body_pose(s);
-  a_W_ = (s.v_WB_W_mps - v_last_) / ns_to_seconds(t - t_last_);
-  truth_.path_length_m += (X.translation() - X_last_.translation()).norm();
-  if (const auto contact = world_.sweep(X_last_, t_last_, X, t, plant::FloorContacts::ignore)) {
+  last_.a_W_mps2 = (s.v_WB_W_mps - last_.v_WB_W_mps) / ns_to_seconds(t - last_.t_ns);
+  truth_.path_length_m += (X.translation() - last_.X_WB.translation()).norm();
+  if (const auto contact = world_.sweep(last_.X_WB, last_.t_ns, X, t, plant::FloorContacts::ignore)) {
     truth_.contact = *contact;
     r.contact = *contact;
     r.end = plant::is_shelf_part(contact->element.kind) ? WorldEnd::collision : WorldEnd::left_arena;
     r.detail = contact->element.name;
-    t_last_ = t;  // the contact's tick is the flight's last instant
+    last_.t_ns = t;  // the contact's tick is the flight's last instant
     return;
   }
   const Eigen::Vector3d& p = s.p_WB_m;
@@ -89,8 +88,8 @@ void TelloWorld::observe(TimeNs t, TickReport& r) {
     return;
   }
   const bool on_floor = p.z() - ground_z_m_ < 1e-4;
-  if (on_floor && !touching_floor_) ++truth_.floor_touches;
-  touching_floor_ = on_floor;
+  if (on_floor && !last_.touching_floor) ++truth_.floor_touches;
+  last_.touching_floor = on_floor;
   // Each mission shelf's crossing, judged on the body origin in that shelf's frame; the
   // clearance near any of them (a row's shelves share shelf 0's depth).
   const double depth_m = sc_.warehouse.shelves.front().depth_m;
@@ -106,14 +105,14 @@ void TelloWorld::observe(TimeNs t, TickReport& r) {
     truth_.min_clearance_m = std::min(truth_.min_clearance_m.value_or(clearance), clearance);
   }
   r.observed = true;
-  X_last_ = X;
-  v_last_ = s.v_WB_W_mps;
-  t_last_ = t;
+  last_.X_WB = X;
+  last_.v_WB_W_mps = s.v_WB_W_mps;
+  last_.t_ns = t;
 }
 
 StateRecord TelloWorld::state_record(TimeNs t) const {
   const plant::Autopilot& firmware = tello_.autopilot();
-  return state_from_truth(tello_.state(), a_W_, ground_z_m_, firmware.battery_pct(), firmware.motor_on_time_s(), t);
+  return state_from_truth(tello_.state(), last_.a_W_mps2, ground_z_m_, firmware.battery_pct(), firmware.motor_on_time_s(), t);
 }
 
 std::optional<TelloWorld::Capture> TelloWorld::capture_due(TimeNs t) {

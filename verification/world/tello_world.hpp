@@ -110,7 +110,7 @@ class TelloWorld {
   /// The mission shelves' crossing monitors (shelf 0 first).
   const std::vector<ShelfCrossingMonitor>& crossings() const { return monitors_; }
   /// The last observed time (0 before the first observed tick).
-  TimeNs t_last_ns() const { return t_last_; }
+  TimeNs t_last_ns() const { return last_.t_ns; }
   double ground_z_m() const { return ground_z_m_; }
 
  private:
@@ -124,11 +124,15 @@ class TelloWorld {
   double half_length_m_;
   std::vector<ShelfCrossingMonitor> monitors_;
   TruthRecord truth_;
-  bool touching_floor_ = true;
-  TimeNs t_last_ = 0;
-  Eigen::Isometry3d X_last_;
-  Eigen::Vector3d v_last_;
-  Eigen::Vector3d a_W_ = Eigen::Vector3d::Zero();
+  /// The last observed state: what the next tick's motion is swept from and differenced
+  /// against, and the acceleration the state record reports.
+  struct LastObserved {
+    TimeNs t_ns = 0;
+    Eigen::Isometry3d X_WB;
+    Eigen::Vector3d v_WB_W_mps;
+    Eigen::Vector3d a_W_mps2 = Eigen::Vector3d::Zero();
+    bool touching_floor = true;
+  } last_;
   /// The camera's and the state record's clocks, and what each capture carries over.
   struct Clocks {
     std::int64_t frame_mhz, state_mhz;

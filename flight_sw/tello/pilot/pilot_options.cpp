@@ -128,122 +128,118 @@ CameraIntrinsics load_calibration(const std::string& path) {
   return c;
 }
 
-std::optional<PilotOptions> parse_options(int argc, char** argv) {
-  PilotOptions o;
-  CLI::App app{"tello_pilot: fly a DJI Tello with the shelfcross flight software (see flight_sw/tello/README.md)"};
-  std::string pilot_file;
-  std::string drone_ip;
+namespace {
+
+// The command line's values, kept apart from the options: they win over the pilot file, which
+// is read after the command line is parsed (an option's count() says it was given).
+struct CommandLine {
+  std::string pilot_file, drone_ip, local_ip, log_path, inventory_path, damaged, board, marker_ids;
   int command_port = 0, local_command_port = 0, state_port = 0, video_port = 0;
   int state_source_port = 0, video_source_port = 0;
-  std::string local_ip, log_path, inventory_path, board;
   Failsafes fs;
-  app.add_option("--pilot", pilot_file, "pilot YAML file (link, failsafes, output, flight_config, calibration, dry_run)")
+  CLI::Option *ip = nullptr, *cport = nullptr, *lip = nullptr, *lcport = nullptr, *sport = nullptr,
+              *vport = nullptr, *ssport = nullptr, *vsport = nullptr, *log = nullptr, *inv = nullptr,
+              *damaged_video = nullptr;
+  CLI::Option *st = nullptr, *sst = nullptr, *vh = nullptr, *vl = nullptr, *bat = nullptr, *max = nullptr;
+};
+
+// The options of a flight: files, the link, the outputs, the modes (--help lists them in this order).
+void add_flight_options(CLI::App& app, PilotOptions& o, CommandLine& c) {
+  app.add_option("--pilot", c.pilot_file, "pilot YAML file (link, failsafes, output, flight_config, calibration, dry_run)")
       ->check(CLI::ExistingFile);
-  auto* o_config = app.add_option("--config", o.flight_config_path, "flight-software YAML (flight_sw/README.md)");
-  auto* o_calib = app.add_option("--calibration", o.calibration_path,
-                                 "OpenCV camera calibration (camera_matrix, distortion_coefficients); replaces the config's camera");
-  auto* o_ip = app.add_option("--drone-ip", drone_ip, "the Tello's address (default 192.168.10.1)");
-  auto* o_cport = app.add_option("--command-port", command_port, "the drone's command port (default 8889)")->check(CLI::Range(1, 65535));
-  auto* o_lip = app.add_option("--local-ip", local_ip, "local address to bind (default 0.0.0.0)");
-  auto* o_lcport = app.add_option("--local-command-port", local_command_port, "local command port (default 0: any)")->check(CLI::Range(0, 65535));
-  auto* o_sport = app.add_option("--state-port", state_port, "local state port (default 8890)")->check(CLI::Range(0, 65535));
-  auto* o_vport = app.add_option("--video-port", video_port, "local video port (default 11111)")->check(CLI::Range(0, 65535));
-  auto* o_ssport = app.add_option("--state-source-port", state_source_port, "accept state only from this drone port (default 0: any)")->check(CLI::Range(0, 65535));
-  auto* o_vsport = app.add_option("--video-source-port", video_source_port, "accept video only from this drone port (default 0: any)")->check(CLI::Range(0, 65535));
-  auto* o_log = app.add_option("--log", log_path, "flight log, JSON lines (default tello_flight_log.jsonl)");
-  auto* o_inv = app.add_option("--inventory", inventory_path, "inventory JSON output (default tello_inventory.json)");
-  std::string damaged;
-  auto* o_damaged = app.add_option("--damaged-video", damaged,
+  app.add_option("--config", o.flight_config_path, "flight-software YAML (flight_sw/README.md)");
+  app.add_option("--calibration", o.calibration_path,
+                 "OpenCV camera calibration (camera_matrix, distortion_coefficients); replaces the config's camera");
+  c.ip = app.add_option("--drone-ip", c.drone_ip, "the Tello's address (default 192.168.10.1)");
+  c.cport = app.add_option("--command-port", c.command_port, "the drone's command port (default 8889)")->check(CLI::Range(1, 65535));
+  c.lip = app.add_option("--local-ip", c.local_ip, "local address to bind (default 0.0.0.0)");
+  c.lcport = app.add_option("--local-command-port", c.local_command_port, "local command port (default 0: any)")->check(CLI::Range(0, 65535));
+  c.sport = app.add_option("--state-port", c.state_port, "local state port (default 8890)")->check(CLI::Range(0, 65535));
+  c.vport = app.add_option("--video-port", c.video_port, "local video port (default 11111)")->check(CLI::Range(0, 65535));
+  c.ssport = app.add_option("--state-source-port", c.state_source_port, "accept state only from this drone port (default 0: any)")->check(CLI::Range(0, 65535));
+  c.vsport = app.add_option("--video-source-port", c.video_source_port, "accept video only from this drone port (default 0: any)")->check(CLI::Range(0, 65535));
+  c.log = app.add_option("--log", c.log_path, "flight log, JSON lines (default tello_flight_log.jsonl)");
+  c.inv = app.add_option("--inventory", c.inventory_path, "inventory JSON output (default tello_inventory.json)");
+  c.damaged_video = app.add_option("--damaged-video", c.damaged,
                                    "damaged frames (lost datagrams): conceal (hand over error-concealed pictures, default) or discard (until the next clean key frame)");
   app.add_option("--record-frames", o.record_dir,
                  "write every frame handed to the flight software to this folder as frame_INDEX[_damaged].png (costs time)");
-  auto* o_dry = app.add_flag("--dry-run", o.dry_run, "connect, stream and run perception; never send a motion command");
+  app.add_flag("--dry-run", o.dry_run, "connect, stream and run perception; never send a motion command");
   app.add_flag("--fly-calibration", o.fly_calibration,
                "fly the calibration manoeuvre (pulses and doublets of each stick, about 48 s, in open space) instead of the mission, "
                "then land: its --log is for `shelfcross identify`");
-  auto* o_st = app.add_option("--state-timeout", fs.state_timeout_s, "airborne without state this long (s): land")->check(CLI::PositiveNumber);
-  auto* o_sst = app.add_option("--state-start-timeout", fs.state_start_timeout_s, "no state at all this long after start (s): give up")->check(CLI::PositiveNumber);
-  auto* o_vh = app.add_option("--video-hover", fs.video_hover_s, "airborne without frames this long (s): hover")->check(CLI::PositiveNumber);
-  auto* o_vl = app.add_option("--video-land", fs.video_land_s, "airborne without frames this long (s): land")->check(CLI::PositiveNumber);
-  auto* o_bat = app.add_option("--critical-battery", fs.critical_battery_pct, "battery at or below this (%): land")->check(CLI::Range(0, 100));
-  auto* o_max = app.add_option("--max-flight", fs.max_flight_s, "airborne this long (s): land")->check(CLI::PositiveNumber);
+}
+
+void add_failsafe_options(CLI::App& app, CommandLine& c) {
+  Failsafes& fs = c.fs;
+  c.st = app.add_option("--state-timeout", fs.state_timeout_s, "airborne without state this long (s): land")->check(CLI::PositiveNumber);
+  c.sst = app.add_option("--state-start-timeout", fs.state_start_timeout_s, "no state at all this long after start (s): give up")->check(CLI::PositiveNumber);
+  c.vh = app.add_option("--video-hover", fs.video_hover_s, "airborne without frames this long (s): hover")->check(CLI::PositiveNumber);
+  c.vl = app.add_option("--video-land", fs.video_land_s, "airborne without frames this long (s): land")->check(CLI::PositiveNumber);
+  c.bat = app.add_option("--critical-battery", fs.critical_battery_pct, "battery at or below this (%): land")->check(CLI::Range(0, 100));
+  c.max = app.add_option("--max-flight", fs.max_flight_s, "airborne this long (s): land")->check(CLI::PositiveNumber);
+}
+
+// The modes that do not fly the mission: calibrating the camera, printing markers.
+void add_tool_options(CLI::App& app, PilotOptions& o, CommandLine& c) {
   app.add_option("--calibrate", o.calibrate_path, "calibration mode: record chessboard views from the stream, write intrinsics to this file, exit (no motion)");
-  app.add_option("--board", board, "calibration chessboard inner corners, COLSxROWS (default 9x6)");
+  app.add_option("--board", c.board, "calibration chessboard inner corners, COLSxROWS (default 9x6)");
   app.add_option("--square", o.square_m, "calibration chessboard square side (m, default 0.025)")->check(CLI::PositiveNumber);
   app.add_option("--views", o.calibration_views, "calibration views to collect (default 25)")->check(CLI::Range(5, 200));
-  std::string marker_ids;
   app.add_option("--print-markers", o.print_dir, "print mode: write marker and tag PNGs (300 dpi) of the flight configuration to this folder, exit");
-  app.add_option("--marker-ids", marker_ids, "markers to print, FIRST-LAST (default 0-15)");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp&) {
-    std::cout << app.help();
-    return std::nullopt;
-  } catch (const CLI::ParseError& e) {
-    throw UsageError(std::string(e.what()) + " (see --help)");
+  app.add_option("--marker-ids", c.marker_ids, "markers to print, FIRST-LAST (default 0-15)");
+}
+
+// The command line wins over the pilot file.
+void apply_command_line(const CommandLine& c, PilotOptions& o) {
+  if (c.ip->count()) o.driver.drone_ip = c.drone_ip;
+  if (c.cport->count()) o.driver.drone_command_port = port(c.command_port);
+  if (c.lip->count()) o.driver.local_ip = c.local_ip;
+  if (c.lcport->count()) o.driver.local_command_port = port(c.local_command_port);
+  if (c.sport->count()) o.driver.local_state_port = port(c.state_port);
+  if (c.vport->count()) o.video.local_port = port(c.video_port);
+  if (c.ssport->count()) o.driver.state_source_port = port(c.state_source_port);
+  if (c.vsport->count()) o.video.source_port = port(c.video_source_port);
+  if (c.log->count()) o.log_path = c.log_path;
+  if (c.inv->count()) o.inventory_path = c.inventory_path;
+  if (c.damaged_video->count()) {
+    o.video.damaged = parse_damaged(c.damaged, [](const std::string& why) -> void { throw UsageError("--damaged-video: " + why); });
   }
-  try {
-    if (!pilot_file.empty()) read_pilot_file(pilot_file, o);
-  } catch (const config::ConfigError& e) {
-    throw UsageError(e.what());
-  } catch (const std::exception& e) {
-    throw UsageError(pilot_file + ": " + e.what());
-  }
-  // The command line wins over the pilot file.
-  if (o_ip->count()) o.driver.drone_ip = drone_ip;
-  if (o_cport->count()) o.driver.drone_command_port = port(command_port);
-  if (o_lip->count()) o.driver.local_ip = local_ip;
-  if (o_lcport->count()) o.driver.local_command_port = port(local_command_port);
-  if (o_sport->count()) o.driver.local_state_port = port(state_port);
-  if (o_vport->count()) o.video.local_port = port(video_port);
-  if (o_ssport->count()) o.driver.state_source_port = port(state_source_port);
-  if (o_vsport->count()) o.video.source_port = port(video_source_port);
-  if (o_log->count()) o.log_path = log_path;
-  if (o_inv->count()) o.inventory_path = inventory_path;
-  if (o_damaged->count()) {
-    o.video.damaged = parse_damaged(damaged, [](const std::string& why) -> void { throw UsageError("--damaged-video: " + why); });
-  }
-  if (o_st->count()) o.failsafes.state_timeout_s = fs.state_timeout_s;
-  if (o_sst->count()) o.failsafes.state_start_timeout_s = fs.state_start_timeout_s;
-  if (o_vh->count()) o.failsafes.video_hover_s = fs.video_hover_s;
-  if (o_vl->count()) o.failsafes.video_land_s = fs.video_land_s;
-  if (o_bat->count()) o.failsafes.critical_battery_pct = fs.critical_battery_pct;
-  if (o_max->count()) o.failsafes.max_flight_s = fs.max_flight_s;
-  (void)o_config;
-  (void)o_calib;
-  (void)o_dry;
-  if (o.failsafes.video_land_s < o.failsafes.video_hover_s) {
-    throw UsageError("--video-land must not be shorter than --video-hover");
-  }
-  try {
-    parse_ipv4(o.driver.drone_ip);
-    parse_ipv4(o.driver.local_ip);
-  } catch (const std::invalid_argument& e) {
-    throw UsageError(e.what());
-  }
-  o.video.drone_ip = o.driver.drone_ip;
-  o.video.local_ip = o.driver.local_ip;
-  if (!board.empty()) {
-    int c = 0, r = 0;
+  if (c.st->count()) o.failsafes.state_timeout_s = c.fs.state_timeout_s;
+  if (c.sst->count()) o.failsafes.state_start_timeout_s = c.fs.state_start_timeout_s;
+  if (c.vh->count()) o.failsafes.video_hover_s = c.fs.video_hover_s;
+  if (c.vl->count()) o.failsafes.video_land_s = c.fs.video_land_s;
+  if (c.bat->count()) o.failsafes.critical_battery_pct = c.fs.critical_battery_pct;
+  if (c.max->count()) o.failsafes.max_flight_s = c.fs.max_flight_s;
+}
+
+// --board COLSxROWS and --marker-ids FIRST-LAST, when given.
+void parse_board_and_markers(const CommandLine& c, PilotOptions& o) {
+  if (!c.board.empty()) {
+    int cols = 0, rows = 0;
     char x = 0;
-    std::istringstream in(board);
-    if (!(in >> c >> x >> r) || x != 'x' || c < 3 || r < 3 || !in.eof()) {
-      throw UsageError("--board '" + board + "': expected COLSxROWS inner corners, each >= 3 (e.g. 9x6)");
+    std::istringstream in(c.board);
+    if (!(in >> cols >> x >> rows) || x != 'x' || cols < 3 || rows < 3 || !in.eof()) {
+      throw UsageError("--board '" + c.board + "': expected COLSxROWS inner corners, each >= 3 (e.g. 9x6)");
     }
-    o.board_columns = c;
-    o.board_rows = r;
+    o.board_columns = cols;
+    o.board_rows = rows;
   }
-  if (!marker_ids.empty()) {
+  if (!c.marker_ids.empty()) {
     int first = -1, last = -1;
     char dash = 0;
-    std::istringstream in(marker_ids);
+    std::istringstream in(c.marker_ids);
     if (!(in >> first >> dash >> last) || dash != '-' || first < 0 || last < first || !in.eof()) {
-      throw UsageError("--marker-ids '" + marker_ids + "': expected FIRST-LAST (e.g. 0-15)");
+      throw UsageError("--marker-ids '" + c.marker_ids + "': expected FIRST-LAST (e.g. 0-15)");
     }
     o.marker_first = first;
     o.marker_last = last;
   }
-  // The flight configuration: required to fly, optional to calibrate.
+}
+
+// The flight configuration (required to fly, optional to calibrate) and the camera calibration
+// that replaces its camera.
+void load_flight_files(PilotOptions& o) {
   if (o.flight_config_path.empty() && o.calibrate_path.empty()) {
     throw UsageError("no flight configuration: give --config FILE (or flight_config: in the --pilot file)");
   }
@@ -264,6 +260,46 @@ std::optional<PilotOptions> parse_options(int argc, char** argv) {
       throw UsageError(o.calibration_path + ": " + e.what());
     }
   }
+}
+
+}  // namespace
+
+std::optional<PilotOptions> parse_options(int argc, char** argv) {
+  PilotOptions o;
+  CLI::App app{"tello_pilot: fly a DJI Tello with the shelfcross flight software (see flight_sw/tello/README.md)"};
+  CommandLine c;
+  add_flight_options(app, o, c);
+  add_failsafe_options(app, c);
+  add_tool_options(app, o, c);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp&) {
+    std::cout << app.help();
+    return std::nullopt;
+  } catch (const CLI::ParseError& e) {
+    throw UsageError(std::string(e.what()) + " (see --help)");
+  }
+  try {
+    if (!c.pilot_file.empty()) read_pilot_file(c.pilot_file, o);
+  } catch (const config::ConfigError& e) {
+    throw UsageError(e.what());
+  } catch (const std::exception& e) {
+    throw UsageError(c.pilot_file + ": " + e.what());
+  }
+  apply_command_line(c, o);
+  if (o.failsafes.video_land_s < o.failsafes.video_hover_s) {
+    throw UsageError("--video-land must not be shorter than --video-hover");
+  }
+  try {
+    parse_ipv4(o.driver.drone_ip);
+    parse_ipv4(o.driver.local_ip);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+  o.video.drone_ip = o.driver.drone_ip;
+  o.video.local_ip = o.driver.local_ip;
+  parse_board_and_markers(c, o);
+  load_flight_files(o);
   if (o.fly_calibration && !o.calibrate_path.empty()) {
     throw UsageError("--fly-calibration and --calibrate: one at a time (the camera's calibration never flies)");
   }

@@ -6,48 +6,27 @@
 #include <gtest/gtest.h>
 
 #include "verification/scenario/distribution.hpp"
+#include "verification/scenario/test/distribution_builders.hpp"
 
 namespace shelfcross::verification {
 namespace {
 
-Distribution uniform(double lo, double hi) {
-  Distribution d;
-  d.kind = Distribution::Kind::uniform;
-  d.min = lo;
-  d.max = hi;
-  return d;
-}
-
-Distribution normal(double mean, double stddev) {
-  Distribution d;
-  d.kind = Distribution::Kind::normal;
-  d.mean = mean;
-  d.stddev = stddev;
-  return d;
-}
-
-Distribution truncated(double mean, double stddev, double lo, double hi) {
-  Distribution d = normal(mean, stddev);
-  d.kind = Distribution::Kind::truncated_normal;
-  d.min = lo;
-  d.max = hi;
-  return d;
-}
+using test::normal;
+using test::truncated;
+using test::uniform;
 
 /// Trapezoid integral of exp(log_pdf) over [lo, hi] on n intervals.
-double integral(const Distribution& d, double lo, double hi, int n = 20000) {
-  const double h = (hi - lo) / n;
-  double sum = 0.0;
-  for (int i = 0; i <= n; ++i) sum += (i == 0 || i == n ? 0.5 : 1.0) * std::exp(d.log_pdf(lo + i * h));
-  return sum * h;
-}
-
 template <class LogPdf>
 double integral_of(LogPdf log_pdf, double lo, double hi, int n = 20000) {
   const double h = (hi - lo) / n;
   double sum = 0.0;
   for (int i = 0; i <= n; ++i) sum += (i == 0 || i == n ? 0.5 : 1.0) * std::exp(log_pdf(lo + i * h));
   return sum * h;
+}
+
+/// The same of a distribution's density.
+double integral(const Distribution& d, double lo, double hi, int n = 20000) {
+  return integral_of([&d](double x) { return d.log_pdf(x); }, lo, hi, n);
 }
 
 constexpr double kInf = std::numeric_limits<double>::infinity();

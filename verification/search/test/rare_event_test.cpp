@@ -10,25 +10,13 @@
 #include <gtest/gtest.h>
 
 #include "shelfcross/random.hpp"
+#include "verification/scenario/test/distribution_builders.hpp"
 
 namespace shelfcross::verification {
 namespace {
 
-Distribution normal(double mean, double stddev) {
-  Distribution d;
-  d.kind = Distribution::Kind::normal;
-  d.mean = mean;
-  d.stddev = stddev;
-  return d;
-}
-
-Distribution uniform(double min, double max) {
-  Distribution d;
-  d.kind = Distribution::Kind::uniform;
-  d.min = min;
-  d.max = max;
-  return d;
-}
+using test::normal;
+using test::uniform;
 
 /// Phi(-b), the standard normal's upper tail.
 double upper_tail(double b) { return 0.5 * std::erfc(b / std::numbers::sqrt2); }

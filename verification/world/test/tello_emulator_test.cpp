@@ -45,7 +45,7 @@ class TelloEmulatorTest : public ::testing::Test {
     c.client_video_port = video_.local_port();
     emu_ = std::make_unique<TelloEmulator>(default_scenario(), c);
   }
-  Endpoint drone() const { return {"127.0.0.1", emu_->command_port()}; }
+  Endpoint drone() const { return {"127.0.0.1", emu_->ports().command}; }
   void send(const std::string& text, UdpSocket* from = nullptr) {
     ASSERT_TRUE((from ? *from : client_).send_to(drone(), text));
   }
@@ -91,7 +91,7 @@ TEST_F(TelloEmulatorTest, NothingBeforeCommandThenOkAndStateRecordsAt10Hz) {
   EXPECT_FALSE(state_.receive().has_value()) << "state before `command`";
   send("command");
   EXPECT_EQ(reply(), "ok");  // the first reply at all: battery? and takeoff got none
-  EXPECT_EQ(emu_->tello().mode(), plant::FlightMode::landed);
+  EXPECT_EQ(emu_->world().tello().mode(), plant::FlightMode::landed);
 
   // Two seconds of state: 20 records, SDK 2.0 layout, from the emulator's state port.
   std::vector<std::pair<TimeNs, std::string>> records;
@@ -99,7 +99,7 @@ TEST_F(TelloEmulatorTest, NothingBeforeCommandThenOkAndStateRecordsAt10Hz) {
   while (t_ns_ < t_end) {
     step(10 * kMs);
     while (auto d = state_.receive()) {
-      EXPECT_EQ(d->from.port, emu_->state_source_port());
+      EXPECT_EQ(d->from.port, emu_->ports().state_source);
       records.emplace_back(t_ns_, d->bytes);
     }
   }
@@ -152,13 +152,13 @@ TEST_F(TelloEmulatorTest, TakeoffAnswersWhenItEndsAndTheWatchdogLands) {
   ASSERT_TRUE(d.has_value());
   EXPECT_EQ(d->bytes, "ok");
   EXPECT_GE(t_ns_ - t_sent, 3000 * kMs) << "the takeoff reply came before the takeoff ended";
-  EXPECT_EQ(emu_->tello().mode(), plant::FlightMode::flying);
-  EXPECT_GT(emu_->tello().state().p_WB_m.z(), 0.7);
+  EXPECT_EQ(emu_->world().tello().mode(), plant::FlightMode::flying);
+  EXPECT_GT(emu_->world().tello().state().p_WB_m.z(), 0.7);
   // No command for 15 s: the drone lands by itself, and says nothing.
   const auto quiet = next(client_, 17'000 * kMs);
   EXPECT_FALSE(quiet.has_value()) << quiet->bytes;
   step(4000 * kMs);
-  EXPECT_EQ(emu_->tello().mode(), plant::FlightMode::landed);
+  EXPECT_EQ(emu_->world().tello().mode(), plant::FlightMode::landed);
   const EmulatorReport r = emu_->report();
   EXPECT_TRUE(r.flew);
   EXPECT_TRUE(r.landed);
@@ -218,7 +218,7 @@ TEST_F(TelloEmulatorTest, StreamonSendsH264InTelloDatagrams) {
     while (video_.wait_readable(30000)) {
       auto d = video_.receive();
       ASSERT_TRUE(d.has_value());
-      EXPECT_EQ(d->from.port, emu_->video_source_port());
+      EXPECT_EQ(d->from.port, emu_->ports().video_source);
       ASSERT_LE(d->bytes.size(), 1460u);
       frames.back().push_back(d->bytes);
       const std::vector<int> types = sdk::nal_unit_types(d->bytes);
@@ -337,7 +337,7 @@ TEST_F(TelloEmulatorTest, InjectedCommandLossAndReplyFaults) {
   EXPECT_EQ(reply(), "error Not joystick");
   EXPECT_EQ(reply(), "error Not joystick");
   step(1000 * kMs);
-  EXPECT_EQ(emu_->tello().mode(), plant::FlightMode::landed);
+  EXPECT_EQ(emu_->world().tello().mode(), plant::FlightMode::landed);
   emu_.reset();
 
   EmulatorConfig g;
@@ -367,12 +367,12 @@ TEST_F(TelloEmulatorTest, RefusedCommandsCountForTheWatchdog) {
     t_ns_ = 0;
     start(c);
     enter_sdk_mode();
-    for (int attempt = 0; attempt < 200 && emu_->tello().mode() == plant::FlightMode::landed; ++attempt) {
+    for (int attempt = 0; attempt < 200 && emu_->world().tello().mode() == plant::FlightMode::landed; ++attempt) {
       send("takeoff");
       if (reply(20'000 * kMs) == "ok") break;
       step(200 * kMs);
     }
-    ASSERT_EQ(emu_->tello().mode(), plant::FlightMode::flying);
+    ASSERT_EQ(emu_->world().tello().mode(), plant::FlightMode::flying);
     TimeNs last_accepted_ns = t_ns_;
     for (int k = 0; k < 8; ++k) {
       step(2500 * kMs);
@@ -387,10 +387,10 @@ TEST_F(TelloEmulatorTest, RefusedCommandsCountForTheWatchdog) {
     step(1000 * kMs);
     window = t_ns_ - last_accepted_ns >= 15'000 * kMs;
     if (window) {
-      EXPECT_EQ(emu_->tello().mode(), plant::FlightMode::flying) << "the watchdog landed a drone that was commanded";
+      EXPECT_EQ(emu_->world().tello().mode(), plant::FlightMode::flying) << "the watchdog landed a drone that was commanded";
       // Then silence: the watchdog lands it.
       step(17'000 * kMs);
-      EXPECT_EQ(emu_->tello().mode(), plant::FlightMode::landed);
+      EXPECT_EQ(emu_->world().tello().mode(), plant::FlightMode::landed);
     }
     emu_.reset();
   }
