@@ -101,7 +101,7 @@ std::vector<SdkCommand> FlightSoftware::step(const Input& input) {
   telemetry_.velocity = sticks_.velocity();
   telemetry_.stale_replies = commands_.stale_replies();
   telemetry_.video_stalled = video_stalled_;
-  const TargetTracker::Counts& counts = tracker_.counts();
+  const TrackerRecord& counts = tracker_.record();
   telemetry_.rejected_poses = counts.rejected_poses;
   telemetry_.wrong_level_poses = counts.wrong_level_poses;
   telemetry_.behind_tags_dropped = counts.behind_tags_dropped;
@@ -196,8 +196,8 @@ std::optional<cv::Rect2d> FlightSoftware::decision_region_px() const {
       return cv::Rect2d(region);
     }
     case Phase::Approach:
-      if (!tracker_.target() || tracker_.box_px().area() <= 0.0) return std::nullopt;
-      return tracker_.box_px();
+      if (!tracker_.target() || tracker_.corners().box_px().area() <= 0.0) return std::nullopt;
+      return tracker_.corners().box_px();
     default:
       return std::nullopt;
   }
@@ -434,7 +434,7 @@ void FlightSoftware::abort_on_ground(const std::string& reason) {
 // corner tags are leaving the view: there only nearly whole pictures move the vehicle
 // (approach).
 void FlightSoftware::hold_or_hover() {
-  sticks_.hold_or_hover(now_ns_, phase_ == Phase::Approach && tracker_.near_edge());
+  sticks_.hold_or_hover(now_ns_, phase_ == Phase::Approach && tracker_.corners().near_edge());
 }
 
 void FlightSoftware::emit_rc(bool force) {
@@ -528,11 +528,11 @@ bool FlightSoftware::select_target(const cv::Mat& bgr) {
   // Chosen on a full view, where every cell's grid position is counted from the edges.
   tracker_.choose(*best, survey_.view(), bgr, now_ns_, height_m);
   telemetry_.target = best;
-  telemetry_.tracked_box_px = tracker_.box_px();
+  telemetry_.tracked_box_px = tracker_.corners().box_px();
   cell_height_.clear();
   line_hold_.clear();
   forward_gain_.restart();
-  telemetry_.target_identity = tracker_.identity();
+  telemetry_.target_identity = tracker_.identification().identity();
   return true;
 }
 
@@ -565,14 +565,14 @@ bool FlightSoftware::reacquire(const Picture& pic) {
   survey_.analyse(pic.bgr, telemetry_);
   if (!tracker_.reacquire(pic, survey_.view(), survey_.tag_detector(), state_)) return false;
   after_measurement();
-  telemetry_.tracked_box_px = tracker_.box_px();
+  telemetry_.tracked_box_px = tracker_.corners().box_px();
   return true;
 }
 
 // What a successful measurement of the target changed, for the telemetry.
 void FlightSoftware::after_measurement() {
-  if (tracker_.continuity_lost()) telemetry_.event = "target continuity lost: identity to be confirmed";
-  telemetry_.target_identity = tracker_.identity();
+  if (tracker_.identification().continuity_lost()) telemetry_.event = "target continuity lost: identity to be confirmed";
+  telemetry_.target_identity = tracker_.identification().identity();
 }
 
 // The target's identity judged on this picture (target_tracker.hpp): a contradiction, or no
@@ -580,7 +580,7 @@ void FlightSoftware::after_measurement() {
 bool FlightSoftware::check_identity(const Picture& pic, const PoseEstimate& pose) {
   const IdentityCheck check = tracker_.check_identity(pic, pose, survey_.tag_detector(), survey_.marker_detector(), survey_.inventory());
   if (check.verdict == CellIdentity::Confirmed) {
-    telemetry_.target_identity = tracker_.identity();
+    telemetry_.target_identity = tracker_.identification().identity();
     telemetry_.event = "target identity confirmed: " + check.why;
     return true;
   }
@@ -589,7 +589,7 @@ bool FlightSoftware::check_identity(const Picture& pic, const PoseEstimate& pose
     reread_shelf("target identity contradicted (" + check.why + ")");
     return false;
   }
-  const std::optional<TimeNs>& since = tracker_.unidentified_since_ns();
+  const std::optional<TimeNs>& since = tracker_.identification().unidentified_since_ns();
   if (since && ns_to_seconds(now_ns_ - *since) > config_.mission.identity_confirm_s) {
     reread_shelf("target not identified within identity_confirm_s");
     return false;
@@ -618,7 +618,7 @@ void FlightSoftware::reread_shelf(const std::string& why, const std::optional<st
   // turning, "shelf not found"). So, seeing nothing, it first backs straight out the way the
   // approach came, to the viewpoint's range (the last pose's range: distance / back-off speed).
   reread_back_until_ns_.reset();
-  if (const std::optional<PoseEstimate>& pose_K = tracker_.pose_K()) {
+  if (const std::optional<PoseEstimate>& pose_K = tracker_.poses().pose_K()) {
     const double back_m = std::max(0.0, -survey_.viewpoint_G_m().x() + pose_K->p_FB_m().x());
     reread_back_until_ns_ = now_ns_ + seconds_to_ns(back_m / config_.control.back_off_speed_mps);
   }
@@ -627,7 +627,7 @@ void FlightSoftware::reread_shelf(const std::string& why, const std::optional<st
   telemetry_.target.reset();
   cell_height_.clear();
   line_hold_.clear();
-  telemetry_.target_identity = tracker_.identity();
+  telemetry_.target_identity = tracker_.identification().identity();
   hold_since_ns_.reset();
   sticks_.hover();
   // FindShelf backs away from a fragment until the whole grid is in view, GoToViewpoint flies
@@ -643,7 +643,7 @@ std::optional<std::string> FlightSoftware::cross_if_clear(const std::string& why
   const ControlGains& g = config_.control;
   CrossingGateInput gate;
   const PoseEstimate pose = crossing_gate_pose(gate);
-  gate.identity = tracker_.identity();
+  gate.identity = tracker_.identification().identity();
   const std::optional<double> cell_centre_h_m = cell_height_.measured_m();
   if (cell_centre_h_m && state_fresh()) {
     gate.height_above_cell_m = state_->height_m - *cell_centre_h_m;
@@ -653,7 +653,7 @@ std::optional<std::string> FlightSoftware::cross_if_clear(const std::string& why
   if (refusal) return refusal;
   // Past the back face by beyond_distance_m, or less where a shelf stands behind
   // (guidance.hpp, crossing_beyond_m).
-  const std::optional<double>& behind_m = tracker_.behind_m();
+  const std::optional<double>& behind_m = tracker_.record().behind_m;
   const double beyond_m = crossing_beyond_m(config_, behind_m);
   if (beyond_m < config_.mission.min_beyond_distance_m) {
     land(Outcome::Aborted, "no room behind the shelf to stop after crossing (tags " + format_m(*behind_m) + " m behind)");
@@ -701,16 +701,16 @@ void FlightSoftware::approach(const Picture& pic) {
   const bool found = tracker_.measure(pic, predicted.box_px, survey_.tag_detector(), state_);
   if (found) after_measurement();
   feed_line_hold(found, odometry);
-  telemetry_.tracked_box_px = tracker_.box_px();
+  telemetry_.tracked_box_px = tracker_.corners().box_px();
   const double dt = sticks_.control_dt_s(now_ns_);
   if (found) return approach_found(pic, predicted, dt);
-  if (tracker_.hidden_by_damage() && !back_off_since_ns_) return approach_unseen(dt);
+  if (tracker_.record().hidden_by_damage && !back_off_since_ns_) return approach_unseen(dt);
   approach_without_target(pic);
 }
 
 // Eq. 10's forward speed toward the viewpoint from `range_m` out (none while held short).
 double FlightSoftware::approach_forward_speed_mps(bool hold, double range_m) const {
-  return approach_forward_mps(config_.control, hold, tracker_.identity() == CellIdentity::Confirmed, range_m,
+  return approach_forward_mps(config_.control, hold, tracker_.identification().identity() == CellIdentity::Confirmed, range_m,
                               -survey_.viewpoint_G_m().x());
 }
 
@@ -720,18 +720,18 @@ void FlightSoftware::approach_found(const Picture& pic, const TargetTracker::Pre
   lost_since_ns_.reset();
   back_off_since_ns_.reset();
   tracker_.correct(pic, predicted);
-  const PoseEstimate& pose = *tracker_.pose_K();
+  const PoseEstimate& pose = *tracker_.poses().pose_K();
   telemetry_.pose = pose;
   telemetry_.pose_in_cell_frame = true;
   // Unidentified (continuity lost): judge this picture; a contradiction ends the approach.
   // Whole pictures only: a guessed band can put a tag beyond the grid's edge or hide one.
-  if (tracker_.identity() != CellIdentity::Confirmed && pic.whole() && !check_identity(pic, pose)) return;
+  if (tracker_.identification().identity() != CellIdentity::Confirmed && pic.whole() && !check_identity(pic, pose)) return;
   // Decisions rest only on poses from deciding pictures whose corner tags are clear of the
   // damage (TargetTracker::pose_decides); the others steer. The line-hold monitor measures
   // on the former, carried by the odometry between them (feed_line_hold, line_hold.hpp).
-  const bool decides = tracker_.pose_decides();
+  const bool decides = tracker_.poses().pose_decides();
   // The laws of eq. 10-15 and Fig. 19 (guidance.hpp); the PI states and the timers here.
-  const ApproachErrors e = approach_errors(config_.camera, tracker_.box_centre_px(), pose);
+  const ApproachErrors e = approach_errors(config_.camera, tracker_.corners().box_centre_px(), pose);
   VelocityCommand v = approach_steering(e, dt);
   // Held short inside commit_range_m until settled; settling is given up after
   // settle_hold_s (the crossing gate then decides).
@@ -750,13 +750,13 @@ void FlightSoftware::approach_found(const Picture& pic, const TargetTracker::Pre
   // About to lose the tags: the crossing will be judged on the last nearly whole picture,
   // so only such pictures move the vehicle now (it hovers on damaged ones), and the last
   // one before the tags leave is at most a frame old.
-  if (tracker_.near_edge() && !decides) v = {};
+  if (tracker_.corners().near_edge() && !decides) v = {};
   // Near the border on a nearly whole picture: its pose is the freshest the approach will
   // get, and the crossing is judged on it now rather than when the tags have left the view
   // on a later nearly whole picture, which over a lossy link may come a second after the
   // last one, its pose then too old to cross on (pose_fresh_s). A refusal here only lets
   // the approach go on.
-  if (tracker_.near_edge() && decides && -pose.p_FB_m().x() <= config_.mission.cross_range_max_m &&
+  if (tracker_.corners().near_edge() && decides && -pose.p_FB_m().x() <= config_.mission.cross_range_max_m &&
       !cross_if_clear("corner tags leaving the view")) {
     return;
   }
@@ -805,8 +805,8 @@ void FlightSoftware::approach_without_target(const Picture& pic) {
   }
   // The corner tags are gone. Close and at the border: they left the view; cross if centred,
   // judged on the last pose from a nearly whole picture.
-  const std::optional<PoseEstimate>& decision_pose_K = tracker_.decision_pose_K();
-  if (decision_pose_K && tracker_.near_edge() && -decision_pose_K->p_FB_m().x() <= config_.mission.cross_range_max_m) {
+  const std::optional<PoseEstimate>& decision_pose_K = tracker_.poses().decision_pose_K();
+  if (decision_pose_K && tracker_.corners().near_edge() && -decision_pose_K->p_FB_m().x() <= config_.mission.cross_range_max_m) {
     const std::optional<std::string> refusal = cross_if_clear("corner tags left the view");
     if (!refusal) return;
     const std::string& why = *refusal;

@@ -27,7 +27,7 @@ LineHoldForecast FlightSoftware::line_hold_forecast(const PoseEstimate& pose_K) 
 }
 
 void FlightSoftware::feed_line_hold(bool found, const std::optional<OdometryFix>& odometry) {
-  const PoseEstimate* clean = found && tracker_.pose_decides() ? &*tracker_.pose_K() : nullptr;
+  const PoseEstimate* clean = found && tracker_.poses().pose_decides() ? &*tracker_.poses().pose_K() : nullptr;
   line_hold_.on_picture(now_ns_, clean, odometry, quiet_at(now_ns_), config_.mission.coast_s);
 }
 
@@ -41,8 +41,8 @@ void FlightSoftware::feed_line_hold(bool found, const std::optional<OdometryFix>
 // vehicle may be (at 0.4 s old, 2 cm of the 8.4 cm a 34 cm column leaves). The height is the
 // state height's either way (crossing_refusal).
 PoseEstimate FlightSoftware::crossing_gate_pose(CrossingGateInput& gate) {
-  const TimeNs pose_t_ns = tracker_.decision_pose_t_ns();
-  PoseEstimate pose = *tracker_.decision_pose_K();
+  const TimeNs pose_t_ns = tracker_.poses().decision_pose_t_ns();
+  PoseEstimate pose = *tracker_.poses().decision_pose_K();
   gate.pose_age_s = ns_to_seconds(now_ns_ - pose_t_ns);
   gate.still_for_s = ns_to_seconds(pose_t_ns - lateral_active_ns_);
   double carried_s = 0.0;
@@ -62,7 +62,7 @@ PoseEstimate FlightSoftware::crossing_gate_pose(CrossingGateInput& gate) {
 
 bool FlightSoftware::too_rough_to_cross(const PoseEstimate& pose_K) {
   const MissionParams& m = config_.mission;
-  if (-pose_K.p_FB_m().x() > config_.control.commit_range_m || tracker_.identity() != CellIdentity::Confirmed) {
+  if (-pose_K.p_FB_m().x() > config_.control.commit_range_m || tracker_.identification().identity() != CellIdentity::Confirmed) {
     rough_since_ns_.reset();
     return false;
   }
@@ -95,7 +95,7 @@ void FlightSoftware::back_out_and_land(const std::string& reason, double flown_i
   // the shelf by the last pose (and what was flown in since), then land there (supervise): clear of the frame whatever a
   // gust does during the descent.
   double back_m = config_.mission.give_up_clearance_m + flown_in_m;
-  if (const std::optional<PoseEstimate>& pose_K = tracker_.pose_K()) back_m += pose_K->p_FB_m().x();
+  if (const std::optional<PoseEstimate>& pose_K = tracker_.poses().pose_K()) back_m += pose_K->p_FB_m().x();
   retreat_until_ns_ = now_ns_ + seconds_to_ns(std::max(0.0, back_m) / config_.control.back_off_speed_mps);
   retreat_reason_ = reason;
   telemetry_.event = retreat_reason_ + ": backing out to land clear of the shelf";

@@ -21,6 +21,57 @@ Step hover(Step::Next next = Step::Next::Stay) {
   step.hover = true;
   return step;
 }
+
+// The markers of the boxes in the picture `bgr` of the full view `view`, into `markers`.
+void read_markers(const cv::Mat& bgr, const ShelfView& view, MarkerDetector& marker_detector, const FlightConfig& config,
+                  std::vector<MarkerSighting>& markers) {
+  markers.clear();
+  if (config.perception.pipeline == PerceptionPipeline::fast) {
+    // Markers only where boxes can be: the cells, i.e. inside the front tags' bounding box.
+    cv::Rect grid = view.tags.front().bbox_px;
+    for (const TagBlob& t : view.tags) grid |= t.bbox_px;
+    marker_detector.detect_in(bgr, grid, config.shelf.marker_size_m * view.px_per_m,
+                               config.perception.marker_area_ratio_threshold, markers);
+  } else {
+    marker_detector.detect(bgr, markers);
+  }
+}
+
+// The cells of the full view whose rows no damaged row of `pic` touches: a damaged picture's
+// view of them is whole (inventory.hpp). The cells' rows are their corner tags' centres,
+// band_margin_px around (the marker detector's threshold window and the picture's motion).
+std::vector<CellIndex> cells_clear_of_damage(const Picture& pic, const ShelfView& view, const FlightConfig& config) {
+  std::vector<CellIndex> out;
+  const double margin = config.perception.band_margin_px;
+  if (margin < 0.0) return out;
+  for (int l = 1; l <= config.shelf.levels(); ++l) {
+    for (int c = 1; c <= config.shelf.columns(); ++c) {
+      const auto q = cell_quad(view, {l, c});
+      double top = q[0].y, bottom = q[0].y;
+      for (const cv::Point2d& p : q) {
+        top = std::min(top, p.y);
+        bottom = std::max(bottom, p.y);
+      }
+      if (!pic.damaged_rows || !rows_touch(*pic.damaged_rows, top - margin, bottom + margin)) out.push_back({l, c});
+    }
+  }
+  return out;
+}
+
+// The view's tags and grid, for the logs.
+void update_view_telemetry(const ShelfView& view, Telemetry& t) {
+  t.tags.clear();
+  for (size_t i = 0; i < view.tags.size(); ++i) {
+    const bool classified = view.grid.valid && i < view.grid.row.size();
+    t.tags.push_back({view.tags[i].centre_px, view.tags[i].area_px, classified ? view.grid.row[i] : -1,
+                      classified ? view.grid.column[i] : -1});
+  }
+  t.grid_valid = view.grid.valid;
+  t.grid_rows = view.grid.rows;
+  t.grid_columns = view.grid.columns;
+  t.full_view = view.full;
+  t.grid_refusal = view.grid.refusal;
+}
 }  // namespace
 
 ShelfSurvey::ShelfSurvey(const FlightConfig& config)
@@ -91,13 +142,13 @@ SurveyStep ShelfSurvey::take_inventory(const Picture& pic, Telemetry& telemetry)
   if (!pic.decides) return hover();  // a guessed band may hold a marker, or shift the grid labels
   analyse(pic.bgr, telemetry);
   if (!view_.full) return hover();
-  read_markers(pic.bgr);
+  read_markers(pic.bgr, view_, marker_detector_, config_, markers_);
   telemetry.markers_seen = static_cast<int>(markers_.size());
   const std::vector<std::pair<CellIndex, int>> sightings = assign_markers(view_, markers_, config_);
   if (pic.whole()) {
     inventory_.observe(sightings, true);
   } else {
-    inventory_.observe(sightings, cells_clear_of_damage(pic));
+    inventory_.observe(sightings, cells_clear_of_damage(pic, view_, config_));
   }
   // Closed after inventory_frames full views, with enough whole views of every cell without a
   // box to decide whether it is empty (inventory.hpp); the timeout bounds the wait.
@@ -105,42 +156,9 @@ SurveyStep ShelfSurvey::take_inventory(const Picture& pic, Telemetry& telemetry)
   return hover(Step::Next::InventoryTaken);
 }
 
-void ShelfSurvey::read_markers(const cv::Mat& bgr) {
-  markers_.clear();
-  if (config_.perception.pipeline == PerceptionPipeline::fast) {
-    // Markers only where boxes can be: the cells, i.e. inside the front tags' bounding box.
-    cv::Rect grid = view_.tags.front().bbox_px;
-    for (const TagBlob& t : view_.tags) grid |= t.bbox_px;
-    marker_detector_.detect_in(bgr, grid, config_.shelf.marker_size_m * view_.px_per_m,
-                               config_.perception.marker_area_ratio_threshold, markers_);
-  } else {
-    marker_detector_.detect(bgr, markers_);
-  }
-}
-
 void ShelfSurvey::analyse(const cv::Mat& bgr, Telemetry& telemetry) {
   analyse_shelf(bgr, tag_detector_, config_, view_);
-  update_view_telemetry(telemetry);
-}
-
-// The cells' rows are their corner tags' centres, band_margin_px around (the marker detector's
-// threshold window and the picture's motion).
-std::vector<CellIndex> ShelfSurvey::cells_clear_of_damage(const Picture& pic) const {
-  std::vector<CellIndex> out;
-  const double margin = config_.perception.band_margin_px;
-  if (margin < 0.0) return out;
-  for (int l = 1; l <= config_.shelf.levels(); ++l) {
-    for (int c = 1; c <= config_.shelf.columns(); ++c) {
-      const auto q = cell_quad(view_, {l, c});
-      double top = q[0].y, bottom = q[0].y;
-      for (const cv::Point2d& p : q) {
-        top = std::min(top, p.y);
-        bottom = std::max(bottom, p.y);
-      }
-      if (!pic.damaged_rows || !rows_touch(*pic.damaged_rows, top - margin, bottom + margin)) out.push_back({l, c});
-    }
-  }
-  return out;
+  update_view_telemetry(view_, telemetry);
 }
 
 void ShelfSurvey::next_shelf(int shelf) {
@@ -148,20 +166,6 @@ void ShelfSurvey::next_shelf(int shelf) {
   inventory_ = Inventory(shelf, config_.shelf.levels(), config_.shelf.columns(), config_.perception.marker_min_agreeing_frames);
   pose_G_.reset();
   last_full_view_ns_.reset();
-}
-
-void ShelfSurvey::update_view_telemetry(Telemetry& t) const {
-  t.tags.clear();
-  for (size_t i = 0; i < view_.tags.size(); ++i) {
-    const bool classified = view_.grid.valid && i < view_.grid.row.size();
-    t.tags.push_back({view_.tags[i].centre_px, view_.tags[i].area_px, classified ? view_.grid.row[i] : -1,
-                      classified ? view_.grid.column[i] : -1});
-  }
-  t.grid_valid = view_.grid.valid;
-  t.grid_rows = view_.grid.rows;
-  t.grid_columns = view_.grid.columns;
-  t.full_view = view_.full;
-  t.grid_refusal = view_.grid.refusal;
 }
 
 }  // namespace shelfcross::flight_sw

@@ -58,9 +58,6 @@ class ShelfSurvey {
 
   /// The shelf's view analysed anew on `bgr` (the approach's re-acquisition).
   void analyse(const cv::Mat& bgr, Telemetry& telemetry);
-  /// The cells of the full view whose rows no damaged row of `pic` touches (band_margin_px
-  /// around them): a damaged picture's view of them is whole (inventory.hpp).
-  std::vector<CellIndex> cells_clear_of_damage(const Picture& pic) const;
 
   /// The next shelf: this one's inventory finished, a new one begun, the viewpoint's memory
   /// cleared.
@@ -77,9 +74,6 @@ class ShelfSurvey {
   const std::optional<PoseEstimate>& pose_G() const { return pose_G_; }
 
  private:
-  void update_view_telemetry(Telemetry& telemetry) const;
-  void read_markers(const cv::Mat& bgr);
-
   FlightConfig config_;
   TagDetector tag_detector_;
   MarkerDetector marker_detector_;

@@ -50,6 +50,30 @@ struct CrossingGateInput {
 std::optional<std::string> crossing_refusal(const FlightConfig& config, CellIndex target,
                                             const PoseEstimate& pose_K, const CrossingGateInput& input);
 
+/// Within this of the last pose the box is predicted by its image motion; later by the
+/// vehicle's own motion (TargetTracker::predict): three frame periods.
+constexpr double kMotionPredictAfter_s = 0.1;
+
+/// What the tracker's last measure found beside the pose, and its counters for the telemetry
+/// (never reset).
+struct TrackerRecord {
+  /// The last measure found nothing because the picture's damage hides the target: nothing is
+  /// to be decided on it, and the target is not lost.
+  bool hidden_by_damage = false;
+  std::optional<double> behind_m;  ///< nearest tag behind the target seen through it, from the front tags, m
+  int rejected_poses = 0;          ///< implausible jumps of the target's pose, ignored
+  int wrong_level_poses = 0;       ///< of which on another level's tags (state height disagrees)
+  int behind_tags_dropped = 0;     ///< tags in the target's window too small for the front shelf
+  int identity_checks = 0;         ///< pictures judged while the target was unidentified
+  int hidden_target_pictures = 0;  ///< pictures whose damage hid the target (hidden_by_damage)
+  /// The picture hides the target: counted; returns false (measure's result).
+  bool hide() {
+    hidden_by_damage = true;
+    ++hidden_target_pictures;
+    return false;
+  }
+};
+
 /// The tracked target: the cell chosen on a full view, its four corner tags followed from
 /// picture to picture (fast pipeline: BoxTracker; reference: Median Flow), its pose in the cell
 /// frame K checked for plausibility (jump, level) and its identity (cell_identity.hpp: kept by
@@ -58,22 +82,13 @@ std::optional<std::string> crossing_refusal(const FlightConfig& config, CellInde
 /// seen. Every picture comes as a Picture (its stamp is the time of the step).
 ///
 /// Made of its parts: the corner tags as last measured (CornerTags), the accepted poses
-/// (TargetPoses) and the identity kept by continuity (TargetIdentity), whose read-only views
-/// are the tracker's (private bases, their accessors re-exported below), and the box follower,
-/// the corner tags' search and the plausibility filter (judge_pose) it drives.
-class TargetTracker : private CornerTags, private TargetPoses, private TargetIdentity {
+/// (TargetPoses) and the identity kept by continuity (TargetIdentity), read through corners(),
+/// poses() and identification(); and the box follower, the corner tags' search and the
+/// plausibility filter (judge_pose) it drives.
+class TargetTracker {
  public:
   explicit TargetTracker(const FlightConfig& config)
       : config_(config), follower_(config.perception.pipeline == PerceptionPipeline::fast) {}
-
-  /// Counters for the telemetry (never reset).
-  struct Counts {
-    int rejected_poses = 0;       ///< implausible jumps of the target's pose, ignored
-    int wrong_level_poses = 0;    ///< of which on another level's tags (state height disagrees)
-    int behind_tags_dropped = 0;  ///< tags in the target's window too small for the front shelf
-    int identity_checks = 0;      ///< pictures judged while the target was unidentified
-    int hidden_target_pictures = 0;  ///< pictures whose damage hid the target (hidden_by_damage)
-  };
 
   /// The target chosen on the full `view` of the picture `bgr` at `t_ns` (where every cell's
   /// grid position is counted from the edges: identified), `height_m` its centre's height above
@@ -90,7 +105,6 @@ class TargetTracker : private CornerTags, private TargetPoses, private TargetIde
   /// corner tags projected after the vehicle's own motion since then (`odometry`, now), as the
   /// image velocity of a few pictures extrapolated over a gap throws the window off the tags.
   Prediction predict(const Picture& pic, const std::optional<OdometryFix>& odometry);
-  static constexpr double kMotionPredictAfter_s = 0.1;  ///< three frame periods
   /// Looks for the target's four corner tags around `predicted`: tags in a window around it,
   /// eq. 1 inside the window, each corner the nearest tag to where the box puts it; the pose
   /// from them, if plausible (jump, level by `state`), becomes the target's. False: not found.
@@ -114,17 +128,17 @@ class TargetTracker : private CornerTags, private TargetPoses, private TargetIde
                                MarkerDetector& marker_detector, const Inventory& inventory);
 
   const std::optional<CellIndex>& target() const { return target_; }
-  using CornerTags::box_px;
-  using CornerTags::box_centre_px;
+  /// The corner tags as last measured: the tracked box, its centre, whether a corner tag was
+  /// about to leave the view (corner_tags.hpp).
+  const CornerTags& corners() const { return corners_; }
   /// The last pose in K, and the last from a nearly whole picture (the crossing's) with its
-  /// time; whether the last pose decides (TargetPoses).
-  using TargetPoses::pose_K;
-  using TargetPoses::decision_pose_K;
-  using TargetPoses::decision_pose_t_ns;
-  using TargetPoses::pose_decides;
-  /// The last measure found nothing because the picture's damage hides the target: nothing is
-  /// to be decided on it, and the target is not lost.
-  bool hidden_by_damage() const { return hidden_by_damage_; }
+  /// time; whether the last pose decides (target_pose.hpp).
+  const TargetPoses& poses() const { return poses_; }
+  /// The target's identity, since when it is unidentified, whether the last measure broke its
+  /// continuity (cell_identity.hpp).
+  const TargetIdentity& identification() const { return identification_; }
+  /// What the last measure found beside the pose, and the counters.
+  const TrackerRecord& record() const { return record_; }
   /// Where the vehicle's own motion has carried the target since the last pose, at most
   /// mission.coast_s after it (at `now_ns`): the carried pose and the box its corner tags
   /// make. Empty without odometry at both ends, later, or with a tag behind the camera.
@@ -133,16 +147,6 @@ class TargetTracker : private CornerTags, private TargetPoses, private TargetIde
     cv::Rect2d box_px;
   };
   std::optional<Carried> carried_target(TimeNs now_ns) const;
-  /// A corner tag was about to leave the view on the last measurement.
-  using CornerTags::near_edge;
-  /// The target's identity, since when it is unidentified, whether the last measure broke its
-  /// continuity (TargetIdentity).
-  using TargetIdentity::identity;
-  using TargetIdentity::unidentified_since_ns;
-  using TargetIdentity::continuity_lost;
-  /// Nearest tag behind the target seen through it, from the front tags, m.
-  const std::optional<double>& behind_m() const { return behind_m_; }
-  const Counts& counts() const { return counts_; }
 
  private:
   /// Every tag and marker of a whole picture, for the identity check (buffers reused).
@@ -150,8 +154,6 @@ class TargetTracker : private CornerTags, private TargetPoses, private TargetIde
     std::vector<TagBlob> tags;
     std::vector<MarkerSighting> markers;
   };
-  /// The picture hides the target (hidden_by_damage): counted; measure() returns false.
-  bool hidden();
 
   FlightConfig config_;
   std::optional<CellIndex> target_;
@@ -159,10 +161,11 @@ class TargetTracker : private CornerTags, private TargetPoses, private TargetIde
   BoxFollower follower_;                   ///< the box by its image motion
   CornerTagSearch search_;                 ///< the corner tags found around a predicted box
   PictureFeatures features_;               ///< identity check buffers
-  std::optional<double> behind_m_;         ///< nearest tag behind the target seen through it, from the front tags, m
-  bool hidden_by_damage_ = false;          ///< see hidden_by_damage()
   std::optional<cv::Rect2d> moved_box_px_; ///< the last prediction by the vehicle's motion
-  Counts counts_;
+  CornerTags corners_;
+  TargetPoses poses_;
+  TargetIdentity identification_;
+  TrackerRecord record_;
 };
 
 }  // namespace shelfcross::flight_sw
