@@ -215,7 +215,7 @@ struct MissionParams {
   /// The crossing is judged on a pose from a frame received at most this long ago.
   double pose_fresh_s = 0.25;
   /// A target pose farther than pose_jump_m (+ 1 m/s; grown as the range squared beyond 1 m,
-  /// target_tracker.hpp pose_jump_limit_m) or turned more than pose_jump_rad (+ 1 rad/s) from
+  /// target_pose.hpp pose_jump_limit_m) or turned more than pose_jump_rad (+ 1 rad/s) from
   /// the last one, taken within pose_jump_window_s, is a wrong tag match.
   double pose_jump_m = 0.06;
   double pose_jump_rad = 0.12;
@@ -228,7 +228,7 @@ struct MissionParams {
   /// target was chosen, from the state record's height). Always on in flight; off only for
   /// studies of what it prevents (a campaign over a lossy link then crosses at wrong levels).
   bool level_check = true;
-  /// The target's identity (target_tracker.hpp): lost with the pose continuity, it is
+  /// The target's identity (cell_identity.hpp): lost with the pose continuity, it is
   /// re-established while backing off along the cell normal (the view widening until an edge
   /// or a known marker is in it); not within identity_confirm_s, or contradicted, the shelf is
   /// re-read from the optimal viewpoint and the target chosen anew. A target lost with the

@@ -108,7 +108,7 @@ struct CrossingPlan {
   Eigen::Vector2d dir_B = Eigen::Vector2d::UnitX();  ///< the line's horizontal part in B, |dir_B| = |d_xy|
   CrossingEnd end;  ///< where it ends (odometry.hpp)
 };
-/// Along the crossing line (crossing_direction_K, target_tracker.hpp) at crossing_speed_mps,
+/// Along the crossing line (crossing_direction_K, navigation.hpp) at crossing_speed_mps,
 /// heading held (yaw rate 0); the line in K turned into the body frame by the heading:
 /// v_B = R_z(-yaw) v_K. Ended by distance flown, not by time (crossing_flown): the line's
 /// horizontal length, distance / d_x along the normal times |d_xy|, along the line's direction

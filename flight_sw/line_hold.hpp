@@ -151,7 +151,7 @@ struct LineRoom {
 };
 
 /// The room the crossing line from `pose_K` through `target` leaves (the line: crossing_direction_K,
-/// target_tracker.hpp).
+/// navigation.hpp).
 LineRoom line_room(const FlightConfig& config, CellIndex target, const PoseEstimate& pose_K);
 
 /// Where the crossing may still be stopped and what it must keep clear of, fixed at its start.
