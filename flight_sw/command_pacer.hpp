@@ -28,13 +28,14 @@ class CommandPacer {
   /// last send has passed.
   bool may_send(TimeNs now_ns) const {
     if (outstanding_) return false;
-    return !last_sent_ns_ || now_ns - *last_sent_ns_ >= gap_ns_;
+    return !sent_any_ || now_ns - last_sent_ns_ >= gap_ns_;
   }
 
   /// Records `command` as sent at now_ns and outstanding, its reply due within timeout_ns;
   /// returns it. Requires may_send(now_ns) (a command already outstanding is replaced).
   Command& send(TimeNs now_ns, Command command, TimeNs timeout_ns) {
     outstanding_ = Slot{std::move(command), now_ns, timeout_ns};
+    sent_any_ = true;
     last_sent_ns_ = now_ns;
     return outstanding_->command;
   }
@@ -72,7 +73,10 @@ class CommandPacer {
   };
   TimeNs gap_ns_;
   std::optional<Slot> outstanding_;
-  std::optional<TimeNs> last_sent_ns_;
+  // A flag and a time rather than std::optional<TimeNs>: GCC 12 at -O1 takes the optional's
+  // value, read only when engaged, for maybe uninitialised (-Wmaybe-uninitialized).
+  bool sent_any_ = false;    ///< a command has gone out
+  TimeNs last_sent_ns_ = 0;  ///< the last send (first or re-send), when sent_any_
 };
 
 /// "ok" in any case, blanks around it ignored: the reply that accepts a command.
