@@ -63,28 +63,28 @@ FrameAnnotations AnnotationSorter::sort(const CameraFrame& frame, const flight_s
   a.t_ns = frame.t_ns;
   a.damaged = frame.damaged || frame.damage_events > 0;
   a.phase = flight_sw::phase_name(tm.phase);
-  a.target = tm.target;
-  if (update(tags_, tm.tags, frame, same_tags)) {
-    a.tags = tm.tags;
-  } else if (!tm.tags.empty()) {
+  a.target = tm.tracking.target;
+  if (update(tags_, tm.view.tags, frame, same_tags)) {
+    a.tags = tm.view.tags;
+  } else if (!tm.view.tags.empty()) {
     a.stale_tags = tags_.source;
   }
-  if (update(box_, tm.tracked_box_px, frame, std::equal_to<>())) {
-    a.tracked_box_px = tm.tracked_box_px;
-  } else if (tm.tracked_box_px) {
+  if (update(box_, tm.tracking.tracked_box_px, frame, std::equal_to<>())) {
+    a.tracked_box_px = tm.tracking.tracked_box_px;
+  } else if (tm.tracking.tracked_box_px) {
     a.stale_box = box_.source;
   }
   // e_z and e_psi are computed together, from the target's corner tags (approach only).
-  const std::pair<double, double> errors(tm.e_z_m, tm.e_psi_rad);
+  const std::pair<double, double> errors(tm.control.e_z_m, tm.control.e_psi_rad);
   if (update(errors_, errors, frame, std::equal_to<>())) {
     if (errors != std::pair<double, double>(0.0, 0.0)) {
-      a.e_z_m = tm.e_z_m;
-      a.e_psi_rad = tm.e_psi_rad;
+      a.e_z_m = tm.control.e_z_m;
+      a.e_psi_rad = tm.control.e_psi_rad;
     }
   } else if (errors != std::pair<double, double>(0.0, 0.0)) {
     a.stale_errors = errors_.source;
-    a.stale_e_z_m = tm.e_z_m;
-    a.stale_e_psi_rad = tm.e_psi_rad;
+    a.stale_e_z_m = tm.control.e_z_m;
+    a.stale_e_psi_rad = tm.control.e_psi_rad;
   }
   return a;
 }

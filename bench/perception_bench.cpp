@@ -137,12 +137,12 @@ void prepare_inputs(Data& d) {
         flight_sw::keep_front_shelf(in.front_tags, fast.perception.area_ratio_threshold);
         // The four corner tags: the front tags nearest the tracked box's corners, shrunk by half a tag.
         const auto& t = fsw.telemetry();
-        if (t.target && t.tracked_box_px) {
-          const cv::Rect2d& q = *t.tracked_box_px;
+        if (t.tracking.target && t.tracking.tracked_box_px) {
+          const cv::Rect2d& q = *t.tracking.tracked_box_px;
           const double h = 0.5 * side;
           const std::array<cv::Point2d, 4> corners{cv::Point2d(q.x + h, q.br().y - h), cv::Point2d(q.br().x - h, q.br().y - h),
                                                    cv::Point2d(q.br().x - h, q.y + h), cv::Point2d(q.x + h, q.y + h)};
-          const auto obj = flight_sw::cell_corner_tags_K(fast.shelf, *t.target);
+          const auto obj = flight_sw::cell_corner_tags_K(fast.shelf, *t.tracking.target);
           in.pnp_object.clear();
           in.pnp_pixels.clear();
           for (size_t k = 0; k < 4 && !in.front_tags.empty(); ++k) {
@@ -154,8 +154,8 @@ void prepare_inputs(Data& d) {
           }
         }
       }
-      box_before = fsw.telemetry().tracked_box_px;
-      in.target_box = fsw.telemetry().tracked_box_px;
+      box_before = fsw.telemetry().tracking.tracked_box_px;
+      in.target_box = fsw.telemetry().tracking.tracked_box_px;
     }
   }
 }

@@ -46,7 +46,7 @@ bool Inventory::empty_decidable() const {
 }
 
 std::optional<int> Inventory::box_at(CellIndex cell) const {
-  const auto& m = counts(cell);
+  const auto& m = counts_[slot(cell)];
   int best_id = 0, best = 0, second = 0;
   for (const auto& [id, n] : m) {
     if (n > best) {
@@ -62,7 +62,7 @@ std::optional<int> Inventory::box_at(CellIndex cell) const {
 }
 
 bool Inventory::is_empty(CellIndex cell) const {
-  return whole_views(cell) >= min_agreeing_ && counts(cell).empty();
+  return whole_views(cell) >= min_agreeing_ && counts_[slot(cell)].empty();
 }
 
 std::vector<BoxEntry> Inventory::boxes() const {

@@ -69,7 +69,6 @@ class Inventory {
 
  private:
   size_t slot(CellIndex cell) const;  ///< index into counts_
-  const std::map<int, int>& counts(CellIndex cell) const { return counts_[slot(cell)]; }
   int shelf_ = 0;
   int levels_ = 0;
   int columns_ = 0;

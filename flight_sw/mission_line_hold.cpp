@@ -22,8 +22,8 @@ bool FlightSoftware::quiet_at(TimeNs t_ns) const {
 
 LineHoldForecast FlightSoftware::line_hold_forecast(const PoseEstimate& pose_K) {
   const LineWander w = line_hold_.wander(now_ns_, config_.mission.line_hold_window_s);
-  telemetry_.line_hold = forecast_line_hold(config_.mission, w, blind_crossing_s(config_, -pose_K.p_FB_m().x()));
-  return telemetry_.line_hold;
+  telemetry_.control.line_hold = forecast_line_hold(config_.mission, w, blind_crossing_s(config_, -pose_K.p_FB_m().x()));
+  return telemetry_.control.line_hold;
 }
 
 void FlightSoftware::feed_line_hold(bool found, const std::optional<OdometryFix>& odometry) {
@@ -56,7 +56,7 @@ PoseEstimate FlightSoftware::crossing_gate_pose(CrossingGateInput& gate) {
   }
   gate.line_hold = line_hold_forecast(pose);
   gate.line_hold.y_m += kOdometryDrift_mps * carried_s;
-  telemetry_.line_hold = gate.line_hold;
+  telemetry_.control.line_hold = gate.line_hold;
   return pose;
 }
 
@@ -111,7 +111,7 @@ void FlightSoftware::watch_crossing(const StateRecord& s) {
   const CrossingWatchVerdict v = crossing_watch(crossing_end_, watch_, config_.mission, odometry_.p_O_m(), v_O,
                                                 s.height_m - *crossing_height_m_, s.vz_H_mps);
   if (!v.back_out) return;
-  ++telemetry_.crossings_backed_out;
+  ++telemetry_.control.crossings_backed_out;
   const std::string why = "drift seen before the cell (" + centimetres_text(v.across_m) + " across, " + centimetres_text(v.height_m) + " up)";
   enter(Phase::Approach, "crossing stopped: " + why + ": backing out");
   crossing_height_m_.reset();

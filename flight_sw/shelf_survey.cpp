@@ -60,17 +60,17 @@ std::vector<CellIndex> cells_clear_of_damage(const Picture& pic, const ShelfView
 
 // The view's tags and grid, for the logs.
 void update_view_telemetry(const ShelfView& view, Telemetry& t) {
-  t.tags.clear();
+  t.view.tags.clear();
   for (size_t i = 0; i < view.tags.size(); ++i) {
     const bool classified = view.grid.valid && i < view.grid.row.size();
-    t.tags.push_back({view.tags[i].centre_px, view.tags[i].area_px, classified ? view.grid.row[i] : -1,
+    t.view.tags.push_back({view.tags[i].centre_px, view.tags[i].area_px, classified ? view.grid.row[i] : -1,
                       classified ? view.grid.column[i] : -1});
   }
-  t.grid_valid = view.grid.valid;
-  t.grid_rows = view.grid.rows;
-  t.grid_columns = view.grid.columns;
-  t.full_view = view.full;
-  t.grid_refusal = view.grid.refusal;
+  t.view.grid_valid = view.grid.valid;
+  t.view.grid_rows = view.grid.rows;
+  t.view.grid_columns = view.grid.columns;
+  t.view.full_view = view.full;
+  t.view.grid_refusal = view.grid.refusal;
 }
 }  // namespace
 
@@ -125,7 +125,7 @@ SurveyStep ShelfSurvey::go_to_viewpoint(const Picture& pic, TimeNs now_ns, bool 
   pose_G_ = pose;
   // e1: from the current position to the optimal viewpoint, in G; flown in the body frame.
   const Eigen::Vector3d e1 = viewpoint_G_m_ - pose->p_FB_m();
-  telemetry.e1_G_m = e1;
+  telemetry.view.e1_G_m = e1;
   const bool there = e1.norm() < m.viewpoint_position_tolerance_m && std::abs(pose->yaw_rad) < m.viewpoint_yaw_tolerance_rad;
   if (!there) settled_frames_ = 0;
   else if (pic.decides) ++settled_frames_;  // a damaged picture neither counts nor resets
@@ -143,7 +143,7 @@ SurveyStep ShelfSurvey::take_inventory(const Picture& pic, Telemetry& telemetry)
   analyse(pic.bgr, telemetry);
   if (!view_.full) return hover();
   read_markers(pic.bgr, view_, marker_detector_, config_, markers_);
-  telemetry.markers_seen = static_cast<int>(markers_.size());
+  telemetry.view.markers_seen = static_cast<int>(markers_.size());
   const std::vector<std::pair<CellIndex, int>> sightings = assign_markers(view_, markers_, config_);
   if (pic.whole()) {
     inventory_.observe(sightings, true);

@@ -119,10 +119,10 @@ CameraFrame picture(std::int64_t index, int shade) {
 TEST(AnnotationSorter, DrawsOnlyWhatWasComputedFromThePicture) {
   AnnotationSorter sorter;
   shelfcross::flight_sw::Telemetry tm;
-  tm.tags = {{cv::Point2d(10, 12), 30.0, 0, 1}, {cv::Point2d(40, 12), 31.0, 0, 2}};
-  tm.tracked_box_px = cv::Rect2d(5, 5, 20, 20);
-  tm.e_z_m = 0.05;
-  tm.e_psi_rad = -0.01;
+  tm.view.tags = {{cv::Point2d(10, 12), 30.0, 0, 1}, {cv::Point2d(40, 12), 31.0, 0, 2}};
+  tm.tracking.tracked_box_px = cv::Rect2d(5, 5, 20, 20);
+  tm.control.e_z_m = 0.05;
+  tm.control.e_psi_rad = -0.01;
 
   FrameAnnotations a = sorter.sort(picture(7, 100), tm);
   EXPECT_EQ(a.frame, 7);
@@ -140,14 +140,14 @@ TEST(AnnotationSorter, DrawsOnlyWhatWasComputedFromThePicture) {
 
   // Another picture, on which the flight software computed a new box and new errors but kept
   // the tag list (as while approaching): the tags are not drawn, and say where they are from.
-  tm.tracked_box_px = cv::Rect2d(6, 5, 21, 21);
-  tm.e_z_m = 0.04;
+  tm.tracking.tracked_box_px = cv::Rect2d(6, 5, 21, 21);
+  tm.control.e_z_m = 0.04;
   a = sorter.sort(picture(9, 120), tm);
   EXPECT_TRUE(a.tags.empty());
   ASSERT_TRUE(a.stale_tags);
   EXPECT_EQ(a.stale_tags->frame, 7);
   EXPECT_EQ(a.stale_tags->t_ns, 7 * 33'333'333);
-  EXPECT_EQ(a.tracked_box_px, tm.tracked_box_px);
+  EXPECT_EQ(a.tracked_box_px, tm.tracking.tracked_box_px);
   ASSERT_TRUE(a.e_z_m);
   EXPECT_DOUBLE_EQ(*a.e_z_m, 0.04);
 
@@ -162,8 +162,8 @@ TEST(AnnotationSorter, DrawsOnlyWhatWasComputedFromThePicture) {
   EXPECT_DOUBLE_EQ(a.stale_e_z_m, 0.04);
 
   // A cleared box or tag list is nothing to draw and nothing stale.
-  tm.tracked_box_px.reset();
-  tm.tags.clear();
+  tm.tracking.tracked_box_px.reset();
+  tm.view.tags.clear();
   a = sorter.sort(picture(11, 160), tm);
   EXPECT_FALSE(a.tracked_box_px || a.stale_box || a.stale_tags);
   EXPECT_TRUE(a.tags.empty());
@@ -203,7 +203,7 @@ TEST(ReplayOverlay, TagsAreDrawnOnThePictureTheyCameFrom) {
     }
     if (a.stale_tags) {
       ++frames_with_stale_tags;
-      for (const auto& tag : fsw.telemetry().tags) {
+      for (const auto& tag : fsw.telemetry().view.tags) {
         ++held;
         held_on_tag += on_tag(frame.bgr, tag.centre_px);
       }

@@ -54,7 +54,7 @@ void PilotLog::telemetry(const flight_sw::Telemetry& tm, const Clock& clock) {
   logged_phase_ = tm.phase;
   logged_event_ = tm.event;
   log_.write(clock.now_ns(), "fsw", {{"phase", flight_sw::phase_name(tm.phase)}, {"event", tm.event},
-                                     {"battery_pct", tm.battery_pct}, {"height_m", tm.height_m}});
+                                     {"battery_pct", tm.link.battery_pct}, {"height_m", tm.link.height_m}});
   if (console_) {
     *console_ << "[" << ns_to_seconds(clock.now_ns()) << " s] " << flight_sw::phase_name(tm.phase) << ": "
               << tm.event << std::endl;
@@ -66,18 +66,18 @@ void PilotLog::telemetry(const flight_sw::Telemetry& tm, const Clock& clock) {
 // can be understood afterwards.
 void PilotLog::approach_view(const flight_sw::Telemetry& tm, const Clock& clock) {
   if (tm.phase != flight_sw::Phase::Approach) return;
-  nlohmann::json j = {{"tracker_ok", tm.tracker_ok}, {"e_z_m", tm.e_z_m}, {"e_psi_rad", tm.e_psi_rad},
-                      {"settled", tm.settled}, {"holding_short", tm.holding_short},
-                      {"rejected_poses", tm.rejected_poses}, {"wrong_level_poses", tm.wrong_level_poses},
-                      {"damaged_frames", tm.damaged_frames}, {"band_decided_frames", tm.band_decided_frames},
-                      {"unflown_frames", tm.unflown_frames}};
+  nlohmann::json j = {{"tracker_ok", tm.tracking.tracker_ok}, {"e_z_m", tm.control.e_z_m}, {"e_psi_rad", tm.control.e_psi_rad},
+                      {"settled", tm.control.settled}, {"holding_short", tm.control.holding_short},
+                      {"rejected_poses", tm.tracking.rejected_poses}, {"wrong_level_poses", tm.tracking.wrong_level_poses},
+                      {"damaged_frames", tm.link.damaged_frames}, {"band_decided_frames", tm.link.band_decided_frames},
+                      {"unflown_frames", tm.link.unflown_frames}};
   if (tm.pose && tm.pose_in_cell_frame) {
     const Eigen::Vector3d p = tm.pose->p_FB_m();
     j["p_KB_m"] = {p.x(), p.y(), p.z()};
     j["yaw_K_rad"] = tm.pose->yaw_rad;
   }
-  if (tm.tracked_box_px) {
-    const cv::Rect2d& b = *tm.tracked_box_px;
+  if (tm.tracking.tracked_box_px) {
+    const cv::Rect2d& b = *tm.tracking.tracked_box_px;
     j["box_px"] = {b.x, b.y, b.width, b.height};
   }
   log_.write(clock.now_ns(), "fsw_view", std::move(j));

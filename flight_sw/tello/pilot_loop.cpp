@@ -324,21 +324,21 @@ class PilotLoop::Impl {
                             {"phase", flight_sw::phase_name(fsw_.phase())},
                             {"driver", driver_counters},
                             {"video", video_counters},
-                            {"fsw_damaged_frames", tm.damaged_frames},
-                            {"fsw_band_decided_frames", tm.band_decided_frames},
-                            {"fsw_unflown_frames", tm.unflown_frames},
-                            {"fsw_hidden_target_pictures", tm.hidden_target_pictures},
-                            {"fsw_rejected_poses", tm.rejected_poses},
-                            {"fsw_wrong_level_poses", tm.wrong_level_poses},
-                            {"fsw_stale_replies", tm.stale_replies},
-                            {"fsw_bad_frames", tm.bad_frames}});
+                            {"fsw_damaged_frames", tm.link.damaged_frames},
+                            {"fsw_band_decided_frames", tm.link.band_decided_frames},
+                            {"fsw_unflown_frames", tm.link.unflown_frames},
+                            {"fsw_hidden_target_pictures", tm.tracking.hidden_target_pictures},
+                            {"fsw_rejected_poses", tm.tracking.rejected_poses},
+                            {"fsw_wrong_level_poses", tm.tracking.wrong_level_poses},
+                            {"fsw_stale_replies", tm.link.stale_replies},
+                            {"fsw_bad_frames", tm.link.bad_frames}});
     std::ostringstream summary;
     summary << flight_sw::outcome_name(r.outcome) << (r.reason.empty() ? "" : ": ") << r.reason
             << "\n  driver: " << driver_counters << "\n  video: " << video_counters
-            << "\n  flight software: damaged_frames=" << tm.damaged_frames
-            << " band_decided_frames=" << tm.band_decided_frames << " unflown_frames=" << tm.unflown_frames
-            << " hidden_target_pictures=" << tm.hidden_target_pictures
-            << " rejected_poses=" << tm.rejected_poses << " wrong_level_poses=" << tm.wrong_level_poses;
+            << "\n  flight software: damaged_frames=" << tm.link.damaged_frames
+            << " band_decided_frames=" << tm.link.band_decided_frames << " unflown_frames=" << tm.link.unflown_frames
+            << " hidden_target_pictures=" << tm.tracking.hidden_target_pictures
+            << " rejected_poses=" << tm.tracking.rejected_poses << " wrong_level_poses=" << tm.tracking.wrong_level_poses;
     return summary.str();
   }
 

@@ -20,7 +20,7 @@ StickProgramRun::Pass StickProgramRun::step(TimeNs now, const flight_sw::FlightS
     stop(now, "stopped: the flight software lands (" + fsw.telemetry().event + ")");
     return pass;
   }
-  if (!fsw.telemetry().tags.empty()) {
+  if (!fsw.telemetry().view.tags.empty()) {
     stop(now, "stopped: shelf tags in view");
     pass.land_reason = mode_ + " stopped: shelf tags in view (an obstacle near: fly it in open space)";
     pass.exit_code = 1;

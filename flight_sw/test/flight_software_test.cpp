@@ -354,7 +354,7 @@ TEST(FlightSoftware, OpeningSequenceWaitsForEachOkAndTheFirstFrame) {
   EXPECT_EQ(fsw.phase(), Phase::FindShelf);
   // A stale reply (nothing outstanding) is dropped and counted.
   fsw.step(SdkReply{4 * kNsPerSecond + kMs, "ok"});
-  EXPECT_EQ(fsw.telemetry().stale_replies, 1);
+  EXPECT_EQ(fsw.telemetry().link.stale_replies, 1);
   EXPECT_EQ(fsw.phase(), Phase::FindShelf);
 }
 
@@ -582,7 +582,7 @@ TEST(FlightSoftware, NeverCrossesOffCentreBacksOffAndGivesUp) {
   ASSERT_TRUE(h.fsw().finished()) << phase_name(h.fsw().phase()) << ": " << h.fsw().telemetry().event;
   EXPECT_FALSE(h.saw_phase(Phase::Cross));
   EXPECT_EQ(h.fsw().result().reason, "could not centre on the target cell");
-  EXPECT_EQ(h.fsw().telemetry().shelf_rereads, 1);
+  EXPECT_EQ(h.fsw().telemetry().tracking.shelf_rereads, 1);
   bool backed_off = false;
   for (const auto& cmd : h.commands()) backed_off = backed_off || cmd.text == "rc 0 -20 0 0";
   EXPECT_TRUE(backed_off);
@@ -611,7 +611,7 @@ TEST(FlightSoftware, ARereadFromCloseBacksOutBeforeLooking) {
   EXPECT_LT(end.x(), start.x() - 0.6) << "start " << start.transpose() << " end " << end.transpose();
   EXPECT_GT(end.x(), viewpoint_x_m - 0.3);
   EXPECT_NEAR(h.reread_end_yaw_rad(), 0.0, 0.1);
-  EXPECT_GE(h.fsw().telemetry().shelf_rereads, 1);
+  EXPECT_GE(h.fsw().telemetry().tracking.shelf_rereads, 1);
   EXPECT_TRUE(h.fsw().finished());
 }
 
@@ -654,11 +654,11 @@ TEST(FlightSoftware, ReacquisitionOnTheNeighbouringColumnIsNeverCrossed) {
   FlightSoftware& fsw = h.fsw();
   ASSERT_TRUE(h.slid());
   ASSERT_TRUE(fsw.finished()) << phase_name(fsw.phase()) << ": " << fsw.telemetry().event;
-  EXPECT_GE(fsw.telemetry().identity_checks, 1);
-  EXPECT_GE(fsw.telemetry().shelf_rereads, 1);
+  EXPECT_GE(fsw.telemetry().tracking.identity_checks, 1);
+  EXPECT_GE(fsw.telemetry().tracking.shelf_rereads, 1);
   EXPECT_EQ(fsw.result().outcome, Outcome::Crossed) << fsw.result().reason;
-  ASSERT_TRUE(fsw.telemetry().target);
-  EXPECT_EQ(*fsw.telemetry().target, (CellIndex{2, 3}));
+  ASSERT_TRUE(fsw.telemetry().tracking.target);
+  EXPECT_EQ(*fsw.telemetry().tracking.target, (CellIndex{2, 3}));
   expect_through_cell_2_3(h);
 }
 
@@ -682,11 +682,11 @@ TEST(FlightSoftware, CarriedOneLevelUpTheTargetIsLookedForWhereTheStateHeightPut
   FlightSoftware& fsw = h.fsw();
   ASSERT_TRUE(h.slid());
   ASSERT_TRUE(fsw.finished()) << phase_name(fsw.phase()) << ": " << fsw.telemetry().event;
-  EXPECT_EQ(fsw.telemetry().shelf_rereads, 0);
-  EXPECT_EQ(fsw.telemetry().identity_contradictions, 0);
+  EXPECT_EQ(fsw.telemetry().tracking.shelf_rereads, 0);
+  EXPECT_EQ(fsw.telemetry().tracking.identity_contradictions, 0);
   EXPECT_EQ(fsw.result().outcome, Outcome::Crossed) << fsw.result().reason;
-  ASSERT_TRUE(fsw.telemetry().target);
-  EXPECT_EQ(*fsw.telemetry().target, (CellIndex{2, 3}));
+  ASSERT_TRUE(fsw.telemetry().tracking.target);
+  EXPECT_EQ(*fsw.telemetry().tracking.target, (CellIndex{2, 3}));
   expect_through_cell_2_3(h);
 }
 
@@ -704,10 +704,10 @@ TEST(FlightSoftware, AClimbTheStateHeightMissedIsCaughtByTheIdentityCheck) {
   FlightSoftware& fsw = h.fsw();
   ASSERT_TRUE(h.slid());
   ASSERT_TRUE(fsw.finished()) << phase_name(fsw.phase()) << ": " << fsw.telemetry().event;
-  EXPECT_GE(fsw.telemetry().identity_contradictions, 1);
+  EXPECT_GE(fsw.telemetry().tracking.identity_contradictions, 1);
   EXPECT_EQ(fsw.result().outcome, Outcome::Crossed) << fsw.result().reason;
-  ASSERT_TRUE(fsw.telemetry().target);
-  EXPECT_EQ(*fsw.telemetry().target, (CellIndex{2, 3}));
+  ASSERT_TRUE(fsw.telemetry().tracking.target);
+  EXPECT_EQ(*fsw.telemetry().tracking.target, (CellIndex{2, 3}));
   expect_through_cell_2_3(h);
 }
 
@@ -753,14 +753,14 @@ TEST(FlightSoftware, WholeMissionInventoriesAndCrossesTheEmptyCell) {
   EXPECT_EQ(fsw.inventory().boxes(), expected);
   EXPECT_EQ(fsw.inventory().empty_cells().size(), 11u);
   // The target: of the four cells around the image centre only (2, 3) is empty.
-  ASSERT_TRUE(fsw.telemetry().target);
-  EXPECT_EQ(*fsw.telemetry().target, (CellIndex{2, 3}));
+  ASSERT_TRUE(fsw.telemetry().tracking.target);
+  EXPECT_EQ(*fsw.telemetry().tracking.target, (CellIndex{2, 3}));
   expect_through_cell_2_3(h);
   EXPECT_GT(h.position().x(), 3.34 + 0.4) << "landed beyond the shelf";
   // Calm: the line-hold gate measured the hover before the crossing and let it go.
-  EXPECT_TRUE(fsw.telemetry().line_hold.measured);
-  EXPECT_LT(fsw.telemetry().line_hold.y_m, 0.05);  // the drawn poses' own scatter, about 1 cm, grown
-  EXPECT_EQ(fsw.telemetry().crossings_backed_out, 0);
+  EXPECT_TRUE(fsw.telemetry().control.line_hold.measured);
+  EXPECT_LT(fsw.telemetry().control.line_hold.y_m, 0.05);  // the drawn poses' own scatter, about 1 cm, grown
+  EXPECT_EQ(fsw.telemetry().control.crossings_backed_out, 0);
   EXPECT_EQ(fsw.inventory_json().rfind("{\"shelf\":0,\"levels\":4,\"columns\":4,", 0), 0u);
   // Sticks to zero right before "land": were "land" lost, the Tello would otherwise keep the
   // crossing speed until the retry (into whatever is behind the shelf).
@@ -836,7 +836,7 @@ TEST(FlightSoftware, TheInCrossingWatchBacksOutOfAPushSeenBeforeTheCell) {
   h.run(120.0);
   FlightSoftware& fsw = h.fsw();
   ASSERT_TRUE(fsw.finished()) << phase_name(fsw.phase()) << ": " << fsw.telemetry().event;
-  EXPECT_EQ(fsw.telemetry().crossings_backed_out, 1);
+  EXPECT_EQ(fsw.telemetry().control.crossings_backed_out, 1);
   EXPECT_EQ(fsw.result().outcome, Outcome::Crossed) << fsw.result().reason;
   ASSERT_TRUE(*first_cross_s);
   ASSERT_TRUE(*first_cross_end_s);
@@ -864,8 +864,8 @@ TEST(FlightSoftware, CrossesCentredDespiteVideoLatencyAndVelocityLag) {
   FlightSoftware& fsw = h.fsw();
   ASSERT_TRUE(fsw.finished()) << phase_name(fsw.phase()) << ": " << fsw.telemetry().event;
   EXPECT_EQ(fsw.result().outcome, Outcome::Crossed) << fsw.result().reason;
-  ASSERT_TRUE(fsw.telemetry().target);
-  ASSERT_EQ(*fsw.telemetry().target, (CellIndex{2, 3}));  // centre y -0.17 m, z 0.81 m
+  ASSERT_TRUE(fsw.telemetry().tracking.target);
+  ASSERT_EQ(*fsw.telemetry().tracking.target, (CellIndex{2, 3}));  // centre y -0.17 m, z 0.81 m
   expect_through_cell_2_3(h, Eigen::Vector2d(0.02, 0.03));
 }
 
@@ -889,7 +889,7 @@ TEST(FlightSoftware, CrossingHoldsTheCellHeightByTheStateHeightAgainstASink) {
     FlightSoftware& fsw = h.fsw();
     ASSERT_TRUE(fsw.finished()) << phase_name(fsw.phase()) << ": " << fsw.telemetry().event;
     EXPECT_EQ(fsw.result().outcome, Outcome::Crossed) << fsw.result().reason;
-    ASSERT_EQ(fsw.telemetry().target, (CellIndex{2, 3}));
+    ASSERT_EQ(fsw.telemetry().tracking.target, (CellIndex{2, 3}));
     expect_through_cell_2_3(h, Eigen::Vector2d(0.03, 0.08));
   }
   FlightConfig open_loop;
@@ -961,15 +961,15 @@ TEST(FlightSoftware, DecidesOnlyOnNearlyWholePicturesOfADamagedStream) {
   EXPECT_GT(unflown, 50);
   EXPECT_GT(hovered, 10);
   EXPECT_GT(held, 0);
-  EXPECT_EQ(fsw.telemetry().unflown_frames, unflown);
-  EXPECT_GT(fsw.telemetry().damaged_frames, 2 * fsw.telemetry().unflown_frames);
+  EXPECT_EQ(fsw.telemetry().link.unflown_frames, unflown);
+  EXPECT_GT(fsw.telemetry().link.damaged_frames, 2 * fsw.telemetry().link.unflown_frames);
   // The inventory: the same as on whole video; at least N whole frames vouched for the empty cells.
   const std::vector<BoxEntry> expected = {{21, 0, 1, 1}, {4, 0, 2, 2}, {9, 0, 3, 2}, {17, 0, 3, 3}, {30, 0, 4, 4}};
   EXPECT_EQ(fsw.inventory().boxes(), expected);
   EXPECT_EQ(fsw.inventory().empty_cells().size(), 11u);
   EXPECT_GE(fsw.inventory().whole_frames(), p.marker_min_agreeing_frames);
-  ASSERT_TRUE(fsw.telemetry().target);
-  ASSERT_EQ(*fsw.telemetry().target, (CellIndex{2, 3}));  // centre y -0.17 m, z 0.81 m
+  ASSERT_TRUE(fsw.telemetry().tracking.target);
+  ASSERT_EQ(*fsw.telemetry().tracking.target, (CellIndex{2, 3}));  // centre y -0.17 m, z 0.81 m
   // Measured: entry y -0.168 m, z 0.814 m. Deciding on every picture (both limits 1000)
   // enters 2.5 cm high, z 0.835 m: the biased half of the damaged pictures decides.
   expect_through_cell_2_3(h, Eigen::Vector2d(0.015, 0.015));
@@ -994,12 +994,12 @@ TEST(FlightSoftware, DecidesOnDamagedPicturesWhoseDamageLiesClearOfTheShelf) {
   FlightSoftware& fsw = h.fsw();
   ASSERT_TRUE(fsw.finished()) << phase_name(fsw.phase()) << ": " << fsw.telemetry().event;
   EXPECT_EQ(fsw.result().outcome, Outcome::Crossed) << fsw.result().reason;
-  EXPECT_GT(fsw.telemetry().band_decided_frames, 50) << fsw.telemetry().damaged_frames << " damaged";
+  EXPECT_GT(fsw.telemetry().link.band_decided_frames, 50) << fsw.telemetry().link.damaged_frames << " damaged";
   const std::vector<BoxEntry> expected = {{21, 0, 1, 1}, {4, 0, 2, 2}, {9, 0, 3, 2}, {17, 0, 3, 3}, {30, 0, 4, 4}};
   EXPECT_EQ(fsw.inventory().boxes(), expected);
   EXPECT_EQ(fsw.inventory().empty_cells().size(), 11u);
-  ASSERT_TRUE(fsw.telemetry().target);
-  ASSERT_EQ(*fsw.telemetry().target, (CellIndex{2, 3}));
+  ASSERT_TRUE(fsw.telemetry().tracking.target);
+  ASSERT_EQ(*fsw.telemetry().tracking.target, (CellIndex{2, 3}));
   expect_through_cell_2_3(h, Eigen::Vector2d(0.015, 0.015));
 
   Options across = o;
@@ -1014,8 +1014,8 @@ TEST(FlightSoftware, DecidesOnDamagedPicturesWhoseDamageLiesClearOfTheShelf) {
   // Pictures whose guessed rows cross the lower corner tags (shown 40 rows off) hide the
   // target (measured: 34): the approach coasts on the odometry or holds on them, never
   // counting the target lost. Damage clear of the shelf hides nothing.
-  EXPECT_GT(h2.fsw().telemetry().hidden_target_pictures, 20);
-  EXPECT_EQ(h.fsw().telemetry().hidden_target_pictures, 0);
+  EXPECT_GT(h2.fsw().telemetry().tracking.hidden_target_pictures, 20);
+  EXPECT_EQ(h.fsw().telemetry().tracking.hidden_target_pictures, 0);
 }
 
 // The conventional strategies between two shelves 2.6 m apart: after the first
@@ -1091,7 +1091,7 @@ TEST(FlightSoftware, FastAndReferencePipelinesFlyTheSameMission) {
     EXPECT_TRUE(a.saw_phase(Phase::Approach));
     EXPECT_EQ(a.commands(), b.commands()) << "latency " << latency_s;
     EXPECT_EQ(a.fsw().inventory_json(), b.fsw().inventory_json());
-    EXPECT_EQ(a.fsw().telemetry().target, b.fsw().telemetry().target);
+    EXPECT_EQ(a.fsw().telemetry().tracking.target, b.fsw().telemetry().tracking.target);
     EXPECT_EQ(a.fsw().result().reason, b.fsw().result().reason);
   }
 }

@@ -106,23 +106,23 @@ void RunContext::after_fsw_step(const flight_sw::FlightSoftware& fsw, TimeNs t) 
   RunMetrics& m = result.metrics;
   const flight_sw::Telemetry& tm = fsw.telemetry();
   hash.add(static_cast<int>(tm.phase));
-  hash.add(tm.e_z_m);
-  hash.add(tm.e_psi_rad);
+  hash.add(tm.control.e_z_m);
+  hash.add(tm.control.e_psi_rad);
   if (fsw.phase() != fsw_log_.last_phase) {
     fsw_log_.last_phase = fsw.phase();
     log_event(t, std::string("phase ") + flight_sw::phase_name(*fsw_log_.last_phase) + (tm.event.empty() ? "" : ": " + tm.event));
     if (*fsw_log_.last_phase == flight_sw::Phase::Approach && !traj_.approach_start_ns) {
       traj_.approach_start_ns = t;
       result.approach_start_s = ns_to_seconds(t);
-      m.target = tm.target;
+      m.target = tm.tracking.target;
     }
     if (*fsw_log_.last_phase == flight_sw::Phase::Cross && !result.cross_start_s) result.cross_start_s = ns_to_seconds(t);
   } else if (tm.event != fsw_log_.last_event && !tm.event.empty()) {
     log_event(t, "event " + tm.event, false);  // within a phase: refusals, losses, back-offs
   }
   fsw_log_.last_event = tm.event;
-  if (tm.target && fsw.shelf_index() == 0) m.target = tm.target;
-  if (tm.target && fsw.shelf_index() < shelf_count) fsw_log_.targets[static_cast<size_t>(fsw.shelf_index())] = tm.target;
+  if (tm.tracking.target && fsw.shelf_index() == 0) m.target = tm.tracking.target;
+  if (tm.tracking.target && fsw.shelf_index() < shelf_count) fsw_log_.targets[static_cast<size_t>(fsw.shelf_index())] = tm.tracking.target;
 }
 
 void RunContext::flight_software_threw(TimeNs t, const std::string& what) {

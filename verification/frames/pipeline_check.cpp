@@ -42,7 +42,7 @@ PipelineComparison compare_pipelines(const FrameSet& set, const std::string& con
       const flight_sw::Telemetry& ta = fast.driver().fsw().telemetry();
       const flight_sw::Telemetry& tb = reference.driver().fsw().telemetry();
       why << "  first difference at frame " << c.frames << ": " << what << "\n    fast: '" << ta.event << "', box "
-          << box(ta.tracked_box_px) << "\n    reference: '" << tb.event << "', box " << box(tb.tracked_box_px) << "\n";
+          << box(ta.tracking.tracked_box_px) << "\n    reference: '" << tb.event << "', box " << box(tb.tracking.tracked_box_px) << "\n";
     }
     c.same = false;
   };
@@ -61,12 +61,12 @@ PipelineComparison compare_pipelines(const FrameSet& set, const std::string& con
     const flight_sw::Telemetry& ta = a.telemetry();
     const flight_sw::Telemetry& tb = b.telemetry();
     if (a.phase() != b.phase()) fail(std::string("phase ") + phase_name(a.phase()) + " vs " + phase_name(b.phase()));
-    if (!(ta.target == tb.target)) fail("target " + cell(ta.target) + " vs " + cell(tb.target));
-    if (ta.full_view != tb.full_view) fail("full view differs");
+    if (!(ta.tracking.target == tb.tracking.target)) fail("target " + cell(ta.tracking.target) + " vs " + cell(tb.tracking.target));
+    if (ta.view.full_view != tb.view.full_view) fail("full view differs");
     if (a.inventory_json() != b.inventory_json()) fail("inventory so far differs");
-    if (!(ta.rc == tb.rc)) fail("commands differ (" + ta.rc.text() + " vs " + tb.rc.text() + ")");
-    const auto& va = ta.velocity;
-    const auto& vb = tb.velocity;
+    if (!(ta.control.rc == tb.control.rc)) fail("commands differ (" + ta.control.rc.text() + " vs " + tb.control.rc.text() + ")");
+    const auto& va = ta.control.velocity;
+    const auto& vb = tb.control.velocity;
     const double dv = std::max({std::abs(va.vx_B_mps - vb.vx_B_mps), std::abs(va.vy_B_mps - vb.vy_B_mps),
                                 std::abs(va.vz_mps - vb.vz_mps), std::abs(va.yaw_rate_radps - vb.yaw_rate_radps)});
     if (dv > kVelocityTolerance) fail("velocity commands differ by " + std::to_string(dv));
@@ -87,7 +87,7 @@ PipelineComparison compare_pipelines(const FrameSet& set, const std::string& con
   }
   const flight_sw::FlightSoftware& a = fast.driver().fsw();
   const flight_sw::FlightSoftware& b = reference.driver().fsw();
-  c.target = cell(a.telemetry().target);
+  c.target = cell(a.telemetry().tracking.target);
   c.inventory = a.inventory_json();
   if (a.inventory_json() != b.inventory_json()) fail("inventories differ:\n" + a.inventory_json() + "\n" + b.inventory_json());
   std::ostringstream os;
