@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "flight_sw/mission_text.hpp"
 #include "shelfcross/rotation.hpp"
 
 namespace shelfcross::frames {
@@ -19,18 +20,7 @@ PipelineComparison compare_pipelines(const FrameSet& set, const std::string& con
   PipelineComparison c;
   std::ostringstream why;
   std::optional<flight_sw::Phase> last_phase;
-  const auto cell = [](const std::optional<CellIndex>& t) {
-    // Appended piece by piece: GCC 12 misreads "literal" + std::string as an overlapping copy
-    // (-Wrestrict, a false positive in its own <string>).
-    std::string text = "none";
-    if (t) {
-      text = "L";
-      text += std::to_string(t->level);
-      text += " C";
-      text += std::to_string(t->column);
-    }
-    return text;
-  };
+  const auto cell = [](const std::optional<CellIndex>& t) { return t ? flight_sw::cell_text(*t) : std::string("none"); };
   const auto box = [](const std::optional<cv::Rect2d>& r) {
     std::ostringstream os;
     if (r) os << "[" << r->x << ", " << r->y << ", " << r->width << " x " << r->height << "]";
