@@ -7,8 +7,9 @@
 // The pacer holds the outstanding command (Command: whatever its user sends, with its own
 // bookkeeping) and the times the rules need. It reads no clock: every time is the caller's
 // "now". Queues, retries and what a reply means are the users' own: the flight software's
-// SdkLink (one queued command, replaced by a newer one; no retries below it) and the Tello
-// driver (a queue, retries, refusals, urgent commands).
+// MissionCommands (mission_commands.hpp: one command waiting, replaced by a newer one; the
+// mission's retries and re-asks) and the Tello driver (a queue, retries, refusals, urgent
+// commands).
 
 #include <optional>
 #include <string>

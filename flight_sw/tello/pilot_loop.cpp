@@ -181,7 +181,7 @@ class PilotLoop::Impl {
       const auto& t = o_.flight.timeouts;
       CommandOptions opt;
       opt.tag = kTagFlightSoftware;
-      opt.retries = 0;  // the flight software retries on its own (its SdkLink)
+      opt.retries = 0;  // the flight software retries on its own (MissionCommands)
       opt.timeout_ns = seconds_to_ns(c.text == "takeoff" ? t.takeoff_reply_s
                                      : c.text == "land"  ? t.land_reply_s
                                                          : t.command_reply_s);

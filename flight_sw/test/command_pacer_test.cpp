@@ -1,10 +1,10 @@
-// The SDK's command rules (CommandPacer) and the flight software's link that keeps them
-// (SdkLink): one command outstanding, the gap between sends, the reply timeout.
+// The SDK's command rules (CommandPacer): one command outstanding, the gap between sends, the
+// reply timeout; the reply that accepts a command (is_ok_reply).
 #include "flight_sw/command_pacer.hpp"
 
 #include <gtest/gtest.h>
 
-#include "flight_sw/sdk_link.hpp"
+#include <string>
 
 namespace shelfcross::flight_sw {
 namespace {
@@ -25,30 +25,6 @@ TEST(CommandPacer, OneOutstandingAGapBetweenSendsAndATimeoutPerCommand) {
   EXPECT_FALSE(pacer.complete());
   EXPECT_FALSE(pacer.may_send(599 * kMsNs));  // the gap runs from the re-send
   EXPECT_TRUE(pacer.may_send(600 * kMsNs));
-}
-
-TEST(SdkLink, SendsTheNewestRequestAfterTheGapAndCompletesItByReplyOrTimeout) {
-  SdkLink link(0.1);
-  std::vector<SdkCommand> out;
-  link.request("command", 1.0);
-  link.request("streamon", 1.0);  // replaces the queued one
-  link.poll(0, out);
-  ASSERT_EQ(out.size(), 1u);
-  EXPECT_EQ(out[0].text, "streamon");
-  EXPECT_FALSE(link.on_reply({10, "ok"}) == std::nullopt);
-  EXPECT_FALSE(link.on_reply({20, "ok"}));  // nothing outstanding: stale
-  EXPECT_EQ(link.stale_replies(), 1);
-  link.request("takeoff", 0.5);
-  link.poll(50 * kMsNs, out);  // inside the gap
-  EXPECT_EQ(out.size(), 1u);
-  link.poll(100 * kMsNs, out);
-  ASSERT_EQ(out.size(), 2u);
-  EXPECT_FALSE(link.check_timeout(599 * kMsNs));
-  const auto c = link.check_timeout(600 * kMsNs);
-  ASSERT_TRUE(c);
-  EXPECT_TRUE(c->timed_out);
-  EXPECT_EQ(c->command, "takeoff");
-  EXPECT_TRUE(link.idle());
 }
 
 TEST(IsOkReply, AnyCaseBlanksAroundIgnored) {
