@@ -37,8 +37,12 @@ void CommandQueue::abandon_all() {
     ++recorder_.counters().abandoned;
     recorder_.add(DriverEvent::Kind::Abandoned, o->text, "", o->attempt, o->options.tag);
     pacer_.complete();
-    // Its reply may still come: the guard keeps it from answering the urgent command as long
-    // as the gap allows; what arrives later is drained as stale.
+    // Its reply may still come. The gap keeps it from answering the next command: the pacer's
+    // gap still runs from this command's last send, so the next one goes no sooner than
+    // command_gap_ns after it, and a reply that arrives before then answers nothing (none is
+    // outstanding: read_replies, and send_next's drain just before the send) and is dropped
+    // as stale. A reply later than the gap would be taken for the next command's. The stale
+    // guard, which would hold the next command back longer, is cleared below.
   }
   for (const Pending& p : queue_) {
     ++recorder_.counters().abandoned;

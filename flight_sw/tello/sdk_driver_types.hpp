@@ -76,6 +76,7 @@ struct DriverEvent {
   bool synthetic = false;  ///< a dry-run reply made up by the driver
   std::optional<StateRecord> state;
 };
+/// The kind's name for logs ("sent", "stale_reply", ...); "?" for a value that is no Kind.
 const char* event_kind_name(DriverEvent::Kind kind);
 
 struct DriverCounters {
@@ -96,7 +97,7 @@ struct DriverCounters {
   std::int64_t foreign_state_datagrams = 0;
   std::int64_t states = 0;
   std::int64_t bad_states = 0;       ///< malformed state datagrams (stray "ok" included)
-  std::int64_t stray_ok_states = 0;  ///< of which a stray "ok"
+  std::int64_t stray_ok_states = 0;  ///< of which a stray "ok" (flight_sw::is_ok_reply: any case)
   std::string text() const;          ///< "name=value ..." on one line
 };
 
@@ -109,7 +110,8 @@ class DriverRecorder {
   /// The driver's parts keep references to it: it stays where it is.
   DriverRecorder(const DriverRecorder&) = delete;
   DriverRecorder& operator=(const DriverRecorder&) = delete;
-  /// Records an event; returns it for the fields set only by some events.
+  /// Records an event stamped with the clock's now; returns it for the fields set only by
+  /// some events (the reference holds until the next add or take).
   DriverEvent& add(DriverEvent::Kind kind, const std::string& command, const std::string& reply = "",
                    int attempt = 0, int tag = 0);
   /// Events since the last call, in the order they happened.

@@ -1,5 +1,7 @@
 #include "flight_sw/tello/state_listener.hpp"
 
+#include "flight_sw/command_pacer.hpp"
+
 namespace shelfcross::tello {
 
 StateListener::StateListener(std::string drone_ip, std::uint16_t source_port,
@@ -20,7 +22,7 @@ void StateListener::read(TimeNs now) {
     const std::string raw = trim_reply(d->bytes);
     if (!record) {
       ++counters.bad_states;
-      if (raw == "ok" || raw == "OK") ++counters.stray_ok_states;
+      if (flight_sw::is_ok_reply(raw)) ++counters.stray_ok_states;
       std::string shown = raw;
       if (!printable(raw)) shown = std::to_string(d->bytes.size()).append(" bytes, not text");
       recorder_.add(DriverEvent::Kind::BadState, "", shown);
