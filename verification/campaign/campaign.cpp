@@ -100,10 +100,10 @@ std::vector<std::pair<std::string, std::optional<double>>> named_summary_values(
   using Value = std::optional<double>;
   const auto abs_of = [](const Value& v) { return v ? Value(std::abs(*v)) : Value(); };
   std::vector<std::pair<std::string, Value>> v{{"mission_time_s", m.mission_time_s},
-                                               {"path_length_m", m.path_length_m},
-                                               {"min_clearance_m", m.min_clearance_m},
-                                               {"entry_offset_y_abs_m", abs_of(m.entry_offset_y_m)},
-                                               {"entry_offset_z_abs_m", abs_of(m.entry_offset_z_m)}};
+                                               {"path_length_m", m.truth.path_length_m},
+                                               {"min_clearance_m", m.truth.min_clearance_m},
+                                               {"entry_offset_y_abs_m", abs_of(m.truth.entry_offset_y_m)},
+                                               {"entry_offset_z_abs_m", abs_of(m.truth.entry_offset_z_m)}};
   const std::pair<const char*, const std::optional<StepResponse>*> axes[] = {
       {"altitude", &m.altitude}, {"heading", &m.heading}, {"lateral", &m.lateral}};
   for (const auto& [axis, r] : axes) {

@@ -160,19 +160,10 @@ void RunContext::started(const flight_sw::FlightSoftware& fsw) {
 RunResult RunContext::finish(const TelloWorld& world, const flight_sw::FlightSoftware& fsw,
                              const std::string& pilot_failsafe) {
   RunMetrics& m = result.metrics;
-  // The world's truth record.
-  const TruthRecord& truth = world.truth();
-  const ShelfCrossingMonitor& crossing = world.crossings().front();
-  m.path_length_m = truth.path_length_m;
-  m.floor_touches = truth.floor_touches;
-  m.contact = truth.contact;
-  m.min_clearance_m = truth.min_clearance_m;
-  m.entry_offset_y_m = crossing.entry_offset_y_m();
-  m.entry_offset_z_m = crossing.entry_offset_z_m();
-  m.crossed = crossing.crossed();
+  m.truth = world.truth();
   // Metrics and the verdict.
   m.mission_time_s = ns_to_seconds(t_end_ns);
-  m.crossed_target = m.crossed && m.target && *m.crossed == *m.target;
+  m.crossed_target = m.truth.crossed && m.target && *m.truth.crossed == *m.target;
   for (size_t i = 0; i < world.crossings().size(); ++i) {
     const auto& crossed = world.crossings()[i].crossed();
     m.shelves_crossed += crossed ? 1 : 0;

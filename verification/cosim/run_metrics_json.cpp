@@ -12,25 +12,11 @@ namespace {
 
 using nlohmann::json;
 
-json cell_json(const std::optional<CellIndex>& c) {
-  return c ? json{{"level", c->level}, {"column", c->column}} : json(nullptr);
-}
-
 json response_json(const std::optional<StepResponse>& r) {
   if (!r) return nullptr;
   return {{"initial_error", r->initial_error},       {"band", r->band},
           {"settling_time_s", number_or_null(r->settling_time_s)}, {"overshoot", number_or_null(r->overshoot)},
           {"overshoot_abs", r->overshoot_abs},       {"peak_abs_error", r->peak_abs_error}};
-}
-
-std::optional<CellIndex> read_cell(StrictObject& parent, const std::string& key) {
-  auto o = parent.optional_object(key);
-  if (!o) return std::nullopt;
-  CellIndex c;
-  c.level = static_cast<int>(o->integer("level"));
-  c.column = static_cast<int>(o->integer("column"));
-  o->finish();
-  return c;
 }
 
 std::optional<StepResponse> read_response(StrictObject& parent, const std::string& key) {
@@ -45,31 +31,6 @@ std::optional<StepResponse> read_response(StrictObject& parent, const std::strin
   r.peak_abs_error = o->number("peak_abs_error");
   o->finish();
   return r;
-}
-
-plant::ElementKind element_kind(const StrictObject& contact, const std::string& name) {
-  using K = plant::ElementKind;
-  for (K k : {K::floor, K::wall, K::post, K::beam, K::rail, K::tag, K::box}) {
-    if (name == plant::to_string(k)) return k;
-  }
-  contact.fail_at(contact.path_of("kind"), "unknown element kind \"" + name + "\"");
-}
-
-std::optional<plant::Contact> read_contact(StrictObject& parent) {
-  auto o = parent.optional_object("contact");
-  if (!o) return std::nullopt;
-  plant::Contact c;
-  c.t_ns = seconds_to_ns(o->number("t_s"));
-  c.element.name = o->text("element");
-  c.element.kind = element_kind(*o, o->text("kind"));
-  const json& p = o->at("point_W_m");
-  if (!p.is_array() || p.size() != 3 || !p[0].is_number() || !p[1].is_number() || !p[2].is_number()) {
-    o->fail_at(o->path_of("point_W_m"), "expected three numbers");
-  }
-  c.point_W_m = {p[0].get<double>(), p[1].get<double>(), p[2].get<double>()};
-  c.depth_m = o->number("depth_m");
-  o->finish();
-  return c;
 }
 
 LinkMetrics read_link(StrictObject o) {
@@ -98,19 +59,14 @@ LinkMetrics read_link(StrictObject o) {
 RunMetrics read_metrics(StrictObject& o) {
   RunMetrics m;
   m.mission_time_s = o.number("mission_time_s");
-  m.path_length_m = o.number("path_length_m");
-  m.floor_touches = static_cast<int>(o.integer("floor_touches"));
-  m.contact = read_contact(o);
+  m.truth = read_world_truth(o);
+  m.truth.floor_touches = static_cast<int>(o.integer("floor_touches"));
   m.strategy = o.text("strategy");
   m.shelves = static_cast<int>(o.integer("shelves"));
   m.shelves_crossed = static_cast<int>(o.integer("shelves_crossed"));
   m.shelves_crossed_target = static_cast<int>(o.integer("shelves_crossed_target"));
   m.target = read_cell(o, "target");
-  m.crossed = read_cell(o, "crossed");
   m.crossed_target = o.boolean("crossed_target");
-  m.entry_offset_y_m = o.optional_number("entry_offset_y_m");
-  m.entry_offset_z_m = o.optional_number("entry_offset_z_m");
-  m.min_clearance_m = o.optional_number("min_clearance_m");
   m.altitude = read_response(o, "altitude");
   m.heading = read_response(o, "heading");
   m.lateral = read_response(o, "lateral");
@@ -135,14 +91,8 @@ void to_json(json& j, const RunMetrics& m) {
            {"shelves", m.shelves},
            {"shelves_crossed", m.shelves_crossed},
            {"shelves_crossed_target", m.shelves_crossed_target},
-           {"path_length_m", m.path_length_m},
-           {"floor_touches", m.floor_touches},
            {"target", cell_json(m.target)},
-           {"crossed", cell_json(m.crossed)},
            {"crossed_target", m.crossed_target},
-           {"entry_offset_y_m", number_or_null(m.entry_offset_y_m)},
-           {"entry_offset_z_m", number_or_null(m.entry_offset_z_m)},
-           {"min_clearance_m", number_or_null(m.min_clearance_m)},
            {"altitude", response_json(m.altitude)},
            {"heading", response_json(m.heading)},
            {"lateral", response_json(m.lateral)},
@@ -150,7 +100,8 @@ void to_json(json& j, const RunMetrics& m) {
                           {"correct", m.inventory.correct}, {"reported", m.inventory.reported},
                           {"truth", m.inventory.truth}}},
            {"flight_software_result", m.flight_software_result},
-           {"contact", m.contact ? contact_json(*m.contact) : json(nullptr)}};
+           {"floor_touches", m.truth.floor_touches}};
+  write_world_truth(j, m.truth);
   const LinkMetrics& l = m.link;
   j["link"] = {{"model", l.model},
                {"video_datagrams", l.video_datagrams},

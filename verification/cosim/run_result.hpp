@@ -13,10 +13,10 @@
 #include <Eigen/Core>
 
 #include "flight_sw/flight_software.hpp"
-#include "plant/collision.hpp"
 #include "shelfcross/camera.hpp"
 #include "shelfcross/cell_index.hpp"
 #include "verification/world/metrics.hpp"
+#include "verification/world/world_truth.hpp"
 
 namespace shelfcross::verification {
 
@@ -62,22 +62,17 @@ struct LinkMetrics {
 /// Everything a run measured (JSON form, both ways: run_metrics_json.hpp).
 struct RunMetrics {
   double mission_time_s = 0.0;     ///< start to the end of the run
-  double path_length_m = 0.0;      ///< of the body origin
-  int floor_touches = 0;           ///< airborne-to-floor contacts (landings included)
-  // First contact (collision or wall)
-  std::optional<plant::Contact> contact;
+  /// The world's truth (TelloWorld::truth): path, floor touches, the first contact, shelf 0's
+  /// crossing and entry offsets, the minimum clearance.
+  WorldTruth truth;
   // The mission: its shelves (the scenario's row, mission_shelf_count) and strategy
   std::string strategy = "through_cells";
   int shelves = 1;
   int shelves_crossed = 0;                      ///< shelves crossed face to face through a cell
   int shelves_crossed_target = 0;               ///< ... through the cell the flight software chose there
-  // Crossing, in shelf 0's frame S
+  // Shelf 0's crossing (truth.crossed) against the flight software's choice
   std::optional<CellIndex> target;   ///< the flight software's chosen cell
-  std::optional<CellIndex> crossed;  ///< the cell entered and left face to face
-  bool crossed_target = false;
-  std::optional<double> entry_offset_y_m;       ///< body origin - cell centre, at the front face
-  std::optional<double> entry_offset_z_m;
-  std::optional<double> min_clearance_m;        ///< to any shelf part while inside the shelf
+  bool crossed_target = false;       ///< truth.crossed is the target
   // Approach responses (paper Fig. 26-28): from the start of the approach to the crossing
   std::optional<StepResponse> altitude;  ///< body z - cell centre z, m
   std::optional<StepResponse> heading;   ///< yaw - shelf normal, rad

@@ -76,7 +76,7 @@ StrategyRow summarize_strategy(const std::string& strategy, const std::vector<Ru
     if (stored.run) recall.push_back(stored.run->inventory.recall);
     if (r.outcome != "success") continue;
     ++row.successes;
-    distance.push_back(stored.run.value().path_length_m);  // a success always measured its run
+    distance.push_back(stored.run.value().truth.path_length_m);  // a success always measured its run
     time.push_back(stored.run.value().mission_time_s);
   }
   row.success_rate = row.runs ? static_cast<double>(row.successes) / static_cast<double>(row.runs) : 0.0;

@@ -208,8 +208,8 @@ RunsDrawn draw_runs(const std::filesystem::path& dir, const Scenario& scenario, 
       const RunMetrics& m = *stored.run;
       settle_z.push_back(m.altitude && m.altitude->settling_time_s ? *m.altitude->settling_time_s : NAN);
       settle_yaw.push_back(m.heading && m.heading->settling_time_s ? *m.heading->settling_time_s : NAN);
-      if (m.entry_offset_y_m) offset_y.push_back(*m.entry_offset_y_m);
-      if (m.entry_offset_z_m) offset_z.push_back(*m.entry_offset_z_m);
+      if (m.truth.entry_offset_y_m) offset_y.push_back(*m.truth.entry_offset_y_m);
+      if (m.truth.entry_offset_z_m) offset_z.push_back(*m.truth.entry_offset_z_m);
     }
     if (!ok) {
       ++drawn.failures;

@@ -39,22 +39,22 @@ double RunMargins::of(FailureClass c) const {
 RunMargins run_margins(const Scenario& nominal, const std::string& outcome, const std::optional<RunMetrics>& metrics) {
   RunMargins m;
   // Contact: below zero by the first contact's depth (touching counts), else the least
-  // clearance to a shelf part while inside the shelf.
-  if (metrics && metrics->contact) {
-    m.contact_m = std::min(-metrics->contact->depth_m, -1e-6);
+  // clearance to a shelf part while near a mission shelf (WorldTruth::min_clearance_m).
+  if (metrics && metrics->truth.contact) {
+    m.contact_m = std::min(-metrics->truth.contact->depth_m, -1e-6);
   } else if (outcome == "left_arena" || outcome == "collision") {
     m.contact_m = -1e-6;  // left the arena box without a recorded contact
   } else {
-    m.contact_m = metrics ? metrics->min_clearance_m.value_or(kNaN) : kNaN;
+    m.contact_m = metrics ? metrics->truth.min_clearance_m.value_or(kNaN) : kNaN;
   }
   // Crossing: the room at the entered cell's front face.
   m.crossing_m = kNaN;
-  if (metrics && metrics->entry_offset_y_m && metrics->entry_offset_z_m && !nominal.warehouse.shelves.empty()) {
-    const double e_y = *metrics->entry_offset_y_m, e_z = *metrics->entry_offset_z_m;
+  if (metrics && metrics->truth.entry_offset_y_m && metrics->truth.entry_offset_z_m && !nominal.warehouse.shelves.empty()) {
+    const double e_y = *metrics->truth.entry_offset_y_m, e_z = *metrics->truth.entry_offset_z_m;
     const ShelfSpec& shelf = nominal.warehouse.shelves.front();
     double pitch_y = *std::min_element(shelf.column_pitch_m.begin(), shelf.column_pitch_m.end());
     double pitch_z = *std::min_element(shelf.row_pitch_m.begin(), shelf.row_pitch_m.end());
-    for (const std::optional<CellIndex>& cell : {metrics->target, metrics->crossed}) {  // the crossed cell wins
+    for (const std::optional<CellIndex>& cell : {metrics->target, metrics->truth.crossed}) {  // the crossed cell wins
       if (!cell) continue;
       const int level = cell->level, column = cell->column;
       if (column >= 1 && column <= static_cast<int>(shelf.column_pitch_m.size()) && level >= 1 &&

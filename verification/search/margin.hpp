@@ -6,7 +6,7 @@
 // campaign runs as well as to search runs.
 //
 //   contact   m: the minimum clearance between the vehicle box and any shelf part while near a
-//             shelf (RunMetrics::min_clearance_m); after a contact with anything (a shelf part,
+//             shelf (WorldTruth::min_clearance_m); after a contact with anything (a shelf part,
 //             a wall, the ceiling) minus its penetration depth, and at most -1e-6 m, so every
 //             contact is negative; NaN when the run never came near a shelf and touched nothing.
 //             A near miss of a wall does not lower it (clearance is to shelves only).

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "shelfcross/time.hpp"
 
 namespace shelfcross::verification {
 
@@ -51,14 +50,6 @@ InventoryScore score_inventory(const std::set<InventoryEntry>& reported, const s
   s.precision = s.reported ? static_cast<double>(s.correct) / s.reported : 1.0;
   s.recall = s.truth ? static_cast<double>(s.correct) / s.truth : 1.0;
   return s;
-}
-
-nlohmann::json contact_json(const plant::Contact& c) {
-  return {{"t_s", ns_to_seconds(c.t_ns)},
-          {"element", c.element.name},
-          {"kind", plant::to_string(c.element.kind)},
-          {"point_W_m", {c.point_W_m.x(), c.point_W_m.y(), c.point_W_m.z()}},
-          {"depth_m", c.depth_m}};
 }
 
 }  // namespace shelfcross::verification

@@ -9,10 +9,6 @@
 #include <tuple>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
-#include "plant/collision.hpp"
-
 namespace shelfcross::verification {
 
 /// A settling band: |e| <= max(fraction * |e(t0)|, floor).
@@ -56,10 +52,5 @@ struct InventoryScore {
 };
 
 InventoryScore score_inventory(const std::set<InventoryEntry>& reported, const std::set<InventoryEntry>& truth);
-
-/// A first contact as stored (the run's metrics, the emulator's report): time, element name and
-/// kind, point, depth. The element's index and the contact normal are not stored, so they read
-/// back as -1 and zero.
-nlohmann::json contact_json(const plant::Contact& contact);
 
 }  // namespace shelfcross::verification

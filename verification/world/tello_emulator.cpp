@@ -119,7 +119,7 @@ void TelloEmulator::tick(TimeNs t, TimeNs now_ns) {
   }
 
   // 5. Landed after flying, and nobody talking any more: the flight is over.
-  if (world_.truth().flew && tello.mode() == plant::FlightMode::landed &&
+  if (world_.flew() && tello.mode() == plant::FlightMode::landed &&
       t - commands_.last_datagram_ns() >= seconds_to_ns(config_.linger_s)) {
     end("landed");
   }
@@ -137,18 +137,11 @@ EmulatorReport TelloEmulator::report() const {
   r.dispersed = config_.disperse;
   r.drawn = setup_.drawn;
   const plant::SimulatedTello& tello = world_.tello();
-  const TruthRecord& truth = world_.truth();
-  const ShelfCrossingMonitor& crossing = world_.crossings().front();
   r.elapsed_s = ns_to_seconds(tello.time_ns());
   r.flight_time_s = tello.autopilot().motor_on_time_s();
-  r.path_length_m = truth.path_length_m;
-  r.flew = truth.flew;
+  r.flew = world_.flew();
   r.landed = tello.mode() == plant::FlightMode::landed;
-  r.contact = truth.contact;
-  r.min_clearance_m = truth.min_clearance_m;
-  r.crossed = crossing.crossed();
-  r.entry_offset_y_m = crossing.entry_offset_y_m();
-  r.entry_offset_z_m = crossing.entry_offset_z_m();
+  r.truth = world_.truth();
   const auto lock = outbox_.lock();
   r.counters = outbox_.counters_locked();
   return r;

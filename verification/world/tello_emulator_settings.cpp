@@ -10,12 +10,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "config/strict_json.hpp"
-#include "verification/world/metrics.hpp"
-
 namespace shelfcross::verification {
 
-using config::number_or_null;
 namespace {
 
 void check_probability(double p, const char* name) {
@@ -81,13 +77,8 @@ std::string emulator_report_json(const EmulatorReport& r) {
          {"detail", r.detail},
          {"elapsed_s", r.elapsed_s},
          {"flight_time_s", r.flight_time_s},
-         {"path_length_m", r.path_length_m},
          {"flew", r.flew},
          {"landed", r.landed},
-         {"crossed", r.crossed ? json{{"level", r.crossed->level}, {"column", r.crossed->column}} : json(nullptr)},
-         {"entry_offset_y_m", number_or_null(r.entry_offset_y_m)},
-         {"entry_offset_z_m", number_or_null(r.entry_offset_z_m)},
-         {"min_clearance_m", number_or_null(r.min_clearance_m)},
          {"inventory_truth", inventory},
          {"start", {{"p_W_m", {r.start_p_W_m.x(), r.start_p_W_m.y(), r.start_p_W_m.z()}}, {"yaw_rad", r.start_yaw_rad}}},
          {"seed", r.seed},
@@ -107,25 +98,26 @@ std::string emulator_report_json(const EmulatorReport& r) {
   json drawn = json::object();
   for (const auto& [name, value] : r.drawn) drawn[name] = {{"value", value}, {"applied", emulator_applies_dispersion(name)}};
   j["dispersions"] = drawn;
-  j["contact"] = r.contact ? contact_json(*r.contact) : json(nullptr);
+  write_world_truth(j, r.truth);
   return j.dump(2);
 }
 
 std::string emulator_report_text(const EmulatorReport& r) {
   std::ostringstream o;
   const EmulatorCounters& c = r.counters;
+  const WorldTruth& t = r.truth;
   o << "tello-sim: " << r.end_reason << (r.detail.empty() ? "" : " (" + r.detail + ")") << " after " << r.elapsed_s
-    << " s; flight time " << r.flight_time_s << " s, path " << r.path_length_m << " m, "
+    << " s; flight time " << r.flight_time_s << " s, path " << t.path_length_m << " m, "
     << (r.landed ? "landed" : "airborne") << "\n";
-  o << "contact: " << (r.contact ? r.contact->element.name : std::string("none")) << "\n";
+  o << "contact: " << (t.contact ? t.contact->element.name : std::string("none")) << "\n";
   o << "crossed: ";
-  if (r.crossed) {
-    o << "shelf 0 level " << r.crossed->level << " column " << r.crossed->column << ", entry offset y "
-      << r.entry_offset_y_m.value_or(NAN) << " m z " << r.entry_offset_z_m.value_or(NAN) << " m";
+  if (t.crossed) {
+    o << "shelf 0 level " << t.crossed->level << " column " << t.crossed->column << ", entry offset y "
+      << t.entry_offset_y_m.value_or(NAN) << " m z " << t.entry_offset_z_m.value_or(NAN) << " m";
   } else {
     o << "no cell";
   }
-  if (r.min_clearance_m) o << "; min clearance " << *r.min_clearance_m << " m";
+  if (t.min_clearance_m) o << "; min clearance " << *t.min_clearance_m << " m";
   o << "\ninventory truth (id level column):";
   for (const auto& [id, shelf, level, column] : r.inventory_truth) o << " " << id << "@" << level << "," << column;
   o << "\ncommands received " << c.commands_received << " dropped " << c.commands_dropped << " malformed "

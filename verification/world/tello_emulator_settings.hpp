@@ -6,18 +6,16 @@
 
 #include <cstdint>
 #include <memory>
-#include <optional>
 #include <set>
 #include <string>
 
 #include <Eigen/Core>
 
 #include "flight_sw/tello/udp_socket.hpp"
-#include "plant/collision.hpp"
-#include "shelfcross/cell_index.hpp"
 #include "verification/scenario/dispersion.hpp"
 #include "verification/world/datagram_faults.hpp"
 #include "verification/world/metrics.hpp"
+#include "verification/world/world_truth.hpp"
 
 namespace shelfcross::verification {
 
@@ -90,13 +88,10 @@ struct EmulatorReport {
   std::string detail;
   double elapsed_s = 0.0;          ///< emulated (= wall) time since the start
   double flight_time_s = 0.0;      ///< motors on
-  double path_length_m = 0.0;      ///< of the body origin
-  bool flew = false;
+  bool flew = false;               ///< the firmware left `landed` at least once (TelloWorld::flew)
   bool landed = true;
-  std::optional<plant::Contact> contact;          ///< the first contact with a shelf part or a wall
-  std::optional<CellIndex> crossed;    ///< shelf 0's cell crossed face to face
-  std::optional<double> entry_offset_y_m, entry_offset_z_m;
-  std::optional<double> min_clearance_m;          ///< to any shelf part near a mission shelf
+  /// The world's truth (TelloWorld::truth); printed but for floor_touches.
+  WorldTruth truth;
   std::set<InventoryEntry> inventory_truth;       ///< (marker id, shelf, level, column) of shelf 0
   Eigen::Vector3d start_p_W_m = Eigen::Vector3d::Zero();  ///< the scenario's (dispersed) start
   double start_yaw_rad = 0.0;

@@ -63,7 +63,7 @@ TickReport TelloWorld::tick(TimeNs t) {
     r.detail = "non-finite state";
     return r;
   }
-  if (tello_.mode() != plant::FlightMode::landed) truth_.flew = true;
+  if (tello_.mode() != plant::FlightMode::landed) flew_ = true;
   if (t > last_.t_ns) observe(t, r);
   return r;
 }
@@ -100,6 +100,10 @@ void TelloWorld::observe(TimeNs t, TickReport& r) {
     const double x_S = monitor.p_S_m().x();
     near_a_shelf = near_a_shelf || (x_S > -half_length_m_ - 0.05 && x_S < depth_m + half_length_m_ + 0.05);
   }
+  const ShelfCrossingMonitor& shelf0 = monitors_.front();
+  truth_.crossed = shelf0.crossed();
+  truth_.entry_offset_y_m = shelf0.entry_offset_y_m();
+  truth_.entry_offset_z_m = shelf0.entry_offset_z_m();
   if (near_a_shelf) {
     const double clearance = world_.clearance_to_shelves(X).distance_m;
     truth_.min_clearance_m = std::min(truth_.min_clearance_m.value_or(clearance), clearance);

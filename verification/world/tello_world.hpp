@@ -1,10 +1,10 @@
 #pragma once
 // The simulated Tello in its world, one tick at a time: the plant and the firmware
 // (plant::SimulatedTello on CVODE), the Bullet collision world, the crossing monitors of the
-// mission's shelves and the run's truth record. The co-simulation (either link) and the Tello
-// emulator both advance the vehicle through this one component; what each adds around it is
-// its own: the emulator its datagrams, sockets and wall clock, the co-simulation its link,
-// the flight software and simulated time.
+// mission's shelves and the run's truth (WorldTruth, world_truth.hpp). The co-simulation
+// (either link) and the Tello emulator both advance the vehicle through this one component;
+// what each adds around it is its own: the emulator its datagrams, sockets and wall clock, the
+// co-simulation its link, the flight software and simulated time.
 //
 // A tick to t (the caller picks t: the emulator at autopilot ticks, the ideal link at every
 // event time) does, in this order:
@@ -16,10 +16,11 @@
 //      contacts (continuous: nothing tunnels between ticks; the first contact ends the world:
 //      collision on a shelf part, left_arena on a wall or the ceiling), the body origin must
 //      stay inside the arena box (left_arena), floor touches are counted, each mission shelf's
-//      crossing monitor sees the body origin, and near any of them (within half the vehicle's
-//      length plus its margin and 5 cm of the faces) the clearance to the shelves is taken.
+//      crossing monitor sees the body origin (shelf 0's crossing enters the truth), and near
+//      any of them (within half the vehicle's length plus its margin and 5 cm of the faces)
+//      the clearance to the shelves is taken.
 // A contact or the arena ends the observation at that tick: nothing after it (crossings,
-// clearance) enters the record, since the flight is over.
+// clearance) enters the truth, since the flight is over.
 //
 // The frame clock and the state clock are here too, so both callers capture frames and send
 // state records at the same instants from the same pose: a capture is due at the first tick
@@ -39,22 +40,13 @@
 #include "shelfcross/time.hpp"
 #include "verification/scenario/dispersion.hpp"
 #include "verification/world/vehicle_truth.hpp"
+#include "verification/world/world_truth.hpp"
 
 namespace shelfcross::verification {
 
 /// How a tick ended the world, if it did.
 enum class WorldEnd { none, numerical_failure, collision, left_arena };
 const char* world_end_name(WorldEnd end);  ///< "", "numerical_failure", "collision", "left_arena"
-
-/// The truth a run accumulates, the same record for the co-simulation's metrics and the
-/// emulator's report.
-struct TruthRecord {
-  double path_length_m = 0.0;            ///< of the body origin
-  int floor_touches = 0;                 ///< airborne-to-floor contacts (landings included)
-  bool flew = false;                     ///< the firmware left `landed` at least once
-  std::optional<plant::Contact> contact; ///< the first contact with a shelf part or a wall
-  std::optional<double> min_clearance_m; ///< to any shelf part, near a mission shelf
-};
 
 /// What one tick did.
 struct TickReport {
@@ -106,12 +98,14 @@ class TelloWorld {
 
   plant::SimulatedTello& tello() { return tello_; }
   const plant::SimulatedTello& tello() const { return tello_; }
-  const TruthRecord& truth() const { return truth_; }
-  /// The mission shelves' crossing monitors (shelf 0 first).
+  /// The truth measured so far (world_truth.hpp).
+  const WorldTruth& truth() const { return truth_; }
+  /// Whether the firmware has left `landed` at least once (at any tick, observed or not).
+  bool flew() const { return flew_; }
+  /// The mission shelves' crossing monitors (shelf 0 first, whose crossing truth() holds).
   const std::vector<ShelfCrossingMonitor>& crossings() const { return monitors_; }
   /// The last observed time (0 before the first observed tick).
   TimeNs t_last_ns() const { return last_.t_ns; }
-  double ground_z_m() const { return ground_z_m_; }
 
  private:
   void observe(TimeNs t, TickReport& report);
@@ -123,7 +117,8 @@ class TelloWorld {
   double ground_z_m_;
   double half_length_m_;
   std::vector<ShelfCrossingMonitor> monitors_;
-  TruthRecord truth_;
+  WorldTruth truth_;
+  bool flew_ = false;
   /// The last observed state: what the next tick's motion is swept from and differenced
   /// against, and the acceleration the state record reports.
   struct LastObserved {

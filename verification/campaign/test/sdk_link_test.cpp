@@ -80,11 +80,11 @@ TEST(SdkLink, LostLandWithoutTheStopSticksRuleFliesIntoTheWall) {
   const RunResult on = run_once(s, 1);
 
   EXPECT_EQ(off.outcome, RunOutcome::left_arena) << off.detail << "\n" << events_text(off);
-  ASSERT_TRUE(off.metrics.contact.has_value()) << events_text(off);
-  EXPECT_EQ(off.metrics.contact->element.kind, plant::ElementKind::wall) << off.metrics.contact->element.name;
+  ASSERT_TRUE(off.metrics.truth.contact.has_value()) << events_text(off);
+  EXPECT_EQ(off.metrics.truth.contact->element.kind, plant::ElementKind::wall) << off.metrics.truth.contact->element.name;
   EXPECT_TRUE(off.metrics.crossed_target) << "the crossing itself went well";
 
-  EXPECT_FALSE(on.metrics.contact.has_value()) << on.metrics.contact->element.name << "\n" << events_text(on);
+  EXPECT_FALSE(on.metrics.truth.contact.has_value()) << on.metrics.truth.contact->element.name << "\n" << events_text(on);
   EXPECT_TRUE(on.metrics.crossed_target);
   const std::string log = events_text(on);
   const size_t land = log.find("send land");

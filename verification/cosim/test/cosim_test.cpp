@@ -45,7 +45,7 @@ TEST(CoSimulation, SameSeedGivesTheSameRunHash) {
   EXPECT_EQ(a.run_hash, b.run_hash);
   EXPECT_EQ(a.events, b.events);
   EXPECT_NE(a.run_hash, c.run_hash);
-  EXPECT_GT(a.metrics.path_length_m, 0.9);  // it took off
+  EXPECT_GT(a.metrics.truth.path_length_m, 0.9);  // it took off
 }
 
 // With the sdk link (the default): the same runs on one or two worker threads; the MPI test

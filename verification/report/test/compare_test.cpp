@@ -15,7 +15,7 @@ RunRecord record(std::int64_t index, const std::string& outcome, double distance
   r.index = index;
   r.outcome = outcome;
   RunMetrics m;
-  m.path_length_m = distance_m;
+  m.truth.path_length_m = distance_m;
   m.mission_time_s = time_s;
   m.inventory.recall = recall;
   r.metrics_json = stored_metrics_json({m, "", std::nullopt});

@@ -61,11 +61,11 @@ inline void write_planned_campaign(const std::filesystem::path& db, const Scenar
     r.outcome = p.outcome;
     RunMetrics m;
     m.mission_time_s = p.mission_time_s;
-    m.path_length_m = 4.0;
+    m.truth.path_length_m = 4.0;
     if (p.outcome == "success") {
-      m.min_clearance_m = p.min_clearance_m;
-      m.entry_offset_y_m = 0.004;
-      m.entry_offset_z_m = -0.003;
+      m.truth.min_clearance_m = p.min_clearance_m;
+      m.truth.entry_offset_y_m = 0.004;
+      m.truth.entry_offset_z_m = -0.003;
     }
     r.metrics_json = stored_metrics_json({m, p.outcome == "success" ? "" : "planned " + p.outcome, std::nullopt});
     char hash[33];

@@ -78,7 +78,7 @@ TEST(Warehouse, EveryStrategyInventoriesFiveShelvesAndThroughTheCellsIsShortest)
       const RunResult& r = results[k];
       SCOPED_TRACE("seed " + std::to_string(seed) + ", " + link + " link, " + strategies[k]);
       EXPECT_EQ(r.outcome, RunOutcome::success) << outcome_name(r.outcome) << ": " << r.detail;
-      EXPECT_FALSE(r.metrics.contact.has_value());
+      EXPECT_FALSE(r.metrics.truth.contact.has_value());
       EXPECT_EQ(r.metrics.shelves, 5);
       EXPECT_TRUE(r.metrics.inventory.exact());
       EXPECT_EQ(r.metrics.inventory.recall, 1.0);
@@ -86,10 +86,10 @@ TEST(Warehouse, EveryStrategyInventoriesFiveShelvesAndThroughTheCellsIsShortest)
       EXPECT_EQ(r.metrics.shelves_crossed, k == 0 ? 5 : 0);
       EXPECT_EQ(r.metrics.shelves_crossed_target, k == 0 ? 5 : 0);
       std::cout << "seed " << seed << " " << strategies[k] << ": " << outcome_name(r.outcome) << ", "
-                << r.metrics.path_length_m << " m, " << r.metrics.mission_time_s << " s" << std::endl;
+                << r.metrics.truth.path_length_m << " m, " << r.metrics.mission_time_s << " s" << std::endl;
     }
-    EXPECT_LT(results[0].metrics.path_length_m, results[1].metrics.path_length_m) << "seed " << seed;
-    EXPECT_LT(results[1].metrics.path_length_m, results[2].metrics.path_length_m) << "seed " << seed;
+    EXPECT_LT(results[0].metrics.truth.path_length_m, results[1].metrics.truth.path_length_m) << "seed " << seed;
+    EXPECT_LT(results[1].metrics.truth.path_length_m, results[2].metrics.truth.path_length_m) << "seed " << seed;
   }
 }
 

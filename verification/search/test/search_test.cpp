@@ -55,11 +55,11 @@ TEST(SearchPieces, MarginsFromStoredMetrics) {
   m.mission_time_s = 24.0;
   m.shelves = 1;
   m.shelves_crossed_target = 1;
-  m.crossed = CellIndex{2, 2};
+  m.truth.crossed = CellIndex{2, 2};
   m.target = CellIndex{2, 2};
-  m.entry_offset_y_m = 0.03;
-  m.entry_offset_z_m = -0.01;
-  m.min_clearance_m = 0.09;
+  m.truth.entry_offset_y_m = 0.03;
+  m.truth.entry_offset_z_m = -0.01;
+  m.truth.min_clearance_m = 0.09;
   RunMargins r = run_margins(s, "success", m);
   EXPECT_DOUBLE_EQ(r.contact_m, 0.09);
   // y: (0.48 - 0.02) / 2 - 0.0925 / 2 - 0.03 = 0.15375; z: (0.34 - 0.02) / 2 - 0.041 / 2 - 0.01 = 0.1295
@@ -67,22 +67,22 @@ TEST(SearchPieces, MarginsFromStoredMetrics) {
   EXPECT_NEAR(r.mission, 1.0 - 24.0 / 120.0, 1e-12);
   EXPECT_FALSE(r.failed(FailureClass::contact) || r.failed(FailureClass::crossing) || r.failed(FailureClass::mission));
   // Wide off the centre of a narrow column (0.34): y room 0.16 - 0.04625 - 0.13 < 0.
-  m.crossed = CellIndex{2, 1};
-  m.entry_offset_y_m = -0.13;
+  m.truth.crossed = CellIndex{2, 1};
+  m.truth.entry_offset_y_m = -0.13;
   EXPECT_NEAR(run_margins(s, "success", m).crossing_m, 0.16 - 0.04625 - 0.13, 1e-12);
   // A contact 4 mm deep: contact and mission fail; no crossing: the crossing margin says nothing.
   RunMetrics hit;
   hit.mission_time_s = 12.0;
-  hit.contact = plant::Contact{};
-  hit.contact->depth_m = 0.004;
-  hit.min_clearance_m = 0.01;
+  hit.truth.contact = plant::Contact{};
+  hit.truth.contact->depth_m = 0.004;
+  hit.truth.min_clearance_m = 0.01;
   r = run_margins(s, "collision", hit);
   EXPECT_DOUBLE_EQ(r.contact_m, -0.004);
   EXPECT_TRUE(std::isnan(r.crossing_m));
   EXPECT_FALSE(r.failed(FailureClass::crossing));
   EXPECT_DOUBLE_EQ(r.mission, -1.0);
   // Touching (depth 0) is still a contact.
-  hit.contact->depth_m = 0.0;
+  hit.truth.contact->depth_m = 0.0;
   EXPECT_LT(run_margins(s, "collision", hit).contact_m, 0.0);
   // Crossed and then failed (a wrong inventory): mission -0.1; never near a shelf: no contact margin.
   RunMetrics wrong;

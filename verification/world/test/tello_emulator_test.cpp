@@ -163,8 +163,8 @@ TEST_F(TelloEmulatorTest, TakeoffAnswersWhenItEndsAndTheWatchdogLands) {
   EXPECT_TRUE(r.flew);
   EXPECT_TRUE(r.landed);
   EXPECT_GT(r.flight_time_s, 10.0);
-  EXPECT_FALSE(r.contact.has_value());
-  EXPECT_FALSE(r.crossed.has_value());
+  EXPECT_FALSE(r.truth.contact.has_value());
+  EXPECT_FALSE(r.truth.crossed.has_value());
   EXPECT_EQ(r.inventory_truth, true_inventory(default_scenario()));
 }
 
