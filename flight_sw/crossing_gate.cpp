@@ -22,7 +22,7 @@ void CrossingGate::new_target() {
 // Quiet: no lateral command has acted for settle_s (more than the video latency plus the
 // autopilot's velocity lag), so what moves the vehicle sideways now nobody commanded.
 bool CrossingGate::quiet_at(TimeNs t_ns) const {
-  return ns_to_seconds(t_ns - lateral_active_ns_) >= config_.mission.settle_s;
+  return ns_to_seconds(t_ns - lateral_active_ns_) >= config_.mission.approach.settle_s;
 }
 
 void CrossingGate::on_state(const StateRecord& s, bool approaching) {
@@ -31,7 +31,7 @@ void CrossingGate::on_state(const StateRecord& s, bool approaching) {
 }
 
 LineHoldForecast CrossingGate::forecast(MissionFacts& facts, const PoseEstimate& pose_K) {
-  const LineWander w = line_hold_.wander(facts.now_ns, config_.mission.line_hold_window_s);
+  const LineWander w = line_hold_.wander(facts.now_ns, config_.mission.line_hold.line_hold_window_s);
   facts.telemetry.control.line_hold =
       forecast_line_hold(config_.mission, w, blind_crossing_s(config_, -pose_K.p_FB_m().x()));
   return facts.telemetry.control.line_hold;
@@ -40,7 +40,7 @@ LineHoldForecast CrossingGate::forecast(MissionFacts& facts, const PoseEstimate&
 void CrossingGate::on_picture(const MissionFacts& facts, const TargetTracker& tracker, bool found,
                               const std::optional<OdometryFix>& odometry) {
   const PoseEstimate* clean = found && tracker.poses().pose_decides() ? &*tracker.poses().pose_K() : nullptr;
-  line_hold_.on_picture(facts.now_ns, clean, odometry, quiet_at(facts.now_ns), config_.mission.coast_s);
+  line_hold_.on_picture(facts.now_ns, clean, odometry, quiet_at(facts.now_ns), config_.mission.approach.coast_s);
 }
 
 // The forward speed gain (odometry.hpp, ForwardGainEstimator), then a sample of the target cell
@@ -50,7 +50,7 @@ void CrossingGate::on_deciding_pose(MissionFacts& facts, const PoseEstimate& pos
   forward_gain_.on_pose(facts.now_ns, pose.p_FB_m().x());
   facts.telemetry.control.forward_gain = forward_gain_.gain();
   if (!facts.state_fresh() || -pose.p_FB_m().x() > config_.control.commit_range_m) return;
-  if (!cell_height_.vertically_still_for(facts.now_ns, config_.mission.vertical_lag_s)) return;
+  if (!cell_height_.vertically_still_for(facts.now_ns, config_.mission.crossing.vertical_lag_s)) return;
   cell_height_.sample(facts.state->height_m, pose.p_FB_m().z());
 }
 
@@ -69,9 +69,9 @@ PoseEstimate CrossingGate::gate_pose(MissionFacts& facts, const TargetTracker& t
   gate.pose_age_s = ns_to_seconds(facts.now_ns - pose_t_ns);
   gate.still_for_s = ns_to_seconds(pose_t_ns - lateral_active_ns_);
   double carried_s = 0.0;
-  if (gate.pose_age_s > config_.mission.pose_fresh_s && facts.state_fresh()) {
+  if (gate.pose_age_s > config_.mission.crossing.pose_fresh_s && facts.state_fresh()) {
     const auto c = line_hold_.carried(facts.now_ns, OdometryFix{facts.odometry.p_O_m(), facts.state->yaw_rad},
-                                      config_.mission.coast_s);
+                                      config_.mission.approach.coast_s);
     if (c && c->second == pose_t_ns) {
       pose = c->first;
       carried_s = gate.pose_age_s;
@@ -108,10 +108,10 @@ RoughAir CrossingGate::too_rough(MissionFacts& facts, const TargetTracker& track
     facts.telemetry.event = "holding short: the hover's wander (" + centimetres_text(f.y_m) + " across, " +
                             centimetres_text(f.z_m) + " up) leaves the line no room";
   }
-  if (ns_to_seconds(facts.now_ns - *rough_since_ns_) > m.calm_wait_s) {
+  if (ns_to_seconds(facts.now_ns - *rough_since_ns_) > m.line_hold.calm_wait_s) {
     return {true, std::string(kCrossingDeclined) + kLineCannotBeHeld + " (wander " + centimetres_text(f.y_m) +
                       " across, " + centimetres_text(f.z_m) + " up, for " +
-                      std::to_string(static_cast<int>(m.calm_wait_s)) + " s)"};
+                      std::to_string(static_cast<int>(m.line_hold.calm_wait_s)) + " s)"};
   }
   return {true, std::nullopt};
 }
@@ -135,7 +135,7 @@ GateVerdict CrossingGate::judge(MissionFacts& facts, const TargetTracker& tracke
   // (guidance.hpp, crossing_beyond_m).
   const std::optional<double>& behind_m = tracker.record().behind_m;
   const double beyond_m = crossing_beyond_m(config_, behind_m);
-  if (beyond_m < config_.mission.min_beyond_distance_m) {
+  if (beyond_m < config_.mission.crossing.min_beyond_distance_m) {
     return {std::nullopt, "no room behind the shelf to stop after crossing (tags " + format_m(*behind_m) + " m behind)",
             std::nullopt};
   }

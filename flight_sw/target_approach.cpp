@@ -142,7 +142,7 @@ std::optional<ApproachStep> TargetApproach::check_identity(const Picture& pic, c
     return reread("target identity contradicted (" + check.why + ")", std::nullopt, tools.facts, survey);
   }
   const std::optional<TimeNs>& since = tracker_.identification().unidentified_since_ns();
-  if (since && ns_to_seconds(tools.facts.now_ns - *since) > config_.mission.identity_confirm_s) {
+  if (since && ns_to_seconds(tools.facts.now_ns - *since) > config_.mission.target.identity_confirm_s) {
     return reread("target not identified within identity_confirm_s", std::nullopt, tools.facts, survey);
   }
   return std::nullopt;
@@ -151,7 +151,7 @@ std::optional<ApproachStep> TargetApproach::check_identity(const Picture& pic, c
 ApproachStep TargetApproach::reread(const std::string& why, const std::optional<std::string>& give_up_reason,
                                     MissionFacts& facts, const ShelfSurvey& survey) {
   ++facts.telemetry.tracking.shelf_rereads;
-  if (++rereads_ > config_.mission.identity_rereads) {
+  if (++rereads_ > config_.mission.target.identity_rereads) {
     // Every re-read starts in the approach, close to the shelf: back out and land clear of it.
     return give_up(give_up_reason.value_or("target cell not identified: " + why), 0.0, facts);
   }
@@ -186,7 +186,7 @@ ApproachStep TargetApproach::give_up(const std::string& reason, double flown_in_
   // Back straight out (the heading is on the cell normal) to give_up_clearance_m in front of
   // the shelf by the last pose (and what was flown in since), then land there (supervise):
   // clear of the frame whatever a gust does during the descent.
-  double back_m = config_.mission.give_up_clearance_m + flown_in_m;
+  double back_m = config_.mission.line_hold.give_up_clearance_m + flown_in_m;
   if (const std::optional<PoseEstimate>& pose_K = tracker_.poses().pose_K()) back_m += pose_K->p_FB_m().x();
   retreat_.until_ns = facts.now_ns + seconds_to_ns(std::max(0.0, back_m) / config_.control.back_off_speed_mps);
   retreat_.reason = reason;
@@ -224,7 +224,7 @@ std::optional<ApproachStep> TargetApproach::supervise(MissionFacts& facts, const
 ApproachStep TargetApproach::crossing_stopped(const CrossingStop& stop, MissionFacts& facts) {
   gate_.clear_line_hold();
   gate_.moved_sideways(facts.now_ns);  // stillness to be shown anew
-  if (++crossing_refusals_ >= config_.mission.crossing_attempts) {
+  if (++crossing_refusals_ >= config_.mission.crossing.crossing_attempts) {
     return give_up(std::string(kCrossingDeclined) + kLineCannotBeHeld + ": " + stop.why, stop.flown_in_m, facts);
   }
   timers_.back_off_since_ns = facts.now_ns;
@@ -299,7 +299,7 @@ ApproachStep TargetApproach::found(const Picture& pic, const TargetTracker::Pred
   std::optional<TimeNs>& hold_since = timers_.hold_since_ns;
   if (!settling) hold_since.reset();
   if (settling && !hold_since) hold_since = f.now_ns;
-  const bool settle_given_up = hold_since && ns_to_seconds(f.now_ns - *hold_since) > config_.mission.settle_hold_s;
+  const bool settle_given_up = hold_since && ns_to_seconds(f.now_ns - *hold_since) > config_.mission.approach.settle_hold_s;
   const bool hold = !h.in_cone || (settling && !settle_given_up);
   v.vx_B_mps = forward_speed_mps(config_, tracker_, tools.survey, hold, -pose.p_FB_m().x());  // eq. 10
   // About to lose the tags: the crossing will be judged on the last nearly whole picture,
@@ -311,7 +311,7 @@ ApproachStep TargetApproach::found(const Picture& pic, const TargetTracker::Pred
   // on a later nearly whole picture, which over a lossy link may come a second after the
   // last one, its pose then too old to cross on (pose_fresh_s). A refusal here only lets
   // the approach go on.
-  if (tracker_.corners().near_edge() && decides && -pose.p_FB_m().x() <= config_.mission.cross_range_max_m) {
+  if (tracker_.corners().near_edge() && decides && -pose.p_FB_m().x() <= config_.mission.approach.cross_range_max_m) {
     GateVerdict verdict = gate_.judge(f, tracker_, "corner tags leaving the view");
     if (!verdict.refusal) return crossing_step(std::move(verdict));
   }
@@ -368,12 +368,12 @@ ApproachStep TargetApproach::without_target(const Picture& pic, ApproachTools to
   // judged on the last pose from a nearly whole picture.
   const std::optional<PoseEstimate>& decision_pose_K = tracker_.poses().decision_pose_K();
   if (decision_pose_K && tracker_.corners().near_edge() &&
-      -decision_pose_K->p_FB_m().x() <= config_.mission.cross_range_max_m) {
+      -decision_pose_K->p_FB_m().x() <= config_.mission.approach.cross_range_max_m) {
     GateVerdict verdict = gate_.judge(f, tracker_, "corner tags left the view");
     if (!verdict.refusal) return crossing_step(std::move(verdict));
     const std::string& why = *verdict.refusal;
     if (!timers_.back_off_since_ns) {
-      if (++crossing_refusals_ >= config_.mission.crossing_attempts) {
+      if (++crossing_refusals_ >= config_.mission.crossing.crossing_attempts) {
         // The air, not the view, keeps the line from being held: a re-read would not help.
         if (why.rfind(kLineHoldNotMeasured, 0) == 0 || why.rfind(kLineCannotBeHeld, 0) == 0) {
           return give_up(kCrossingDeclined + why, 0.0, f);
