@@ -38,8 +38,8 @@ class CrossingGate {
 
   /// A new target: its cell height, line hold and forward gain measured anew.
   void new_target();
-  void clear_line_hold() { line_hold_.clear(); }
-  void clear_cell_height() { cell_height_.clear(); }
+  void clear_line_hold() { line_hold_.clear(); }  ///< the line hold measured anew (a re-read, a stopped crossing)
+  void clear_cell_height() { cell_height_.clear(); }  ///< the cell height measured anew (a re-read, the next shelf)
   /// A phase change: the rough air's hold starts anew.
   void forget_rough() { rough_since_ns_.reset(); }
 

@@ -75,7 +75,7 @@ class TargetApproach {
   /// The next shelf: the target forgotten, its measures and off-centre arrivals with it.
   void next_shelf(Telemetry& telemetry);
 
-  const TargetTracker& tracker() const { return tracker_; }
+  const TargetTracker& tracker() const { return tracker_; }  ///< the target, its corner tags, poses and identity
   /// A re-read from close backs straight out until then (FindShelf).
   const std::optional<TimeNs>& reread_back_until_ns() const { return reread_back_until_ns_; }
 

@@ -39,7 +39,7 @@ class VideoIntake {
   void airborne_from(TimeNs t_ns) { airborne_since_ns_ = t_ns; }
   /// The stall's verdict now (in a vision phase); a new stall writes its event.
   VideoStall stall(MissionFacts& facts);
-  bool stalled() const { return video_stalled_; }
+  bool stalled() const { return video_stalled_; }  ///< no frame for video_hover_s, until the next one
 
  private:
   /// True when the frame's damage is placed and lies band_margin_px clear of `region`'s rows.
