@@ -294,8 +294,8 @@ void TargetIdentity::follow(const cv::Rect2d& box_now_px, TimeNs now_ns, const s
   const std::optional<cv::Rect2d> vouched_now =
       moved_box_px && vouched_ns_ == last_pose_t_ns ? moved_box_px : vouched_box_px_;
   const bool continuous =
-      gap_s <= mission.pose_jump_window_s ||
-      (gap_s <= mission.identity_continuity_s && vouched_now &&
+      gap_s <= mission.target.pose_jump_window_s ||
+      (gap_s <= mission.target.identity_continuity_s && vouched_now &&
        cv::norm(centre_of(box_now_px) - centre_of(*vouched_now)) < 0.3 * vouched_now->width &&
        std::abs(box_now_px.width / vouched_now->width - 1.0) < 0.2);
   if (identity_ == CellIdentity::Confirmed && continuous) {

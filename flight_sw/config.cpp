@@ -189,39 +189,39 @@ void read_mission(const Map& m, MissionParams& p) {
   opt(m, "low_battery_pct", p.low_battery_pct, kPercent);
   opt(m, "takeoff_min_battery_pct", p.takeoff_min_battery_pct, kPercent);
   opt(m, "airborne_height_m", p.airborne_height_m, kPositive);
-  opt(m, "viewpoint_margin", p.viewpoint_margin, within(0.0, 2.0));
-  opt(m, "viewpoint_position_tolerance_m", p.viewpoint_position_tolerance_m, kPositive);
-  opt(m, "viewpoint_yaw_tolerance_rad", p.viewpoint_yaw_tolerance_rad, kPositive);
-  opt(m, "viewpoint_settle_frames", p.viewpoint_settle_frames, at_least(1));
-  opt(m, "viewpoint_lost_s", p.viewpoint_lost_s, kPositive);
+  opt(m, "viewpoint_margin", p.viewpoint.viewpoint_margin, within(0.0, 2.0));
+  opt(m, "viewpoint_position_tolerance_m", p.viewpoint.viewpoint_position_tolerance_m, kPositive);
+  opt(m, "viewpoint_yaw_tolerance_rad", p.viewpoint.viewpoint_yaw_tolerance_rad, kPositive);
+  opt(m, "viewpoint_settle_frames", p.viewpoint.viewpoint_settle_frames, at_least(1));
+  opt(m, "viewpoint_lost_s", p.viewpoint.viewpoint_lost_s, kPositive);
   p.vehicle_size_m = vector3(m, "vehicle_size_m", p.vehicle_size_m, kPositive);
   opt(m, "crossing_margin_m", p.crossing_margin_m, kNonNegative);
-  opt(m, "crossing_yaw_tolerance_rad", p.crossing_yaw_tolerance_rad, kPositive);
-  opt(m, "crossing_attempts", p.crossing_attempts, at_least(1));
-  opt(m, "cross_range_max_m", p.cross_range_max_m, kPositive);
-  opt(m, "beyond_distance_m", p.beyond_distance_m, kNonNegative);
-  opt(m, "edge_margin_px", p.edge_margin_px, kNonNegative);
-  opt(m, "settle_s", p.settle_s, kNonNegative);
-  opt(m, "settle_z_m", p.settle_z_m, kPositive);
-  opt(m, "settle_psi_rad", p.settle_psi_rad, kPositive);
-  opt(m, "settle_hold_s", p.settle_hold_s, kNonNegative);
-  opt(m, "pose_fresh_s", p.pose_fresh_s, kPositive);
-  opt(m, "pose_jump_m", p.pose_jump_m, kPositive);
-  opt(m, "pose_jump_rad", p.pose_jump_rad, kPositive);
-  opt(m, "pose_jump_window_s", p.pose_jump_window_s, kNonNegative);
-  opt(m, "coast_s", p.coast_s, kNonNegative);
-  opt(m, "level_check", p.level_check);
-  opt(m, "identity_continuity_s", p.identity_continuity_s, kNonNegative);
-  opt(m, "stop_distance_m", p.stop_distance_m, kNonNegative);
-  opt(m, "min_beyond_distance_m", p.min_beyond_distance_m, kNonNegative);
-  opt(m, "identity_confirm_s", p.identity_confirm_s, kPositive);
-  opt(m, "identity_rereads", p.identity_rereads, within(0, 100));
-  opt(m, "vertical_lag_s", p.vertical_lag_s, kNonNegative);
-  opt(m, "line_hold_window_s", p.line_hold_window_s, within(0.1, 10.0));
-  opt(m, "line_hold_min_span_s", p.line_hold_min_span_s, within(0.05, 10.0));
-  opt(m, "calm_wait_s", p.calm_wait_s, kNonNegative);
-  opt(m, "give_up_clearance_m", p.give_up_clearance_m, kNonNegative);
-  if (p.line_hold_min_span_s > p.line_hold_window_s) m.fail("line_hold_min_span_s", "must not exceed line_hold_window_s");
+  opt(m, "crossing_yaw_tolerance_rad", p.crossing.crossing_yaw_tolerance_rad, kPositive);
+  opt(m, "crossing_attempts", p.crossing.crossing_attempts, at_least(1));
+  opt(m, "cross_range_max_m", p.approach.cross_range_max_m, kPositive);
+  opt(m, "beyond_distance_m", p.crossing.beyond_distance_m, kNonNegative);
+  opt(m, "edge_margin_px", p.approach.edge_margin_px, kNonNegative);
+  opt(m, "settle_s", p.approach.settle_s, kNonNegative);
+  opt(m, "settle_z_m", p.approach.settle_z_m, kPositive);
+  opt(m, "settle_psi_rad", p.approach.settle_psi_rad, kPositive);
+  opt(m, "settle_hold_s", p.approach.settle_hold_s, kNonNegative);
+  opt(m, "pose_fresh_s", p.crossing.pose_fresh_s, kPositive);
+  opt(m, "pose_jump_m", p.target.pose_jump_m, kPositive);
+  opt(m, "pose_jump_rad", p.target.pose_jump_rad, kPositive);
+  opt(m, "pose_jump_window_s", p.target.pose_jump_window_s, kNonNegative);
+  opt(m, "coast_s", p.approach.coast_s, kNonNegative);
+  opt(m, "level_check", p.target.level_check);
+  opt(m, "identity_continuity_s", p.target.identity_continuity_s, kNonNegative);
+  opt(m, "stop_distance_m", p.crossing.stop_distance_m, kNonNegative);
+  opt(m, "min_beyond_distance_m", p.crossing.min_beyond_distance_m, kNonNegative);
+  opt(m, "identity_confirm_s", p.target.identity_confirm_s, kPositive);
+  opt(m, "identity_rereads", p.target.identity_rereads, within(0, 100));
+  opt(m, "vertical_lag_s", p.crossing.vertical_lag_s, kNonNegative);
+  opt(m, "line_hold_window_s", p.line_hold.line_hold_window_s, within(0.1, 10.0));
+  opt(m, "line_hold_min_span_s", p.line_hold.line_hold_min_span_s, within(0.05, 10.0));
+  opt(m, "calm_wait_s", p.line_hold.calm_wait_s, kNonNegative);
+  opt(m, "give_up_clearance_m", p.line_hold.give_up_clearance_m, kNonNegative);
+  if (p.line_hold.line_hold_min_span_s > p.line_hold.line_hold_window_s) m.fail("line_hold_min_span_s", "must not exceed line_hold_window_s");
   m.finish();
 }
 
@@ -338,8 +338,8 @@ void validate_flight_config(const FlightConfig& c) {
           "forward and crossing speeds must be positive");
   require(c.mission.vehicle_size_m.minCoeff() > 0.0, "vehicle size must be positive");
   const MissionParams& mp = c.mission;
-  require(mp.line_hold_min_span_s >= 0.05 && mp.line_hold_min_span_s <= mp.line_hold_window_s &&
-              mp.line_hold_window_s <= 10.0 && mp.calm_wait_s >= 0.0 && mp.give_up_clearance_m >= 0.0,
+  require(mp.line_hold.line_hold_min_span_s >= 0.05 && mp.line_hold.line_hold_min_span_s <= mp.line_hold.line_hold_window_s &&
+              mp.line_hold.line_hold_window_s <= 10.0 && mp.line_hold.calm_wait_s >= 0.0 && mp.line_hold.give_up_clearance_m >= 0.0,
           "mission: 0.05 <= line_hold_min_span_s <= line_hold_window_s <= 10, calm_wait_s and "
           "give_up_clearance_m >= 0");
   require(c.layout.shelf_count >= 1 && c.layout.shelf_count <= 64, "layout.shelf_count must be 1..64");

@@ -190,21 +190,19 @@ struct Timeouts {
   double video_land_s = 3.0;     ///< no frame for this long: land
 };
 
-struct MissionParams {
-  int low_battery_pct = 15;
-  int takeoff_min_battery_pct = 25;
-  double airborne_height_m = 0.3;  ///< a takeoff whose reply was lost counts above this, a land at or below
+/// Reaching and reading the optimal viewpoint (GoToViewpoint; mission: viewpoint_* keys).
+struct ViewpointParams {
   double viewpoint_margin = 0.15;  ///< shelf extent grown by this fraction to fit the view
   double viewpoint_position_tolerance_m = 0.15;
   double viewpoint_yaw_tolerance_rad = 0.08;
   int viewpoint_settle_frames = 5;
   double viewpoint_lost_s = 2.0;   ///< full grid out of view this long: search again
-  Eigen::Vector3d vehicle_size_m = Eigen::Vector3d(0.098, 0.0925, 0.041);
-  double crossing_margin_m = 0.03;  ///< kept clear on each side inside the opening
-  double crossing_yaw_tolerance_rad = 0.15;
-  int crossing_attempts = 3;       ///< off-centre arrivals (each backed off) before re-reading the shelf
+};
+
+/// The approach's settling and its last metres (mission: settle_*, edge_margin_px, coast_s,
+/// cross_range_max_m).
+struct ApproachParams {
   double cross_range_max_m = 0.9;  ///< tags leaving the view farther than this: lost, not close
-  double beyond_distance_m = 0.5;  ///< flown past the back face before landing
   double edge_margin_px = 4.0;     ///< a tag this close to the border is leaving the view
   /// Settled: the lateral law has commanded 0 for this long (more than the video latency plus
   /// the autopilot's velocity time constant, so the last pose is not a moving one) ...
@@ -212,18 +210,21 @@ struct MissionParams {
   double settle_z_m = 0.03;        ///< ... and |e_z| is within this ...
   double settle_psi_rad = 0.04;    ///< ... and |e_psi| within this.
   double settle_hold_s = 10.0;     ///< holding short longer than this: go on anyway
-  /// The crossing is judged on a pose from a frame received at most this long ago.
-  double pose_fresh_s = 0.25;
+  /// A pose from corner tags crossed by a damaged picture's guessed rows is compared with the
+  /// last pose carried by the state odometry for at most this long after it (the odometry
+  /// drifts about 5 cm/s); later such pictures hide the target until a clean one shows it.
+  double coast_s = 1.5;
+};
+
+/// The target's pose plausibility and identity (mission: pose_jump_*, level_check,
+/// identity_*).
+struct TargetParams {
   /// A target pose farther than pose_jump_m (+ 1 m/s; grown as the range squared beyond 1 m,
   /// target_pose.hpp pose_jump_limit_m) or turned more than pose_jump_rad (+ 1 rad/s) from
   /// the last one, taken within pose_jump_window_s, is a wrong tag match.
   double pose_jump_m = 0.06;
   double pose_jump_rad = 0.12;
   double pose_jump_window_s = 0.5;
-  /// A pose from corner tags crossed by a damaged picture's guessed rows is compared with the
-  /// last pose carried by the state odometry for at most this long after it (the odometry
-  /// drifts about 5 cm/s); later such pictures hide the target until a clean one shows it.
-  double coast_s = 1.5;
   /// The level check (every approach pose's cell height against the one measured when the
   /// target was chosen, from the state record's height). Always on in flight; off only for
   /// studies of what it prevents (a campaign over a lossy link then crosses at wrong levels).
@@ -240,30 +241,60 @@ struct MissionParams {
   /// was last identified (target_tracker.cpp, TargetTracker::measure).
   double identity_continuity_s = 1.0;
   double identity_confirm_s = 10.0;
+  int identity_rereads = 2;
+};
+
+/// The crossing gate and the crossing's end (mission: crossing_yaw_tolerance_rad,
+/// crossing_attempts, pose_fresh_s, beyond_distance_m, stop_distance_m, min_beyond_distance_m,
+/// vertical_lag_s).
+struct CrossingParams {
+  double crossing_yaw_tolerance_rad = 0.15;
+  int crossing_attempts = 3;       ///< off-centre arrivals (each backed off) before re-reading the shelf
+  /// The crossing is judged on a pose from a frame received at most this long ago.
+  double pose_fresh_s = 0.25;
+  double beyond_distance_m = 0.5;  ///< flown past the back face before landing
   /// The crossing's end with a shelf seen behind: the vehicle's front plus this (its drift after
   /// the stop: crossing speed x velocity lag, 0.375 m/s x 0.7 s, and the timing's error) stays
   /// short of the nearest tag behind; a crossing that would end less than
   /// min_beyond_distance_m past the back face is not flown (landing in front instead).
   double stop_distance_m = 0.4;
   double min_beyond_distance_m = 0.1;
-  int identity_rereads = 2;
   /// The autopilot's vertical lag assumed: a vertical speed vz carries the vehicle about
   /// vz * vertical_lag_s further after the command changes (a first-order response; the Tello's
   /// time constant is unidentified, docs/tello_sdk.md: 0.3 to 0.7 s horizontally). The crossing
   /// gate adds it to the state height; the approach's height samples wait this long after the
   /// state last showed vertical motion (the picture is a video latency older than the record).
   double vertical_lag_s = 0.5;
-  /// The line-hold gate (line_hold.hpp, docs/method.md section 7): the wander of the quiet
-  /// stretch before the crossing is judged over at most line_hold_window_s, and only over a
-  /// stretch of line_hold_min_span_s or more; a forecast that leaves no room holds the vehicle
-  /// short of the cell, for up to calm_wait_s (then, as after crossing_attempts refusals of
-  /// the gate for it, the crossing is declined: the vehicle backs out to give_up_clearance_m
-  /// in front of the shelf by the last pose and lands there). calm_wait_s below settle_hold_s:
-  /// the hold for the air is given up with the settling's, and the gate then decides.
+};
+
+/// The line-hold gate (line_hold.hpp, docs/method.md section 7): the wander of the quiet
+/// stretch before the crossing is judged over at most line_hold_window_s, and only over a
+/// stretch of line_hold_min_span_s or more; a forecast that leaves no room holds the vehicle
+/// short of the cell, for up to calm_wait_s (then, as after crossing_attempts refusals of
+/// the gate for it, the crossing is declined: the vehicle backs out to give_up_clearance_m
+/// in front of the shelf by the last pose and lands there). calm_wait_s below settle_hold_s:
+/// the hold for the air is given up with the settling's, and the gate then decides.
+struct LineHoldParams {
   double line_hold_window_s = 2.5;
   double line_hold_min_span_s = 0.5;
   double calm_wait_s = 8.0;
   double give_up_clearance_m = 1.0;
+};
+
+/// The mission's parameters (the YAML section `mission`, its keys flat: config.hpp's key list),
+/// grouped here by what they govern; the battery, take-off and landing limits and the vehicle's
+/// size are the mission's own.
+struct MissionParams {
+  int low_battery_pct = 15;
+  int takeoff_min_battery_pct = 25;
+  double airborne_height_m = 0.3;  ///< a takeoff whose reply was lost counts above this, a land at or below
+  Eigen::Vector3d vehicle_size_m = Eigen::Vector3d(0.098, 0.0925, 0.041);
+  double crossing_margin_m = 0.03;  ///< kept clear on each side inside the opening
+  ViewpointParams viewpoint;
+  ApproachParams approach;
+  TargetParams target;
+  CrossingParams crossing;
+  LineHoldParams line_hold;
 };
 
 /// The warehouse as the operator describes it: shelf_count shelves of the known geometry in a

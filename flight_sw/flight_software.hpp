@@ -103,21 +103,22 @@
 
 #include <opencv2/core.hpp>
 
+#include "flight_sw/cell_crossing.hpp"
 #include "flight_sw/config.hpp"
 #include "flight_sw/control.hpp"
 #include "flight_sw/guidance.hpp"
 #include "flight_sw/inventory.hpp"
-#include "flight_sw/line_hold.hpp"
+#include "flight_sw/mission_facts.hpp"
 #include "flight_sw/mission_phases.hpp"
 #include "flight_sw/navigation.hpp"
-#include "flight_sw/odometry.hpp"
 #include "flight_sw/perception.hpp"
 #include "flight_sw/mission_commands.hpp"
 #include "flight_sw/shelf_survey.hpp"
 #include "flight_sw/sticks.hpp"
-#include "flight_sw/target_tracker.hpp"
+#include "flight_sw/target_approach.hpp"
 #include "flight_sw/telemetry.hpp"
 #include "flight_sw/transfer_flight.hpp"
+#include "flight_sw/video_intake.hpp"
 #include "shelfcross/camera.hpp"
 #include "shelfcross/sdk_messages.hpp"
 
@@ -158,7 +159,7 @@ class FlightSoftware {
   /// Everything else: one input, the commands it causes (each stamped with the input's time).
   std::vector<SdkCommand> step(const Input& input);
 
-  const Telemetry& telemetry() const { return telemetry_; }
+  const Telemetry& telemetry() const { return facts_.telemetry; }
   Phase phase() const { return phase_; }
   bool finished() const { return phase_ == Phase::Done; }
   MissionResult result() const { return result_; }
@@ -171,7 +172,7 @@ class FlightSoftware {
   /// One shelf: Inventory::to_json. Several: {"shelves":[<Inventory::to_json>, ...]}.
   std::string inventory_json() const;
   int shelf_index() const { return shelf_; }
-  const FlightConfig& config() const { return config_; }
+  const FlightConfig& config() const { return *config_; }
 
  private:
   // Input handlers
@@ -182,52 +183,13 @@ class FlightSoftware {
   void supervise();
   // Phase behaviours on a frame
   void fly(const SurveyStep& step);
+  /// Flies an approach step and takes the transition it asks for (target_approach.hpp).
+  void follow(const ApproachStep& step);
+  /// What an approach step works with (target_approach.hpp).
+  ApproachTools approach_tools() { return {facts_, sticks_, survey_}; }
   void find_shelf(const Picture& pic);
   void go_to_viewpoint(const Picture& pic, bool view_fresh);
   void take_inventory(const Picture& pic);
-  void approach(const Picture& pic);
-  void approach_found(const Picture& pic, const TargetTracker::Prediction& predicted, double dt);
-  void approach_unseen(double dt);
-  void approach_without_target(const Picture& pic);
-  std::optional<std::string> cross_if_clear(const std::string& why_now);
-  // Approach helpers
-  bool select_target(const cv::Mat& bgr);
-  bool reacquire(const Picture& pic);
-  VelocityCommand approach_steering(const ApproachErrors& e, double dt);
-  double approach_forward_speed_mps(bool hold, double range_m) const;
-  void after_measurement();
-  void sample_cell_height(const PoseEstimate& pose);
-  bool state_fresh() const;
-  std::optional<cv::Rect2d> decision_region_px() const;
-  bool damage_clear_of_decision(const CameraFrame& f) const;
-  static void blank_rows(const CameraFrame& f, cv::Mat& out);
-  void start_losing_target();
-  /// The target's identity on a picture where it is not confirmed (target_tracker.hpp):
-  /// confirmed, kept unknown, or the shelf re-read (returns false: the approach is over).
-  bool check_identity(const Picture& pic, const PoseEstimate& pose_K);
-  /// The target is in doubt (its identity, or lost, or never centred): forget it and re-read
-  /// the shelf from the optimal viewpoint, or, after mission.identity_rereads re-reads in the
-  /// mission, abort (land where it hovers, in front of the shelf) with `give_up_reason`
-  /// (default: "target cell not identified: " + why).
-  void reread_shelf(const std::string& why, const std::optional<std::string>& give_up_reason = std::nullopt);
-  void estimate_forward_gain(const PoseEstimate& pose_K);
-  // The line-hold gate and the in-crossing watch (line_hold.hpp)
-  bool quiet_at(TimeNs t_ns) const;
-  LineHoldForecast line_hold_forecast(const PoseEstimate& pose_K);
-  /// The monitor's sample of this approach picture (LineHoldMonitor::on_picture); `found`: the
-  /// target was measured on it.
-  void feed_line_hold(bool found, const std::optional<OdometryFix>& odometry);
-  /// The pose the crossing gate judges, and its age, stillness and line-hold forecast in `gate`
-  /// (mission_line_hold.cpp).
-  PoseEstimate crossing_gate_pose(CrossingGateInput& gate);
-  /// Inside commit_range_m: true while the forecast is not yet measured or leaves no room
-  /// (hold short); declines the crossing after calm_wait_s of no room.
-  bool too_rough_to_cross(const PoseEstimate& pose_K);
-  /// Gives the approach up for good: backs out to give_up_clearance_m in front of the shelf (by
-  /// the last pose, plus `flown_in_m` flown toward it since), then lands there (supervise),
-  /// the mission aborted with `reason`.
-  void back_out_and_land(const std::string& reason, double flown_in_m = 0.0);
-  void watch_crossing(const StateRecord& s);
   // Actions
   void enter(Phase phase, const std::string& event);
   void command_takeoff_if_ready();
@@ -240,57 +202,26 @@ class FlightSoftware {
   void hold_or_hover();
   void emit_rc(bool force);
   // Several shelves and the conventional strategies
-  bool last_shelf() const { return shelf_ + 1 >= config_.layout.shelf_count; }
+  bool last_shelf() const { return shelf_ + 1 >= config_->layout.shelf_count; }
   void next_shelf(const std::string& event);
   void start_transfer();
   void transfer();
 
-  FlightConfig config_;
+  std::shared_ptr<const FlightConfig> config_;  ///< the one configuration every unit reads
+  MissionFacts facts_;        ///< now, the last state record, the odometry, the telemetry
   MissionCommands commands_;  ///< the non-rc commands, their retries and re-asks
   Sticks sticks_;  ///< the velocity flown, its PI loops and its rc datagrams
+  VideoIntake video_;  ///< the pictures' worth, the damaged rows blanked, the video's stall
   ShelfSurvey survey_;  ///< FindShelf, GoToViewpoint, TakeInventory; the inventories
   TransferFlight transfer_;  ///< the conventional strategies' waypoints
-  cv::Mat masked_bgr_;  ///< a damaged picture with its damaged rows blanked (on_frame)
+  TargetApproach approach_;  ///< the target, its approach, the crossing gate
+  CellCrossing crossing_;    ///< the crossing's height hold, watch and end
 
   Phase phase_ = Phase::Idle;
-  TimeNs now_ns_ = 0;
   TimeNs phase_start_ns_ = 0;
   MissionResult result_;
   Outcome pending_outcome_ = Outcome::Aborted;  ///< the outcome a Land phase ends in
-  std::optional<StateRecord> state_;
-  std::optional<TimeNs> last_frame_ns_;
-  TimeNs airborne_since_ns_ = 0;  ///< video-stall timer floor: frames are needed from here
-  bool video_stalled_ = false;
-
-  // Target (target_tracker.hpp): the cell, its corner tags tracked, its pose, its identity.
-  TargetTracker tracker_;
-  std::optional<TimeNs> reread_back_until_ns_;  ///< a re-read from close backs out until then
-  TimeNs lateral_active_ns_ = 0;        ///< last time the lateral law commanded a speed
-  std::optional<TimeNs> hold_since_ns_;  ///< holding short of the shelf to settle
-  std::optional<TimeNs> lost_since_ns_;
-  bool grid_in_view_while_lost_ = false;  ///< the last nearly whole picture since then showed the shelf's grid
-  std::optional<TimeNs> back_off_since_ns_;
-  int crossing_refusals_ = 0;           ///< off-centre arrivals at the cell so far
-  int rereads_ = 0;
-  // Forward speed per commanded speed (estimate_forward_gain), for timing the crossing.
-  ForwardGainEstimator forward_gain_;
-  // The target cell centre's height in the frame of the state height h (sample_cell_height).
-  CellHeightEstimator cell_height_;
-  // The line-hold gate and the in-crossing watch (line_hold.hpp)
-  LineHoldMonitor line_hold_;
-  std::optional<TimeNs> rough_since_ns_;     ///< held short since then: the forecast left no room
-  std::optional<TimeNs> retreat_until_ns_;   ///< a declined crossing backs out until then, then lands
-  std::string retreat_reason_;
-  CrossingWatchPlan watch_;
-  // Crossing
-  CrossingEnd crossing_end_;  ///< crossing_flown (odometry.hpp)
-  std::optional<double> crossing_height_m_;   ///< the height the crossing holds, h's frame
-  // Shelves
   int shelf_ = 0;
-  // Odometry frame O (odometry.hpp): the state's velocities integrated, its height.
-  StateOdometry odometry_;
-
-  Telemetry telemetry_;
   std::vector<SdkCommand> out_;  ///< the commands of the input being handled
 };
 

@@ -76,8 +76,8 @@ ApproachHold approach_hold(const FlightConfig& config, const ApproachErrors& e, 
   const MissionParams& m = config.mission;
   const ControlGains& g = config.control;
   ApproachHold h;
-  h.settled = laterally_still_s >= m.settle_s && std::abs(e.e_z_m) <= m.settle_z_m &&
-              std::abs(e.e_psi_rad) <= m.settle_psi_rad;
+  h.settled = laterally_still_s >= m.approach.settle_s && std::abs(e.e_z_m) <= m.approach.settle_z_m &&
+              std::abs(e.e_psi_rad) <= m.approach.settle_psi_rad;
   h.in_cone = std::abs(e.psi_cell_rad) <= g.approach_cone_rad;
   h.settling = range_x_m <= g.commit_range_m && !h.settled;
   return h;
@@ -95,9 +95,9 @@ VelocityCommand back_off_velocity(const ControlGains& g) { return {-g.back_off_s
 
 double crossing_beyond_m(const FlightConfig& config, const std::optional<double>& behind_m) {
   const MissionParams& mp = config.mission;
-  double beyond_m = mp.beyond_distance_m;
+  double beyond_m = mp.crossing.beyond_distance_m;
   if (behind_m) {
-    beyond_m = std::min(beyond_m, *behind_m - config.shelf.depth_m - mp.vehicle_size_m.x() - mp.stop_distance_m);
+    beyond_m = std::min(beyond_m, *behind_m - config.shelf.depth_m - mp.vehicle_size_m.x() - mp.crossing.stop_distance_m);
   }
   return beyond_m;
 }
@@ -138,7 +138,7 @@ std::vector<Eigen::Vector3d> transfer_waypoints_G(const FlightConfig& config, co
   // the shelf just passed: at least the clearance behind its back face, even when the next
   // shelf's viewpoint is closer (GoToViewpoint then brings the vehicle back to it visually).
   const double clearance = st.mode == Strategy::over_tops ? st.top_clearance_m : st.end_clearance_m;
-  const double x_end = std::max(last_shelf ? sh.depth_m + half.x() + config.mission.beyond_distance_m
+  const double x_end = std::max(last_shelf ? sh.depth_m + half.x() + config.mission.crossing.beyond_distance_m
                                            : config.layout.shelf_spacing_m + viewpoint_G_m.x(),
                                 sh.depth_m + half.x() + clearance);
   const Eigen::Vector3d end(x_end, viewpoint_G_m.y(), viewpoint_G_m.z());

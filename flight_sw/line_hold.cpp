@@ -132,7 +132,7 @@ LineWander LineHoldMonitor::wander(TimeNs now_ns, double window_s) const {
 
 LineHoldForecast forecast_line_hold(const MissionParams& m, const LineWander& w, double blind_s) {
   LineHoldForecast f;
-  f.measured = w.poses >= kLineHoldMinPoses && w.measured >= kLineHoldMinMeasured && w.span_s >= m.line_hold_min_span_s;
+  f.measured = w.poses >= kLineHoldMinPoses && w.measured >= kLineHoldMinMeasured && w.span_s >= m.line_hold.line_hold_min_span_s;
   if (!f.measured) return f;
   // Random-walk growth of the spread from the quiet stretch to the blind crossing (never below
   // the spread seen), and the carry of the speed seen (file comment).
@@ -194,7 +194,7 @@ CrossingWatchVerdict crossing_watch(const CrossingEnd& end, const CrossingWatchP
   // Where the vehicle is carried before a change of command takes hold: its speed times the
   // autopilot's lag (horizontal kVelocityLag_s, vertical vertical_lag_s).
   v.across_m = flown.dot(across_axis) + v_O_mps.dot(across_axis) * kVelocityLag_s;
-  v.height_m = height_above_cell_m + vz_mps * m.vertical_lag_s;
+  v.height_m = height_above_cell_m + vz_mps * m.crossing.vertical_lag_s;
   const double stops_at = flown.dot(end.axis_O) + std::max(0.0, v_O_mps.dot(end.axis_O)) * kVelocityLag_s;
   if (stops_at >= plan.stop_before_m) return v;  // committed: stopping would leave it in the frame
   v.back_out = std::abs(v.across_m) > plan.slack_y_m || std::abs(v.height_m) > plan.slack_z_m;

@@ -41,8 +41,6 @@ class MissionCommands {
   /// Asks again for `command` (the one that just completed) if retries remain: true, the
   /// attempt counted (attempts()); false, nothing asked, when the retries are spent.
   bool retry(const std::string& command, double reply_timeout_s);
-  /// retry(c.command, reply_timeout_s): the form FlightSoftware::on_completion calls.
-  bool retry(const Completion& c, double reply_timeout_s) { return retry(c.command, reply_timeout_s); }
   /// Asks again for `command` at `at_ns` (poll asks for it then, as `ask` would but with its
   /// attempts unchanged). Replaces a re-ask already waiting.
   void ask_again_at(std::string command, double reply_timeout_s, TimeNs at_ns);

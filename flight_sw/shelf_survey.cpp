@@ -79,7 +79,7 @@ ShelfSurvey::ShelfSurvey(const FlightConfig& config)
       tag_detector_(config_.perception),
       marker_detector_(config_.shelf.aruco_dictionary),
       inventory_(0, config_.shelf.levels(), config_.shelf.columns(), config_.perception.marker_min_agreeing_frames),
-      viewpoint_G_m_(optimal_viewpoint_G(config_.shelf, config_.camera, config_.mount, config_.mission.viewpoint_margin)) {}
+      viewpoint_G_m_(optimal_viewpoint_G(config_.shelf, config_.camera, config_.mount, config_.mission.viewpoint.viewpoint_margin)) {}
 
 SurveyStep ShelfSurvey::find_shelf(const Picture& pic, bool back_out, Telemetry& telemetry) {
   analyse(pic.bgr, telemetry);
@@ -106,7 +106,7 @@ SurveyStep ShelfSurvey::go_to_viewpoint(const Picture& pic, TimeNs now_ns, bool 
   if (!view_fresh) analyse(pic.bgr, telemetry);
   const MissionParams& m = config_.mission;
   if (!view_.full) {
-    const bool lost = last_full_view_ns_ && ns_to_seconds(now_ns - *last_full_view_ns_) > m.viewpoint_lost_s;
+    const bool lost = last_full_view_ns_ && ns_to_seconds(now_ns - *last_full_view_ns_) > m.viewpoint.viewpoint_lost_s;
     return hover(lost ? Step::Next::ShelfOutOfView : Step::Next::Stay);
   }
   last_full_view_ns_ = now_ns;
@@ -126,12 +126,12 @@ SurveyStep ShelfSurvey::go_to_viewpoint(const Picture& pic, TimeNs now_ns, bool 
   // e1: from the current position to the optimal viewpoint, in G; flown in the body frame.
   const Eigen::Vector3d e1 = viewpoint_G_m_ - pose->p_FB_m();
   telemetry.view.e1_G_m = e1;
-  const bool there = e1.norm() < m.viewpoint_position_tolerance_m && std::abs(pose->yaw_rad) < m.viewpoint_yaw_tolerance_rad;
+  const bool there = e1.norm() < m.viewpoint.viewpoint_position_tolerance_m && std::abs(pose->yaw_rad) < m.viewpoint.viewpoint_yaw_tolerance_rad;
   if (!there) settled_frames_ = 0;
   else if (pic.decides) ++settled_frames_;  // a damaged picture neither counts nor resets
   const VelocityCommand v = viewpoint_velocity(config_.control, e1, pose->yaw_rad);
   Step step = fly(v);
-  if (settled_frames_ >= m.viewpoint_settle_frames) {  // flown, then a hover: set now, at rest
+  if (settled_frames_ >= m.viewpoint.viewpoint_settle_frames) {  // flown, then a hover: set now, at rest
     step.next = Step::Next::AtViewpoint;
     step.hover = true;
   }

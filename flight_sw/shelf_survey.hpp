@@ -41,7 +41,8 @@ struct SurveyStep {
 
 class ShelfSurvey {
  public:
-  /// `config` must be valid (validate_flight_config).
+  /// `config` must be valid (validate_flight_config) and outlive this (the mission's one
+  /// configuration, held by reference).
   explicit ShelfSurvey(const FlightConfig& config);
 
   /// FindShelf on a picture. `back_out`: a re-read from close, backing straight out while
@@ -74,7 +75,7 @@ class ShelfSurvey {
   const std::optional<PoseEstimate>& pose_G() const { return pose_G_; }
 
  private:
-  FlightConfig config_;
+  const FlightConfig& config_;  ///< the mission's one configuration (outlives this)
   TagDetector tag_detector_;
   MarkerDetector marker_detector_;
   ShelfView view_;  ///< the last analysis (buffers reused frame to frame)

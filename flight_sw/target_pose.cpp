@@ -22,7 +22,7 @@ std::optional<double> row_height_m(const FlightConfig& config, const std::option
 
 double pose_jump_limit_m(const MissionParams& mission, double range_m) {
   const double r = std::max(1.0, range_m / kPoseJumpRange_m);
-  return mission.pose_jump_m * r * r;
+  return mission.target.pose_jump_m * r * r;
 }
 
 // ---- TargetPoses ----
@@ -62,8 +62,8 @@ bool jumped(const MissionParams& mp, const PoseEstimate& pose, const PoseEstimat
   const double jump_m = (pose.p_FB_m() - last.p_FB_m()).norm();
   const double turn = std::abs(wrap_pi(pose.yaw_rad - last.yaw_rad));
   const double range_m = -last.p_FB_m().x();
-  return dt <= mp.pose_jump_window_s &&
-         (jump_m > pose_jump_limit_m(mp, range_m) + 1.0 * dt || turn > mp.pose_jump_rad + 1.0 * dt);
+  return dt <= mp.target.pose_jump_window_s &&
+         (jump_m > pose_jump_limit_m(mp, range_m) + 1.0 * dt || turn > mp.target.pose_jump_rad + 1.0 * dt);
 }
 
 // A pose from touched tags must agree with the last pose carried to now by the state
@@ -71,10 +71,10 @@ bool jumped(const MissionParams& mp, const PoseEstimate& pose, const PoseEstimat
 // for at most mission.coast_s after the last pose.
 bool agrees_with_carried(const MissionParams& mp, const PoseEstimate& pose, const std::optional<PoseEstimate>& carried,
                          double age_s) {
-  return carried && age_s <= mp.coast_s &&
+  return carried && age_s <= mp.approach.coast_s &&
          (pose.p_FB_m() - carried->p_FB_m()).norm() <=
              pose_jump_limit_m(mp, -carried->p_FB_m().x()) + kOdometryDrift_mps * age_s &&
-         std::abs(wrap_pi(pose.yaw_rad - carried->yaw_rad)) <= mp.pose_jump_rad;
+         std::abs(wrap_pi(pose.yaw_rad - carried->yaw_rad)) <= mp.target.pose_jump_rad;
 }
 
 // The target cell's centre stays at one height above the take-off point. After the target was
@@ -112,7 +112,7 @@ PoseVerdict judge_pose(const FlightConfig& config, const PoseCandidate& candidat
     return PoseVerdict::Hidden;
   }
   // (mission.level_check off: for verification studies only, to show what the check prevents.)
-  if (mp.level_check && target_height_m && on_another_level(config, candidate, state, *target_height_m)) {
+  if (mp.target.level_check && target_height_m && on_another_level(config, candidate, state, *target_height_m)) {
     return PoseVerdict::WrongLevel;
   }
   return PoseVerdict::Plausible;

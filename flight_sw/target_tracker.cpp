@@ -16,9 +16,9 @@ std::optional<std::string> crossing_refusal(const FlightConfig& config, CellInde
   if (input.identity != CellIdentity::Confirmed) return std::string("target cell not identified (") + cell_identity_name(input.identity) + ")";
   // The pose is honest only if it is recent (frames may drop) and the vehicle was not moving
   // sideways when it was taken: the video latency hides up to V_y (latency + tau) of motion.
-  if (input.pose_age_s > m.pose_fresh_s) return "last pose too old";
-  if (input.still_for_s < m.settle_s) return "still moving sideways";
-  if (psi > m.crossing_yaw_tolerance_rad) return "heading off the cell normal";
+  if (input.pose_age_s > m.crossing.pose_fresh_s) return "last pose too old";
+  if (input.still_for_s < m.approach.settle_s) return "still moving sideways";
+  if (psi > m.crossing.crossing_yaw_tolerance_rad) return "heading off the cell normal";
   if (d.x() <= 0.0 || room.offset_y_m() > tol_y) return "off-centre laterally";
   if (room.offset_z_m() > tol_z) return "off-centre vertically";
   // The height now, by the state record: the pose shows the vehicle a video latency ago
@@ -27,7 +27,7 @@ std::optional<std::string> crossing_refusal(const FlightConfig& config, CellInde
   // a vertical speed vz carries it about vz * vertical_lag_s further before the hold turns it.
   // Both heights must leave the vehicle crossing_margin_m clear of the beams.
   if (!input.height_above_cell_m) return std::string("cell height not measured against the state height");
-  const double z_now = *input.height_above_cell_m, z_carried = z_now + input.vz_mps * m.vertical_lag_s;
+  const double z_now = *input.height_above_cell_m, z_carried = z_now + input.vz_mps * m.crossing.vertical_lag_s;
   if (std::abs(z_now) > tol_z || std::abs(z_carried) > tol_z) return "off the cell's height by the state height";
   // The blind crossing: what the hover before it says the vehicle may wander (line_hold.hpp).
   const LineHoldForecast& f = input.line_hold;
@@ -139,12 +139,12 @@ bool TargetTracker::measure(const Picture& pic, const cv::Rect2d& predicted, Tag
   const double side = search_.picked_side_px();
   identification_.follow(corner_box(img, side), now_ns, moved_box_px_, poses_.pose_t_ns(), config_.mission);
   poses_.accept(*pose, now_ns, pic.decides && !touched);
-  corners_.accept(img, side, touched, pic.bgr.size(), config_.mission.edge_margin_px);
+  corners_.accept(img, side, touched, pic.bgr.size(), config_.mission.approach.edge_margin_px);
   return true;
 }
 
 std::optional<TargetTracker::Carried> TargetTracker::carried_target(TimeNs now_ns) const {
-  if (!target_ || ns_to_seconds(now_ns - poses_.pose_t_ns()) > config_.mission.coast_s) return std::nullopt;
+  if (!target_ || ns_to_seconds(now_ns - poses_.pose_t_ns()) > config_.mission.approach.coast_s) return std::nullopt;
   const std::optional<PoseEstimate> carried = poses_.carried_pose();
   if (!carried) return std::nullopt;
   const auto corners = corners_seen_from(config_, *target_, *carried);

@@ -87,6 +87,7 @@ struct TrackerRecord {
 /// plausibility filter (judge_pose) it drives.
 class TargetTracker {
  public:
+  /// `config` must be valid and outlive this (the mission's one configuration, held by reference).
   explicit TargetTracker(const FlightConfig& config)
       : config_(config), follower_(config.perception.pipeline == PerceptionPipeline::fast) {}
 
@@ -155,7 +156,7 @@ class TargetTracker {
     std::vector<MarkerSighting> markers;
   };
 
-  FlightConfig config_;
+  const FlightConfig& config_;  ///< the mission's one configuration (outlives this)
   std::optional<CellIndex> target_;
   std::optional<double> target_height_m_;  ///< target cell centre above the take-off point (state h)
   BoxFollower follower_;                   ///< the box by its image motion

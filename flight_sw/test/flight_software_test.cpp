@@ -553,7 +553,7 @@ TEST(FlightSoftware, NeverCrossesWithoutRoomBacksOutAndGivesUp) {
   // the line-hold gate holds the vehicle short of the cell, and after calm_wait_s declines the
   // crossing, backs out to give_up_clearance_m and lands there.
   c.mission.crossing_margin_m = 0.1135;
-  c.mission.identity_rereads = 0;
+  c.mission.target.identity_rereads = 0;
   Harness h(Options{}, c);
   h.run(60.0);
   ASSERT_TRUE(h.fsw().finished()) << phase_name(h.fsw().phase()) << ": " << h.fsw().telemetry().event;
@@ -563,7 +563,7 @@ TEST(FlightSoftware, NeverCrossesWithoutRoomBacksOutAndGivesUp) {
   bool backed_off = false;
   for (const auto& cmd : h.commands()) backed_off = backed_off || cmd.text == "rc 0 -20 0 0";
   EXPECT_TRUE(backed_off);
-  EXPECT_LT(h.position().x(), 3.0 - c.mission.give_up_clearance_m + 0.1) << "landed clear of the shelf";
+  EXPECT_LT(h.position().x(), 3.0 - c.mission.line_hold.give_up_clearance_m + 0.1) << "landed clear of the shelf";
 }
 
 // The gate's off-centre refusals: with the line-hold's hold short switched off by a calm wait
@@ -573,10 +573,10 @@ TEST(FlightSoftware, NeverCrossesWithoutRoomBacksOutAndGivesUp) {
 TEST(FlightSoftware, NeverCrossesOffCentreBacksOffAndGivesUp) {
   FlightConfig c;
   c.mission.crossing_margin_m = 0.1135;
-  c.mission.calm_wait_s = 1000.0;
-  c.mission.settle_hold_s = 0.0;  // held short only to settle; the rough air's hold is given up with it
+  c.mission.line_hold.calm_wait_s = 1000.0;
+  c.mission.approach.settle_hold_s = 0.0;  // held short only to settle; the rough air's hold is given up with it
   // No re-read: with them, one of the later arrivals may fall inside the 0.25 mm and cross.
-  c.mission.identity_rereads = 0;
+  c.mission.target.identity_rereads = 0;
   Harness h(Options{}, c);
   h.run(60.0);
   ASSERT_TRUE(h.fsw().finished()) << phase_name(h.fsw().phase()) << ": " << h.fsw().telemetry().event;
@@ -586,7 +586,7 @@ TEST(FlightSoftware, NeverCrossesOffCentreBacksOffAndGivesUp) {
   bool backed_off = false;
   for (const auto& cmd : h.commands()) backed_off = backed_off || cmd.text == "rc 0 -20 0 0";
   EXPECT_TRUE(backed_off);
-  EXPECT_LT(h.position().x(), 3.0 - c.mission.give_up_clearance_m + 0.1) << "landed clear of the shelf";
+  EXPECT_LT(h.position().x(), 3.0 - c.mission.line_hold.give_up_clearance_m + 0.1) << "landed clear of the shelf";
 }
 
 // A re-read from close that sees nothing (run 242 of the default sdk campaign, commit bfd468c:
@@ -596,9 +596,9 @@ TEST(FlightSoftware, NeverCrossesOffCentreBacksOffAndGivesUp) {
 TEST(FlightSoftware, ARereadFromCloseBacksOutBeforeLooking) {
   FlightConfig c;
   c.mission.crossing_margin_m = 0.1135;  // never centred: could not centre, re-read (above)
-  c.mission.calm_wait_s = 1000.0;        // and arriving there: no hold short for the air (above)
-  c.mission.settle_hold_s = 0.0;
-  c.mission.identity_rereads = 1;
+  c.mission.line_hold.calm_wait_s = 1000.0;        // and arriving there: no hold short for the air (above)
+  c.mission.approach.settle_hold_s = 0.0;
+  c.mission.target.identity_rereads = 1;
   Options o;
   o.blank_after_reread_s = 4.0;
   Harness h(o, c);
@@ -736,7 +736,7 @@ TEST(FlightSoftware, TheCrossingEndsWhereTheOdometryHasFlownTheLine) {
     }
   }
   ASSERT_TRUE(x_at_land_m);
-  EXPECT_NEAR(*x_at_land_m, 3.34 + FlightConfig{}.mission.beyond_distance_m, 0.1);
+  EXPECT_NEAR(*x_at_land_m, 3.34 + FlightConfig{}.mission.crossing.beyond_distance_m, 0.1);
 }
 
 TEST(FlightSoftware, WholeMissionInventoriesAndCrossesTheEmptyCell) {
@@ -813,7 +813,7 @@ TEST(FlightSoftware, GustyHoverDeclinesTheCrossingAndLandsClear) {
   }
   const std::optional<Eigen::Vector3d> p_land = position_at_land(h);
   ASSERT_TRUE(p_land);
-  EXPECT_NEAR(p_land->x(), 3.0 - config.mission.give_up_clearance_m, 0.1) << "landed clear of the shelf";
+  EXPECT_NEAR(p_land->x(), 3.0 - config.mission.line_hold.give_up_clearance_m, 0.1) << "landed clear of the shelf";
 }
 
 // A push in the crossing (0.2 m/s sideways, the first crossing's first two seconds only): the

@@ -42,7 +42,7 @@ LineWander hover(LineHoldMonitor& m, double seconds, Y y_of_t, Vy vy_of_t) {
       m.on_state(s, true);
     }
   }
-  return m.wander(at_s(seconds), FlightConfig{}.mission.line_hold_window_s);
+  return m.wander(at_s(seconds), FlightConfig{}.mission.line_hold.line_hold_window_s);
 }
 
 // The gate on a centred pose 0.6 m in front of L2 C3 (34 cm column: 8.4 cm of tolerance
@@ -153,10 +153,10 @@ TEST(LineHold, TouchedPosesDoNotWidenTheWanderCarriedFromCleanOnes) {
     const double t = k / kFrameHz, truth_y = 0.002 * std::sin(37.0 * t);
     const bool clean_tags = k % 10 == 0;
     const PoseEstimate pose = pose_at(-0.6, clean_tags ? truth_y : truth_y + 0.07 * (k % 3 - 1), 0.0);
-    clean.on_picture(at_s(t), clean_tags ? &pose : nullptr, still, true, mp.coast_s);
+    clean.on_picture(at_s(t), clean_tags ? &pose : nullptr, still, true, mp.approach.coast_s);
     every.on_pose(at_s(t), pose.p_FB_m(), 0.0, true);
   }
-  const LineWander w = clean.wander(at_s(2.0), mp.line_hold_window_s);
+  const LineWander w = clean.wander(at_s(2.0), mp.line_hold.line_hold_window_s);
   EXPECT_EQ(w.poses, 61);
   EXPECT_EQ(w.measured, 7);
   EXPECT_NEAR(w.span_s, 2.0, 1e-9);
@@ -165,7 +165,7 @@ TEST(LineHold, TouchedPosesDoNotWidenTheWanderCarriedFromCleanOnes) {
   ASSERT_TRUE(f.measured);
   EXPECT_LT(f.y_m, 0.005);
   EXPECT_FALSE(gate_with(f).has_value()) << *gate_with(f);
-  const LineWander wide = every.wander(at_s(2.0), mp.line_hold_window_s);
+  const LineWander wide = every.wander(at_s(2.0), mp.line_hold.line_hold_window_s);
   EXPECT_GT(wide.half_spread_y_m, 0.068);
   const auto refusal = gate_with(forecast_line_hold(mp, wide, blind_s()));
   ASSERT_TRUE(refusal.has_value());
@@ -179,33 +179,33 @@ TEST(LineHold, CleanPosesAreCarriedByTheOdometry) {
   const MissionParams& mp = FlightConfig{}.mission;
   LineHoldMonitor m;
   const PoseEstimate p0 = pose_at(-0.6, 0.01, 0.0);
-  m.on_picture(at_s(0.0), &p0, OdometryFix{}, true, mp.coast_s);
+  m.on_picture(at_s(0.0), &p0, OdometryFix{}, true, mp.approach.coast_s);
   // K and O aligned (both yaws 0): 3 cm to the left in O is 3 cm along y_K.
   OdometryFix left;
   left.p_O_m = Eigen::Vector3d(0.0, 0.03, 0.0);
-  const auto c = m.carried(at_s(0.5), left, mp.coast_s);
+  const auto c = m.carried(at_s(0.5), left, mp.approach.coast_s);
   ASSERT_TRUE(c.has_value());
   EXPECT_NEAR(c->first.p_FB_m().y(), 0.04, 1e-12);
   EXPECT_NEAR(c->first.p_FB_m().x(), -0.6, 1e-12);
   EXPECT_EQ(c->second, at_s(0.0));
-  EXPECT_FALSE(m.carried(at_s(1.6), left, mp.coast_s).has_value());
+  EXPECT_FALSE(m.carried(at_s(1.6), left, mp.approach.coast_s).has_value());
   // 30 carried samples and a second clean pose: 31 samples, 2 measured, not enough.
-  for (int k = 1; k <= 30; ++k) m.on_picture(at_s(k / kFrameHz), nullptr, left, true, mp.coast_s);
+  for (int k = 1; k <= 30; ++k) m.on_picture(at_s(k / kFrameHz), nullptr, left, true, mp.approach.coast_s);
   const PoseEstimate p1 = pose_at(-0.6, 0.04, 0.0);
-  m.on_picture(at_s(31 / kFrameHz), &p1, left, true, mp.coast_s);
-  for (int k = 32; k <= 45; ++k) m.on_picture(at_s(k / kFrameHz), nullptr, left, true, mp.coast_s);
-  LineWander w = m.wander(at_s(1.5), mp.line_hold_window_s);
+  m.on_picture(at_s(31 / kFrameHz), &p1, left, true, mp.approach.coast_s);
+  for (int k = 32; k <= 45; ++k) m.on_picture(at_s(k / kFrameHz), nullptr, left, true, mp.approach.coast_s);
+  LineWander w = m.wander(at_s(1.5), mp.line_hold.line_hold_window_s);
   EXPECT_EQ(w.poses, 46);
   EXPECT_EQ(w.measured, 2);
   EXPECT_FALSE(forecast_line_hold(mp, w, blind_s()).measured);
-  m.on_picture(at_s(46 / kFrameHz), &p1, left, true, mp.coast_s);
-  w = m.wander(at_s(1.6), mp.line_hold_window_s);
+  m.on_picture(at_s(46 / kFrameHz), &p1, left, true, mp.approach.coast_s);
+  w = m.wander(at_s(1.6), mp.line_hold.line_hold_window_s);
   EXPECT_EQ(w.measured, 3);
   EXPECT_TRUE(forecast_line_hold(mp, w, blind_s()).measured);
   // A lateral command: the stretch and the anchor are gone.
-  m.on_picture(at_s(1.6), nullptr, left, false, mp.coast_s);
-  EXPECT_EQ(m.wander(at_s(1.6), mp.line_hold_window_s).poses, 0);
-  EXPECT_FALSE(m.carried(at_s(1.6), left, mp.coast_s).has_value());
+  m.on_picture(at_s(1.6), nullptr, left, false, mp.approach.coast_s);
+  EXPECT_EQ(m.wander(at_s(1.6), mp.line_hold.line_hold_window_s).poses, 0);
+  EXPECT_FALSE(m.carried(at_s(1.6), left, mp.approach.coast_s).has_value());
 }
 
 // The watch on a crossing from 0.6 m in front of L2 C3, straight along x_O at 0.3 m/s. The

@@ -138,7 +138,7 @@ std::vector<FrameSpec> frame_specs(const verification::Scenario& sc) {
   const Eigen::Isometry3d X_WS = shelf_pose_W(shelf);
   const Eigen::Vector3d g_S = grid_origin_S(shelf);
   const Eigen::Vector3d vp_S =
-      g_S + flight_sw::optimal_viewpoint_G(config.shelf, config.camera, config.mount, config.mission.viewpoint_margin);
+      g_S + flight_sw::optimal_viewpoint_G(config.shelf, config.camera, config.mount, config.mission.viewpoint.viewpoint_margin);
   const auto camera_at = [&](const Eigen::Vector3d& p_S, double yaw_S) {
     return render::camera_pose_W(body_pose(X_WS * p_S, shelf.yaw_rad + yaw_S), sc.camera_mount);
   };

@@ -56,7 +56,7 @@ flight_sw::FlightConfig flight_config_for(const Scenario& sc, const CameraIntrin
   c.shelf.marker_size_m = sc.warehouse.marker_size_m;
   c.camera = believed_camera;
   c.mount = sc.camera_mount;
-  c.mission.level_check = sc.cosim.pilot.level_check;
+  c.mission.target.level_check = sc.cosim.pilot.level_check;
   c.mission.vehicle_size_m = sc.vehicle.size_m;
   c.layout.shelf_count = mission_shelf_count(sc);
   c.layout.shelf_spacing_m = mission_shelf_spacing_m(sc);

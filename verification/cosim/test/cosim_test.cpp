@@ -112,7 +112,7 @@ TEST(RenderedFrames, InventoryOfTheDefaultShelfIsExact) {
   render::Renderer renderer(s.warehouse, s.camera, options);
   // The optimal viewpoint of the flight software, facing the shelf.
   const Eigen::Vector3d p_GB = flight_sw::optimal_viewpoint_G(config.shelf, config.camera, config.mount,
-                                                              config.mission.viewpoint_margin);
+                                                              config.mission.viewpoint.viewpoint_margin);
   Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();
   X_WB.translation() = grid_pose_W(s.warehouse.shelves[0]) * p_GB;
   flight_sw::TagDetector tags(config.perception);

@@ -1,0 +1,82 @@
+#pragma once
+// The crossing gate's side of the approach (flight_software.hpp): what the approach measures
+// for the crossing (the vehicle's lateral stillness, the line's hold by the LineHoldMonitor,
+// line_hold.hpp; the cell centre's height in the state height's frame and the forward speed
+// gain, odometry.hpp), when the air holds the vehicle short or declines the crossing, and the
+// gate judged on the last deciding pose (crossing_refusal, target_tracker.hpp): a refusal, or
+// the crossing to fly (cell_crossing.hpp).
+
+#include <optional>
+#include <string>
+
+#include "flight_sw/cell_crossing.hpp"
+#include "flight_sw/config.hpp"
+#include "flight_sw/line_hold.hpp"
+#include "flight_sw/mission_facts.hpp"
+#include "flight_sw/odometry.hpp"
+#include "flight_sw/target_tracker.hpp"
+
+namespace shelfcross::flight_sw {
+
+/// The gate's verdict (CrossingGate::judge): exactly one of the three is set.
+struct GateVerdict {
+  std::optional<std::string> refusal;  ///< refused: why (the approach goes on)
+  std::optional<std::string> no_room;  ///< clear, but no room behind the shelf to stop: land, this the reason
+  std::optional<CrossingStart> start;  ///< clear: the crossing to fly
+};
+
+/// What the air leaves the line, inside commit_range_m (CrossingGate::too_rough).
+struct RoughAir {
+  bool hold_short = false;              ///< the forecast is not yet measured or leaves no room
+  std::optional<std::string> declined;  ///< no room for calm_wait_s: the crossing declined, this the reason
+};
+
+class CrossingGate {
+ public:
+  /// `config` must be valid and outlive this (the mission's one configuration).
+  explicit CrossingGate(const FlightConfig& config) : config_(config) {}
+
+  /// A new target: its cell height, line hold and forward gain measured anew.
+  void new_target();
+  void clear_line_hold() { line_hold_.clear(); }  ///< the line hold measured anew (a re-read, a stopped crossing)
+  void clear_cell_height() { cell_height_.clear(); }  ///< the cell height measured anew (a re-read, the next shelf)
+  /// A phase change: the rough air's hold starts anew.
+  void forget_rough() { rough_since_ns_.reset(); }
+
+  /// The lateral law commanded a sideways speed at t_ns (stillness to be shown anew).
+  void moved_sideways(TimeNs t_ns) { lateral_active_ns_ = t_ns; }
+  /// Seconds since the last sideways command.
+  double laterally_still_s(TimeNs now_ns) const { return ns_to_seconds(now_ns - lateral_active_ns_); }
+
+  /// Each state record: the cell height's stillness; in the approach (`approaching`), the line
+  /// hold's across-line speed.
+  void on_state(const StateRecord& s, bool approaching);
+  /// Each approach picture: the forward command held since the last (forward gain).
+  void on_command_held(TimeNs now_ns, double vx_B_mps) { forward_gain_.on_command_held(now_ns, vx_B_mps); }
+  /// The monitor's sample of this approach picture (LineHoldMonitor::on_picture); `found`: the
+  /// target was measured on it; `odometry`: the fix now (none: the state is stale).
+  void on_picture(const MissionFacts& facts, const TargetTracker& tracker, bool found,
+                  const std::optional<OdometryFix>& odometry);
+  /// A deciding pose (TargetTracker::pose_decides): the forward gain and the cell height sampled.
+  void on_deciding_pose(MissionFacts& facts, const PoseEstimate& pose_K);
+  /// Inside commit_range_m with the identity confirmed: hold short while the forecast is not yet
+  /// measured or leaves no room; declined after calm_wait_s of no room.
+  RoughAir too_rough(MissionFacts& facts, const TargetTracker& tracker, const PoseEstimate& pose_K);
+  /// The gate on the last deciding pose (requires one, and a target); `why_now` begins the
+  /// crossing's event.
+  GateVerdict judge(MissionFacts& facts, const TargetTracker& tracker, const std::string& why_now);
+
+ private:
+  bool quiet_at(TimeNs t_ns) const;
+  LineHoldForecast forecast(MissionFacts& facts, const PoseEstimate& pose_K);
+  PoseEstimate gate_pose(MissionFacts& facts, const TargetTracker& tracker, CrossingGateInput& gate);
+
+  const FlightConfig& config_;
+  TimeNs lateral_active_ns_ = 0;          ///< last time the lateral law commanded a speed
+  LineHoldMonitor line_hold_;             ///< line_hold.hpp
+  std::optional<TimeNs> rough_since_ns_;  ///< held short since then: the forecast left no room
+  ForwardGainEstimator forward_gain_;     ///< forward speed per commanded speed, for timing the crossing
+  CellHeightEstimator cell_height_;       ///< the target cell centre's height in the frame of the state height h
+};
+
+}  // namespace shelfcross::flight_sw

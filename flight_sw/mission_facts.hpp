@@ -1,0 +1,29 @@
+#pragma once
+// The facts the mission's units share on every input (flight_software.hpp): the time of the
+// input being handled, the last state record, the odometry integrated from the records, and the
+// telemetry every unit writes. The mission owns one; each unit gets it per call.
+
+#include <optional>
+
+#include "flight_sw/odometry.hpp"
+#include "flight_sw/telemetry.hpp"
+#include "shelfcross/sdk_messages.hpp"
+
+namespace shelfcross::flight_sw {
+
+/// A state record older than this is not the vehicle's height now (they come at 10 Hz).
+constexpr double kStateFresh_s = 0.3;
+
+struct MissionFacts {
+  TimeNs now_ns = 0;                 ///< the stamp of the input being handled (never decreasing)
+  std::optional<StateRecord> state;  ///< the last state record
+  StateOdometry odometry;            ///< frame O: the state records' velocities integrated, their height
+  Telemetry telemetry;               ///< what the mission is doing, written by every unit
+
+  /// A state record within kStateFresh_s of now.
+  bool state_fresh() const {
+    return state && ns_to_seconds(now_ns - state->t_ns) <= kStateFresh_s;
+  }
+};
+
+}  // namespace shelfcross::flight_sw
