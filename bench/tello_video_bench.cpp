@@ -7,17 +7,28 @@
 // BM_EncodeRendered / BM_DecodeRendered time the two ends of the co-simulation's sdk link on
 // what it really carries: rendered 960 x 720 frames of the paper's shelf along an approach,
 // with the default sensor noise, encoded as the simulated Tello encodes them.
+// BM_EncodeRenderedNvenc and BM_NvencFidelity ask whether NVIDIA's hardware encoder could stand
+// in for libx264 there: its wall time per frame, and what its pictures change for the flight
+// software (both skip, with the reason, where NVENC cannot be opened).
 //
 //   build/release/bench/shelfcross_bench --benchmark_filter='Receiver|DecodeAndConvert|Rendered'
+//   build/release/bench/shelfcross_bench --benchmark_filter='Nvenc|EncodeRendered'
 #include <poll.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <map>
+#include <memory>
+#include <stdexcept>
 
 #include <benchmark/benchmark.h>
 
 #include <opencv2/core.hpp>
 #include <opencv2/core/utility.hpp>
 
+#include "flight_sw/config.hpp"
+#include "flight_sw/perception.hpp"
 #include "flight_sw/tello/clock.hpp"
 #include "flight_sw/tello/h264_decoder.hpp"
 #include "flight_sw/tello/video_receiver.hpp"
@@ -163,14 +174,20 @@ const std::vector<cv::Mat>& rendered_approach() {
   return frames;
 }
 
-// The simulated Tello's encoder (tello_emulator.cpp's settings: 45 slices, kTelloQp, a key frame
-// every 30 captures) on the rendered approach; CPU time per frame, bytes per frame.
-void BM_EncodeRendered(benchmark::State& state) {
+// The simulated Tello's encoder settings (tello_emulator.cpp's: kTelloQp, `slices`, the
+// encoder's own key interval a backstop at 4 x 30, every 30th capture forced to a key frame).
+std::unique_ptr<verification::H264Encoder> tello_encoder(int slices, verification::H264Encoder::Backend backend) {
+  return std::make_unique<verification::H264Encoder>(kWidth, kHeight, 30, 4 * 30, verification::H264Encoder::kTelloQp,
+                                                     slices, backend);
+}
+bool forced_key(size_t frame_index) { return frame_index % 30 == 0; }
+
+// The rendered approach through `encoder`, round and round: time per frame, bytes per frame.
+void encode_rendered(benchmark::State& state, verification::H264Encoder& encoder) {
   const std::vector<cv::Mat>& frames = rendered_approach();
-  verification::H264Encoder encoder(kWidth, kHeight, 30, 120, verification::H264Encoder::kTelloQp, static_cast<int>(state.range(0)));
   size_t k = 0, bytes = 0, key_bytes = 0, keys = 0;
   for (auto _ : state) {
-    const bool key = k % 30 == 0;
+    const bool key = forced_key(k);
     const std::string au = encoder.encode(frames[k % frames.size()], key);
     bytes += au.size();
     if (key) key_bytes += au.size(), ++keys;
@@ -182,21 +199,220 @@ void BM_EncodeRendered(benchmark::State& state) {
       static_cast<double>(bytes - key_bytes) / static_cast<double>(std::max<size_t>(1, k - keys));
   state.counters["Mbit_per_s_at_30fps"] = 30.0 * 8e-6 * static_cast<double>(bytes) / static_cast<double>(std::max<size_t>(1, k));
 }
+
+// libx264 as the simulated Tello runs it on the rendered approach; CPU time per frame.
+void BM_EncodeRendered(benchmark::State& state) {
+  const auto encoder = tello_encoder(static_cast<int>(state.range(0)), verification::H264Encoder::Backend::Libx264);
+  encode_rendered(state, *encoder);
+}
 BENCHMARK(BM_EncodeRendered)->ArgName("slices")->Arg(1)->Arg(45)->MeasureProcessCPUTime()->Unit(benchmark::kMillisecond)
     ->Iterations(360);
+
+// The NVENC encoder, or the reason it cannot be opened (the benchmark is then skipped).
+std::unique_ptr<verification::H264Encoder> nvenc_or_skip(benchmark::State& state, int slices) {
+  try {
+    return tello_encoder(slices, verification::H264Encoder::Backend::Nvenc);
+  } catch (const std::runtime_error& e) {
+    state.SkipWithError(("no NVENC: " + std::string(e.what())).c_str());
+    return nullptr;
+  }
+}
+
+// The same with NVENC: the time reported is wall time per frame (the encoder works on the GPU,
+// the CPU waits), the CPU column the process's CPU time per frame (colour conversion, upload,
+// driver).
+void BM_EncodeRenderedNvenc(benchmark::State& state) {
+  const auto encoder = nvenc_or_skip(state, static_cast<int>(state.range(0)));
+  if (encoder) encode_rendered(state, *encoder);
+}
+BENCHMARK(BM_EncodeRenderedNvenc)->ArgName("slices")->Arg(1)->Arg(45)->MeasureProcessCPUTime()->UseRealTime()
+    ->Unit(benchmark::kMillisecond)->Iterations(360);
 
 // tello_pilot's decoder and its conversion to BGR on the same stream (45 slices).
 void BM_DecodeRendered(benchmark::State& state) {
   static const std::vector<std::string> stream = [] {
-    verification::H264Encoder encoder(kWidth, kHeight, 30, 120, verification::H264Encoder::kTelloQp, 45);
+    const auto encoder = tello_encoder(45, verification::H264Encoder::Backend::Libx264);
     std::vector<std::string> out;
     size_t k = 0;
-    for (const cv::Mat& f : rendered_approach()) out.push_back(encoder.encode(f, k++ % 30 == 0));
+    for (const cv::Mat& f : rendered_approach()) out.push_back(encoder->encode(f, forced_key(k++)));
     return out;
   }();
   decode_and_convert(state, stream);
 }
 BENCHMARK(BM_DecodeRendered)->MeasureProcessCPUTime()->Unit(benchmark::kMillisecond)->Iterations(360);
+
+// What the flight software sees in one picture: its tag blobs (TagDetector, default
+// PerceptionParams, whole frame) and ArUco markers (MarkerDetector's reference pipeline, the
+// shelf's default dictionary), markers by id (the first of an id seen twice).
+struct Seen {
+  std::vector<flight_sw::TagBlob> blobs;
+  std::map<int, std::array<cv::Point2f, 4>> marker_corners_px;
+};
+
+struct FlightSoftwareEyes {
+  flight_sw::TagDetector tags{flight_sw::PerceptionParams{}};
+  flight_sw::MarkerDetector markers{flight_sw::KnownShelf{}.aruco_dictionary};
+  std::vector<flight_sw::MarkerSighting> sightings;
+
+  Seen look(const cv::Mat& bgr) {
+    Seen seen;
+    tags.detect(bgr, cv::Rect(0, 0, bgr.cols, bgr.rows), seen.blobs);
+    sightings.clear();  // detect appends
+    markers.detect(bgr, sightings);
+    for (const auto& m : sightings) seen.marker_corners_px.emplace(m.id, m.corners_px);
+    return seen;
+  }
+};
+
+// One backend's stream of the rendered approach, decoded by tello_pilot's decoder.
+struct DecodedStream {
+  std::vector<cv::Mat> pictures;
+  size_t bytes = 0;
+  int decode_errors = 0;     ///< access units that gave no picture or reported damage
+  int keys_without_sps = 0;  ///< forced key frames without in-band SPS
+};
+
+DecodedStream encode_and_decode(verification::H264Encoder& encoder, const std::vector<cv::Mat>& frames) {
+  H264Decoder decoder;
+  DecodedStream out;
+  for (size_t k = 0; k < frames.size(); ++k) {
+    const std::string au = encoder.encode(frames[k], forced_key(k));
+    out.bytes += au.size();
+    const std::vector<int> types = sdk::nal_unit_types(au);
+    if (forced_key(k) && std::find(types.begin(), types.end(), 7) == types.end()) ++out.keys_without_sps;
+    const DecodeResult r = decoder.decode(au);
+    if (r.error || r.pictures != 1) ++out.decode_errors;
+    cv::Mat bgr;
+    if (!decoder.latest_bgr(bgr)) bgr = cv::Mat::zeros(frames[k].size(), CV_8UC3);  // counted above
+    out.pictures.push_back(bgr);
+  }
+  return out;
+}
+
+// Index of the blob of `blobs` nearest to `p_px` (-1 if none) and its distance (px).
+std::pair<int, double> nearest_blob(const std::vector<flight_sw::TagBlob>& blobs, cv::Point2d p_px) {
+  std::pair<int, double> best{-1, std::numeric_limits<double>::infinity()};
+  for (size_t i = 0; i < blobs.size(); ++i) {
+    const double d_px = cv::norm(blobs[i].centre_px - p_px);
+    if (d_px < best.second) best = {static_cast<int>(i), d_px};
+  }
+  return best;
+}
+
+// How far `b` is from `a`, frame by frame, in what the flight software sees. Blobs are matched
+// as mutual nearest neighbours (each the other's nearest centroid), so a blob seen on one side
+// only is counted unmatched rather than measured against an unrelated blob; markers by id.
+struct Agreement {
+  double blob_max_px = 0.0;    ///< largest centroid distance of a matched pair
+  double corner_max_px = 0.0;  ///< largest corner distance between markers of one id
+  int blobs_unmatched = 0;     ///< blobs of either side in no pair
+  int blob_count_frames = 0;   ///< frames where the blob counts differ
+  int id_frames = 0;           ///< frames where the sets of marker ids differ
+};
+
+Agreement compare(const std::vector<Seen>& a, const std::vector<Seen>& b) {
+  Agreement g;
+  for (size_t k = 0; k < a.size(); ++k) {
+    const auto& blobs_a = a[k].blobs;
+    const auto& blobs_b = b[k].blobs;
+    if (blobs_a.size() != blobs_b.size()) ++g.blob_count_frames;
+    int pairs = 0;
+    for (size_t j = 0; j < blobs_b.size(); ++j) {
+      const auto [i, d_px] = nearest_blob(blobs_a, blobs_b[j].centre_px);
+      if (i < 0 || nearest_blob(blobs_b, blobs_a[static_cast<size_t>(i)].centre_px).first != static_cast<int>(j)) continue;
+      ++pairs;
+      g.blob_max_px = std::max(g.blob_max_px, d_px);
+    }
+    g.blobs_unmatched += static_cast<int>(blobs_a.size() + blobs_b.size()) - 2 * pairs;
+    bool same_ids = a[k].marker_corners_px.size() == b[k].marker_corners_px.size();
+    for (const auto& [id, corners] : b[k].marker_corners_px) {
+      const auto it = a[k].marker_corners_px.find(id);
+      if (it == a[k].marker_corners_px.end()) {
+        same_ids = false;
+        continue;
+      }
+      for (size_t c = 0; c < 4; ++c) {
+        g.corner_max_px = std::max(g.corner_max_px, static_cast<double>(cv::norm(corners[c] - it->second[c])));
+      }
+    }
+    if (!same_ids) ++g.id_frames;
+  }
+  return g;
+}
+
+void report(benchmark::State& state, const std::string& pair, const Agreement& g) {
+  state.counters[pair + "_blob_max_px"] = g.blob_max_px;
+  state.counters[pair + "_blobs_unmatched"] = g.blobs_unmatched;
+  state.counters[pair + "_blob_count_frames"] = g.blob_count_frames;
+  state.counters[pair + "_corner_max_px"] = g.corner_max_px;
+  state.counters[pair + "_id_frames"] = g.id_frames;
+}
+
+// How much the flight software saw over the frames: blobs, and marker ids.
+void report(benchmark::State& state, const std::string& name, const std::vector<Seen>& seen) {
+  size_t blobs = 0, markers = 0;
+  for (const Seen& f : seen) blobs += f.blobs.size(), markers += f.marker_corners_px.size();
+  state.counters[name + "_blobs"] = static_cast<double>(blobs);
+  state.counters[name + "_marker_ids"] = static_cast<double>(markers);
+}
+
+// One backend's decodes against the source pictures (PSNR, dB) and what its stream cost.
+void report(benchmark::State& state, const std::string& name, const DecodedStream& s, const std::vector<cv::Mat>& source) {
+  double sum_db = 0.0, min_db = std::numeric_limits<double>::infinity();
+  for (size_t k = 0; k < source.size(); ++k) {
+    const double db = psnr_db(source[k], s.pictures[k]);
+    sum_db += db;
+    min_db = std::min(min_db, db);
+  }
+  state.counters[name + "_psnr_mean_db"] = sum_db / static_cast<double>(source.size());
+  state.counters[name + "_psnr_min_db"] = min_db;
+  state.counters[name + "_Mbit_per_s"] = 30.0 * 8e-6 * static_cast<double>(s.bytes) / static_cast<double>(source.size());
+  state.counters[name + "_decode_errors"] = s.decode_errors;
+  state.counters[name + "_keys_without_sps"] = s.keys_without_sps;
+}
+
+// The rendered approach (45 slices, a key frame every 30, as the emulator encodes it) through
+// both backends and tello_pilot's decoder: each decode against the source picture, the two
+// decodes against each other (mean and max absolute difference over all pixels and channels),
+// and what the flight software sees on each: x264_vs_source is the codec's own effect,
+// nvenc_vs_x264 what changing the backend would change. One iteration (the work is the
+// comparison, not its time).
+void BM_NvencFidelity(benchmark::State& state) {
+  const auto nvenc = nvenc_or_skip(state, 45);
+  if (!nvenc) return;
+  const std::vector<cv::Mat>& source = rendered_approach();
+  for (auto _ : state) {
+    const DecodedStream x264 = encode_and_decode(*tello_encoder(45, verification::H264Encoder::Backend::Libx264), source);
+    const DecodedStream hw = encode_and_decode(*nvenc, source);
+    FlightSoftwareEyes eyes;
+    std::vector<Seen> seen_source, seen_x264, seen_nvenc;
+    double diff_sum = 0.0, diff_max = 0.0, diff_count = 0.0;
+    for (size_t k = 0; k < source.size(); ++k) {
+      seen_source.push_back(eyes.look(source[k]));
+      seen_x264.push_back(eyes.look(x264.pictures[k]));
+      seen_nvenc.push_back(eyes.look(hw.pictures[k]));
+      cv::Mat diff;
+      cv::absdiff(x264.pictures[k], hw.pictures[k], diff);
+      const cv::Scalar channel_sums = cv::sum(diff);
+      diff_sum += channel_sums[0] + channel_sums[1] + channel_sums[2];
+      diff_count += static_cast<double>(diff.total() * 3);
+      double k_max = 0.0;
+      cv::minMaxLoc(diff.reshape(1), nullptr, &k_max);
+      diff_max = std::max(diff_max, k_max);
+    }
+    report(state, "x264", x264, source);
+    report(state, "nvenc", hw, source);
+    report(state, "source", seen_source);
+    report(state, "x264", seen_x264);
+    report(state, "nvenc", seen_nvenc);
+    state.counters["nvenc_vs_x264_absdiff_mean"] = diff_sum / diff_count;
+    state.counters["nvenc_vs_x264_absdiff_max"] = diff_max;
+    report(state, "x264_vs_source", compare(seen_source, seen_x264));
+    report(state, "nvenc_vs_source", compare(seen_source, seen_nvenc));
+    report(state, "nvenc_vs_x264", compare(seen_x264, seen_nvenc));
+  }
+}
+BENCHMARK(BM_NvencFidelity)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 }  // namespace
 }  // namespace shelfcross::tello
