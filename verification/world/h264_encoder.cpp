@@ -156,6 +156,7 @@ std::string H264Encoder::encode(const cv::Mat& bgr, bool force_key_frame) {
   // the last picture's packet is out FFmpeg holds no reference to the buffer and it may be
   // written again. (NVENC keeps the frame, and so the reference, when it has no free input
   // surface: this check catches that instead of overwriting a picture not yet encoded.)
+  if (av_buffer_get_ref_count(m.frame->buf[0]) != 1) throw std::logic_error("H264Encoder: the picture is still referenced");
   // BGR -> YUV 4:2:0 (ITU-R BT.601, studio range, as libswscale's default) with OpenCV's
   // vectorised conversion, straight into the frame's buffer: libswscale has no unscaled fast
   // path from BGR24, and its generic scaler cost about a third as much as the encoding itself.
