@@ -1,9 +1,10 @@
 #pragma once
-// The simulated Tello's video encoder: libx264 (or, for benchmarks, NVIDIA's hardware encoder)
-// through FFmpeg's libavcodec (Debian), making a Tello-like H.264 stream for the emulator, the co-simulation, and the tests and benchmarks of
-// the video receiver. The drone's side of the link: it lives in verification/ so that
-// `tello_pilot` never links it (the receiver's decoder is flight_sw/tello/h264_decoder.hpp;
-// the datagram framing both sides share is sdk/video_framing.hpp).
+// The simulated Tello's video encoder: libx264 (or, for benchmarks, NVIDIA's hardware
+// encoder) through FFmpeg's libavcodec (Debian), making a Tello-like H.264 stream for the
+// emulator, the co-simulation, and the tests and benchmarks of the video receiver. The
+// drone's side of the link: it lives in verification/ so that `tello_pilot` never links it
+// (the receiver's decoder is flight_sw/tello/h264_decoder.hpp; the datagram framing both
+// sides share is sdk/video_framing.hpp).
 
 #include <memory>
 #include <string>
