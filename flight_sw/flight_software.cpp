@@ -70,7 +70,7 @@ FlightSoftware::FlightSoftware(FlightConfig config)
 
 std::vector<SdkCommand> FlightSoftware::start(TimeNs t_ns) {
   std::vector<SdkCommand> out;
-  if (phase_ != Phase::Idle) return out;
+  if (facts_.phase.current() != Phase::Idle) return out;
   facts_.now_ns = t_ns;
   facts_.telemetry.t_ns = t_ns;
   result_.outcome = Outcome::Running;
@@ -81,7 +81,7 @@ std::vector<SdkCommand> FlightSoftware::start(TimeNs t_ns) {
 
 std::vector<SdkCommand> FlightSoftware::step(const Input& input) {
   out_.clear();
-  if (phase_ == Phase::Idle || phase_ == Phase::Done) {
+  if (facts_.phase.current() == Phase::Idle || facts_.phase.current() == Phase::Done) {
     if (const auto* r = std::get_if<SdkReply>(&input)) commands_.on_reply(*r);  // drained
     return out_;
   }
@@ -98,9 +98,9 @@ std::vector<SdkCommand> FlightSoftware::step(const Input& input) {
       },
       input);
   if (auto c = commands_.check_timeout(facts_.now_ns)) on_completion(*c);
-  if (phase_ != Phase::Done) supervise();
+  if (facts_.phase.current() != Phase::Done) supervise();
   commands_.poll(facts_.now_ns, out_);
-  facts_.telemetry.phase = phase_;
+  facts_.telemetry.phase = facts_.phase.current();
   facts_.telemetry.control.velocity = sticks_.velocity();
   facts_.telemetry.link.stale_replies = commands_.stale_replies();
   facts_.telemetry.link.video_stalled = video_.stalled();
@@ -118,15 +118,12 @@ void FlightSoftware::on_reply(const SdkReply& reply) {
 }
 
 void FlightSoftware::on_state(const StateRecord& s) {
-  facts_.odometry.on_state(s);
-  facts_.state = s;
-  facts_.telemetry.link.battery_pct = s.battery_pct;
-  facts_.telemetry.link.height_m = s.height_m;
-  approach_.on_state(s, phase_ == Phase::Approach);
-  if (phase_ == Phase::Transfer) transfer();
+  facts_.on_state(s);
+  approach_.on_state(s, facts_.phase.current() == Phase::Approach);
+  if (facts_.phase.current() == Phase::Transfer) transfer();
   // The crossing holds the cell centre's height by the state height (no picture shows the cell
   // in there): a drift or a sink the open-loop command would carry into a beam is turned back.
-  if (phase_ == Phase::Cross && crossing_.holding()) {
+  if (facts_.phase.current() == Phase::Cross && crossing_.holding()) {
     sticks_.set_vz(crossing_.vz_mps(s.height_m));
     // A drift the watch sees while the vehicle can still stop short of the front face stops
     // the crossing and backs it out (the approach counts it as a refusal of the gate).
@@ -142,17 +139,17 @@ void FlightSoftware::on_state(const StateRecord& s) {
 
 void FlightSoftware::on_frame(const CameraFrame& f) {
   const std::optional<Picture> taken =
-      video_.take(f, facts_, [this] { return decision_region_px(phase_, survey_, approach_.tracker()); });
+      video_.take(f, facts_, [this] { return decision_region_px(facts_.phase.current(), survey_, approach_.tracker()); });
   if (!taken) return;  // the wrong size or type: counted, ignored
   const Picture& pic = *taken;
   if (!pic.decides && pic.damage_events > config_->perception.steer_max_damage_events) {
     ++facts_.telemetry.link.unflown_frames;
-    if (vision_phase(phase_)) hold_or_hover();
-    if (phase_ == Phase::WaitVideo) command_takeoff_if_ready();
+    if (vision_phase(facts_.phase.current())) hold_or_hover();
+    if (facts_.phase.current() == Phase::WaitVideo) command_takeoff_if_ready();
     else emit_rc(false);
     return;
   }
-  switch (phase_) {
+  switch (facts_.phase.current()) {
     case Phase::WaitVideo:
       command_takeoff_if_ready();
       return;
@@ -228,16 +225,16 @@ void FlightSoftware::finish_landing(bool landed, const std::string& why) {
 
 bool FlightSoftware::land_given_up() const {
   // Refusals are waited out, not counted: the bound is the time a landing may take.
-  return ns_to_seconds(facts_.now_ns - phase_start_ns_) > config_->timeouts.land_reply_s;
+  return facts_.phase.elapsed_s(facts_.now_ns) > config_->timeouts.land_reply_s;
 }
 
 // ---- Timers: failsafes, phase timeouts, keep-alive ----
 
 void FlightSoftware::supervise() {
   const Timeouts& to = config_->timeouts;
-  const double in_phase_s = ns_to_seconds(facts_.now_ns - phase_start_ns_);
+  const double in_phase_s = facts_.phase.elapsed_s(facts_.now_ns);
   auto timed_out = [&](double limit_s) { return in_phase_s > limit_s; };
-  switch (phase_) {
+  switch (facts_.phase.current()) {
     case Phase::WaitVideo:
       if (timed_out(to.video_start_s)) abort_on_ground("no video after streamon");
       return;
@@ -262,7 +259,7 @@ void FlightSoftware::supervise() {
       // No fresh state record: no height to hold by; zero vertical stick (the autopilot holds
       // its own height reference) rather than a correction computed on an old height.
       if (!facts_.state_fresh()) sticks_.set_vz(0.0);
-      if (crossing_.flown(facts_.now_ns - phase_start_ns_, facts_)) {
+      if (crossing_.flown(facts_.phase.elapsed_ns(facts_.now_ns), facts_)) {
         if (!last_shelf()) {
           sticks_.hover();
           return next_shelf("crossed cell " + cell_text(*approach_.tracker().target()) + " of shelf " + std::to_string(shelf_) +
@@ -289,13 +286,13 @@ void FlightSoftware::supervise() {
     default:
       break;
   }
-  if (!airborne(phase_)) return;
+  if (!airborne(facts_.phase.current())) return;
   // Low battery: land now, except in the crossing (finish it, then land beyond the shelf).
-  if (phase_ != Phase::Cross && facts_.state && facts_.state->battery_pct < config_->mission.low_battery_pct) {
+  if (facts_.phase.current() != Phase::Cross && facts_.state && facts_.state->battery_pct < config_->mission.low_battery_pct) {
     return land(Outcome::Aborted, "low battery (" + std::to_string(facts_.state->battery_pct) + "%)");
   }
   // Video stall: the timers run on whatever input arrives (state records at 10 Hz).
-  if (vision_phase(phase_)) {
+  if (vision_phase(facts_.phase.current())) {
     const VideoStall stall = video_.stall(facts_);
     if (stall == VideoStall::Land) return land(Outcome::Aborted, "video lost");
     if (stall == VideoStall::Hover) {
@@ -312,11 +309,7 @@ void FlightSoftware::supervise() {
 // Every transition passes here: the table (mission_phases.cpp) says which are allowed; what
 // every phase's start clears, then the phase's own entry (the SDK command it asks for).
 void FlightSoftware::enter(Phase p, const std::string& event) {
-  if (!may_enter(phase_, p)) {
-    throw std::logic_error(std::string("mission: no transition from ") + phase_name(phase_) + " to " + phase_name(p));
-  }
-  phase_ = p;
-  phase_start_ns_ = facts_.now_ns;
+  facts_.phase.enter(p, facts_.now_ns);
   facts_.telemetry.phase = p;
   facts_.telemetry.event = event;
   survey_.restart_settling();
@@ -361,11 +354,11 @@ void FlightSoftware::abort_on_ground(const std::string& reason) {
 // corner tags are leaving the view: there only nearly whole pictures move the vehicle
 // (approach).
 void FlightSoftware::hold_or_hover() {
-  sticks_.hold_or_hover(facts_.now_ns, phase_ == Phase::Approach && approach_.tracker().corners().near_edge());
+  sticks_.hold_or_hover(facts_.now_ns, facts_.phase.current() == Phase::Approach && approach_.tracker().corners().near_edge());
 }
 
 void FlightSoftware::emit_rc(bool force) {
-  if (!airborne(phase_) || commands_.outstanding()) return;
+  if (!airborne(facts_.phase.current()) || commands_.outstanding()) return;
   if (const std::optional<RcSticks> rc = sticks_.due(facts_.now_ns, force)) {
     facts_.telemetry.control.rc = *rc;
     out_.push_back({facts_.now_ns, rc->text()});

@@ -160,8 +160,8 @@ class FlightSoftware {
   std::vector<SdkCommand> step(const Input& input);
 
   const Telemetry& telemetry() const { return facts_.telemetry; }
-  Phase phase() const { return phase_; }
-  bool finished() const { return phase_ == Phase::Done; }
+  Phase phase() const { return facts_.phase.current(); }
+  bool finished() const { return phase() == Phase::Done; }
   MissionResult result() const { return result_; }
   /// The inventory of the current shelf (the only one with a single-shelf layout).
   const Inventory& inventory() const { return survey_.inventory(); }
@@ -208,7 +208,7 @@ class FlightSoftware {
   void transfer();
 
   std::shared_ptr<const FlightConfig> config_;  ///< the one configuration every unit reads
-  MissionFacts facts_;        ///< now, the last state record, the odometry, the telemetry
+  MissionFacts facts_;        ///< now, the phase, the last state record, the odometry, the telemetry
   MissionCommands commands_;  ///< the non-rc commands, their retries and re-asks
   Sticks sticks_;  ///< the velocity flown, its PI loops and its rc datagrams
   VideoIntake video_;  ///< the pictures' worth, the damaged rows blanked, the video's stall
@@ -217,8 +217,6 @@ class FlightSoftware {
   TargetApproach approach_;  ///< the target, its approach, the crossing gate
   CellCrossing crossing_;    ///< the crossing's height hold, watch and end
 
-  Phase phase_ = Phase::Idle;
-  TimeNs phase_start_ns_ = 0;
   MissionResult result_;
   Outcome pending_outcome_ = Outcome::Aborted;  ///< the outcome a Land phase ends in
   int shelf_ = 0;
