@@ -10,23 +10,6 @@
 namespace shelfcross::flight_sw {
 
 namespace {
-// After a refused `land`: how long to watch the state height before asking again (the
-// tello_pilot's own landing asks every 0.5 s too).
-constexpr double kLandRefusedWait_s = 0.5;
-}  // namespace
-
-const char* outcome_name(Outcome o) {
-  switch (o) {
-    case Outcome::Running: return "running";
-    case Outcome::Crossed: return "crossed";
-    case Outcome::Completed: return "completed";
-    case Outcome::NoEmptyCell: return "no_empty_cell";
-    case Outcome::Aborted: return "aborted";
-  }
-  return "?";
-}
-
-namespace {
 
 FlightConfig validated(FlightConfig c) {
   validate_flight_config(c);
@@ -59,7 +42,7 @@ std::optional<cv::Rect2d> decision_region_px(Phase phase, const ShelfSurvey& sur
 
 FlightSoftware::FlightSoftware(FlightConfig config)
     : config_(std::make_shared<const FlightConfig>(validated(std::move(config)))),
-      commands_(config_->timeouts),
+      commands_(*config_),
       sticks_(*config_),
       video_(*config_),
       survey_(*config_),
@@ -73,7 +56,6 @@ std::vector<SdkCommand> FlightSoftware::start(TimeNs t_ns) {
   if (facts_.phase.current() != Phase::Idle) return out;
   facts_.now_ns = t_ns;
   facts_.telemetry.t_ns = t_ns;
-  result_.outcome = Outcome::Running;
   enter(Phase::EnterSdk, "entering SDK mode");
   commands_.poll(facts_.now_ns, out);
   return out;
@@ -82,7 +64,7 @@ std::vector<SdkCommand> FlightSoftware::start(TimeNs t_ns) {
 std::vector<SdkCommand> FlightSoftware::step(const Input& input) {
   out_.clear();
   if (facts_.phase.current() == Phase::Idle || facts_.phase.current() == Phase::Done) {
-    if (const auto* r = std::get_if<SdkReply>(&input)) commands_.on_reply(*r);  // drained
+    if (const auto* r = std::get_if<SdkReply>(&input)) commands_.drain(*r);
     return out_;
   }
   const TimeNs t = std::visit([](const auto& m) { return m.t_ns; }, input);
@@ -97,7 +79,7 @@ std::vector<SdkCommand> FlightSoftware::step(const Input& input) {
         // ClockTick: only the timers below.
       },
       input);
-  if (auto c = commands_.check_timeout(facts_.now_ns)) on_completion(*c);
+  commands_.check_timeout(facts_, *this);
   if (facts_.phase.current() != Phase::Done) supervise();
   commands_.poll(facts_.now_ns, out_);
   facts_.telemetry.phase = facts_.phase.current();
@@ -114,7 +96,7 @@ std::vector<SdkCommand> FlightSoftware::step(const Input& input) {
 }
 
 void FlightSoftware::on_reply(const SdkReply& reply) {
-  if (auto c = commands_.on_reply(reply)) on_completion(*c);
+  commands_.on_reply(reply, facts_, *this);
 }
 
 void FlightSoftware::on_state(const StateRecord& s) {
@@ -145,13 +127,13 @@ void FlightSoftware::on_frame(const CameraFrame& f) {
   if (!pic.decides && pic.damage_events > config_->perception.steer_max_damage_events) {
     ++facts_.telemetry.link.unflown_frames;
     if (vision_phase(facts_.phase.current())) hold_or_hover();
-    if (facts_.phase.current() == Phase::WaitVideo) command_takeoff_if_ready();
+    if (facts_.phase.current() == Phase::WaitVideo) commands_.take_off_if_ready(facts_, *this);
     else emit_rc(false);
     return;
   }
   switch (facts_.phase.current()) {
     case Phase::WaitVideo:
-      command_takeoff_if_ready();
+      commands_.take_off_if_ready(facts_, *this);
       return;
     case Phase::FindShelf: find_shelf(pic); break;
     case Phase::GoToViewpoint: go_to_viewpoint(pic, false); break;
@@ -163,81 +145,15 @@ void FlightSoftware::on_frame(const CameraFrame& f) {
   emit_rc(false);
 }
 
-// ---- SDK command results ----
-
-void FlightSoftware::on_completion(const MissionCommands::Completion& c) {
-  // Asked again while retries remain (MissionCommands::retry), the event saying why.
-  auto retried = [&](double timeout_s) {
-    if (!commands_.retry(c.command, timeout_s)) return false;
-    facts_.telemetry.event = "'" + c.command + "' " + (c.timed_out ? "timed out" : "refused: " + c.reply) +
-                       ", retry " + std::to_string(commands_.attempts());
-    return true;
-  };
-  if (c.command == "command" || c.command == "streamon") {
-    if (c.ok) {
-      if (c.command == "command") {
-        enter(Phase::StartVideo, "SDK mode; starting video");
-      } else {
-        enter(Phase::WaitVideo, "video on; waiting for the first frame");
-      }
-    } else if (!retried(config_->timeouts.command_reply_s)) {
-      abort_on_ground("'" + c.command + "' failed: " + (c.timed_out ? "no reply" : c.reply));
-    }
-  } else if (c.command == "takeoff") {
-    const bool airborne_anyway = c.timed_out && facts_.state &&
-                                 facts_.state->height_m > config_->mission.airborne_height_m;
-    if (c.ok || airborne_anyway) {
-      video_.airborne_from(facts_.now_ns);
-      enter(Phase::FindShelf, c.ok ? "airborne" : "airborne (takeoff reply lost)");
-    } else if (!retried(config_->timeouts.takeoff_reply_s)) {
-      abort_on_ground("takeoff failed: " + (c.timed_out ? std::string("no reply") : c.reply));
-    }
-  } else if (c.command == "land") {
-    // The `ok` comes once the drone is down; if it was lost, a repeated `land` finds the drone
-    // on the ground and gets `error`. The state height settles it, as for a takeoff whose reply
-    // was lost: at or below airborne_height_m the drone is down. (A stale state record shows
-    // the last height in flight, so it can only keep the flight software trying.)
-    const bool down_anyway = !c.ok && facts_.state && facts_.state->height_m <= config_->mission.airborne_height_m;
-    if (c.ok || down_anyway) {
-      finish_landing(true, c.ok ? "landed" : "landed (no `ok`: the state height says on the ground)");
-    } else if (!c.timed_out && !land_given_up()) {
-      // Refused in the air: the Tello refuses `land` while it is already landing (a duplicated
-      // datagram started the landing, and its `error` was taken for this `land`'s reply) and,
-      // now and then, with `error Not joystick`. Retrying at once would spend the retries in a
-      // fraction of a second and give up on a drone that is coming down; instead wait
-      // kLandRefusedWait_s watching the state height (supervise), then ask again, for up to
-      // land_reply_s, the longest a landing may take.
-      commands_.ask_again_at("land", config_->timeouts.land_reply_s, facts_.now_ns + seconds_to_ns(kLandRefusedWait_s));
-      facts_.telemetry.event = "'land' refused in the air (" + c.reply + "): waiting for the state height";
-    } else if (!(c.timed_out && retried(config_->timeouts.land_reply_s))) {
-      result_.reason += "; land not acknowledged";
-      finish_landing(false, "land not acknowledged");
-    }
-  }
-}
-
-void FlightSoftware::finish_landing(bool landed, const std::string& why) {
-  result_.outcome = pending_outcome_;
-  result_.landed = landed;
-  commands_.cancel_wait();
-  enter(Phase::Done, why);
-}
-
-bool FlightSoftware::land_given_up() const {
-  // Refusals are waited out, not counted: the bound is the time a landing may take.
-  return facts_.phase.elapsed_s(facts_.now_ns) > config_->timeouts.land_reply_s;
-}
-
 // ---- Timers: failsafes, phase timeouts, keep-alive ----
 
 void FlightSoftware::supervise() {
+  // WaitVideo's and Land's timers; the other ground phases have none but their commands'.
+  if (!airborne(facts_.phase.current())) return commands_.supervise(facts_, *this);
   const Timeouts& to = config_->timeouts;
   const double in_phase_s = facts_.phase.elapsed_s(facts_.now_ns);
   auto timed_out = [&](double limit_s) { return in_phase_s > limit_s; };
   switch (facts_.phase.current()) {
-    case Phase::WaitVideo:
-      if (timed_out(to.video_start_s)) abort_on_ground("no video after streamon");
-      return;
     case Phase::FindShelf:
       if (timed_out(to.find_shelf_s)) return land(Outcome::Aborted, "shelf not found");
       break;
@@ -274,15 +190,6 @@ void FlightSoftware::supervise() {
         return land(Outcome::Aborted, "transfer waypoint not reached");
       }
       break;
-    case Phase::Land:
-      // After a refused `land` (on_completion): down by a fresh state record (low and
-      // vertically still: a landing drone passes airborne_height_m still descending), or ask
-      // again when the wait is over (MissionCommands::poll).
-      if (commands_.waiting() && facts_.state_fresh() && facts_.state->height_m <= config_->mission.airborne_height_m &&
-          std::abs(facts_.state->vz_H_mps) <= kVerticallyStill_mps) {
-        return finish_landing(true, "landed (`land` refused while landing; the state height says on the ground)");
-      }
-      return;
     default:
       break;
   }
@@ -309,6 +216,7 @@ void FlightSoftware::supervise() {
 // Every transition passes here: the table (mission_phases.cpp) says which are allowed; what
 // every phase's start clears, then the phase's own entry (the SDK command it asks for).
 void FlightSoftware::enter(Phase p, const std::string& event) {
+  const Phase from = facts_.phase.current();
   facts_.phase.enter(p, facts_.now_ns);
   facts_.telemetry.phase = p;
   facts_.telemetry.event = event;
@@ -320,17 +228,12 @@ void FlightSoftware::enter(Phase p, const std::string& event) {
     case Phase::EnterSdk: return commands_.ask("command", to.command_reply_s);
     case Phase::StartVideo: return commands_.ask("streamon", to.command_reply_s);
     case Phase::TakeOff: return commands_.ask("takeoff", to.takeoff_reply_s);
+    // Airborne: frames are needed from now on (the video's stall timer runs from here).
+    case Phase::FindShelf:
+      if (from == Phase::TakeOff) video_.airborne_from(facts_.now_ns);
+      return;
     case Phase::Land: return commands_.ask("land", to.land_reply_s);
     default: return;
-  }
-}
-
-// The first frame proves the video: take off unless the battery is too low.
-void FlightSoftware::command_takeoff_if_ready() {
-  if (facts_.state && facts_.state->battery_pct < config_->mission.takeoff_min_battery_pct) {
-    abort_on_ground("battery " + std::to_string(facts_.state->battery_pct) + "% below the take-off minimum");
-  } else {
-    enter(Phase::TakeOff, "taking off");
   }
 }
 
@@ -339,14 +242,8 @@ void FlightSoftware::land(Outcome outcome, const std::string& reason) {
   // is lost the Tello would keep the last sticks (the crossing speed, say) until the retry.
   sticks_.hover();
   emit_rc(true);
-  pending_outcome_ = outcome;
-  result_.reason = reason;
+  commands_.landing(outcome, reason);
   enter(Phase::Land, "landing: " + reason);
-}
-
-void FlightSoftware::abort_on_ground(const std::string& reason) {
-  result_ = {Outcome::Aborted, reason, false};
-  enter(Phase::Done, "gave up on the ground: " + reason);
 }
 
 // A picture that cannot steer (too damaged to fly on, or the target not found in a damaged

@@ -104,15 +104,16 @@
 #include <opencv2/core.hpp>
 
 #include "flight_sw/cell_crossing.hpp"
+#include "flight_sw/command_phases.hpp"
 #include "flight_sw/config.hpp"
 #include "flight_sw/control.hpp"
 #include "flight_sw/guidance.hpp"
 #include "flight_sw/inventory.hpp"
+#include "flight_sw/mission.hpp"
 #include "flight_sw/mission_facts.hpp"
 #include "flight_sw/mission_phases.hpp"
 #include "flight_sw/navigation.hpp"
 #include "flight_sw/perception.hpp"
-#include "flight_sw/mission_commands.hpp"
 #include "flight_sw/shelf_survey.hpp"
 #include "flight_sw/sticks.hpp"
 #include "flight_sw/target_approach.hpp"
@@ -134,22 +135,8 @@ struct ClockTick {
 
 using Input = std::variant<CameraFrame, StateRecord, SdkReply, ClockTick>;
 
-enum class Outcome {
-  Running,
-  Crossed,      ///< inventory taken, an empty cell crossed, landed beyond the shelf (every shelf)
-  Completed,    ///< over_tops / around_ends: every shelf inventoried and passed, landed beyond
-  NoEmptyCell,  ///< inventory taken, no crossable empty cell: landed in front of the shelf
-  Aborted       ///< gave up (reason says why); landed if it had taken off
-};
-const char* outcome_name(Outcome outcome);
-
-struct MissionResult {
-  Outcome outcome = Outcome::Running;
-  std::string reason;   ///< why it ended ("crossed cell L2 C3", "video lost", ...)
-  bool landed = false;  ///< a land command was acknowledged (false if it never took off)
-};
-
-class FlightSoftware {
+/// The mission (mission.hpp): the phases' units take their transitions through it.
+class FlightSoftware final : private Mission {
  public:
   /// Throws std::invalid_argument for an invalid configuration (validate_flight_config).
   explicit FlightSoftware(FlightConfig config);
@@ -162,7 +149,7 @@ class FlightSoftware {
   const Telemetry& telemetry() const { return facts_.telemetry; }
   Phase phase() const { return facts_.phase.current(); }
   bool finished() const { return phase() == Phase::Done; }
-  MissionResult result() const { return result_; }
+  MissionResult result() const { return commands_.result(); }
   /// The inventory of the current shelf (the only one with a single-shelf layout).
   const Inventory& inventory() const { return survey_.inventory(); }
   /// Inventories of the shelves finished before the current one.
@@ -175,11 +162,14 @@ class FlightSoftware {
   const FlightConfig& config() const { return *config_; }
 
  private:
+  // Transitions (Mission): the one place a phase is entered
+  void enter(Phase phase, const std::string& event) override;
+  void land(Outcome outcome, const std::string& reason) override;
+  void emit_rc(bool force) override;
   // Input handlers
   void on_reply(const SdkReply& reply);
   void on_state(const StateRecord& state);
   void on_frame(const CameraFrame& frame);
-  void on_completion(const MissionCommands::Completion& c);
   void supervise();
   // Phase behaviours on a frame
   void fly(const SurveyStep& step);
@@ -191,16 +181,7 @@ class FlightSoftware {
   void go_to_viewpoint(const Picture& pic, bool view_fresh);
   void take_inventory(const Picture& pic);
   // Actions
-  void enter(Phase phase, const std::string& event);
-  void command_takeoff_if_ready();
-  void land(Outcome outcome, const std::string& reason);
-  /// Ends the Land phase (Done) with the pending outcome; `landed` false: not acknowledged.
-  void finish_landing(bool landed, const std::string& why);
-  /// The Land phase has lasted longer than a landing may take (timeouts.land_reply_s).
-  bool land_given_up() const;
-  void abort_on_ground(const std::string& reason);
   void hold_or_hover();
-  void emit_rc(bool force);
   // Several shelves and the conventional strategies
   bool last_shelf() const { return shelf_ + 1 >= config_->layout.shelf_count; }
   void next_shelf(const std::string& event);
@@ -209,7 +190,7 @@ class FlightSoftware {
 
   std::shared_ptr<const FlightConfig> config_;  ///< the one configuration every unit reads
   MissionFacts facts_;        ///< now, the phase, the last state record, the odometry, the telemetry
-  MissionCommands commands_;  ///< the non-rc commands, their retries and re-asks
+  CommandPhases commands_;  ///< the non-rc commands, what their replies mean, the result
   Sticks sticks_;  ///< the velocity flown, its PI loops and its rc datagrams
   VideoIntake video_;  ///< the pictures' worth, the damaged rows blanked, the video's stall
   ShelfSurvey survey_;  ///< FindShelf, GoToViewpoint, TakeInventory; the inventories
@@ -217,8 +198,6 @@ class FlightSoftware {
   TargetApproach approach_;  ///< the target, its approach, the crossing gate
   CellCrossing crossing_;    ///< the crossing's height hold, watch and end
 
-  MissionResult result_;
-  Outcome pending_outcome_ = Outcome::Aborted;  ///< the outcome a Land phase ends in
   int shelf_ = 0;
   std::vector<SdkCommand> out_;  ///< the commands of the input being handled
 };
