@@ -1,7 +1,8 @@
 #pragma once
 // The flight software's one entry point, used unchanged by the co-simulation and by
 // tello_pilot: stamped camera frames, state records and SDK replies in, SDK commands out.
-// This is the mission; guidance.hpp, target_tracker.hpp, odometry.hpp (README "Files") the rest.
+// This is the mission (its phases' work: command_phases.hpp, airborne_phases.hpp); guidance.hpp,
+// target_tracker.hpp, odometry.hpp (README "Files") the rest.
 //   FlightSoftware fsw(load_flight_config("shelf.yaml"));
 //   send(fsw.start(t0));                 // "command"; then "streamon", "takeoff" after "ok"s
 //   for (each input in stamp order) send(fsw.step(input));
@@ -96,29 +97,19 @@
 // sent as d = -yaw_rate * rc_per_radps_yaw, the SDK's d being clockwise).
 
 #include <memory>
-#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
 
-#include <opencv2/core.hpp>
-
-#include "flight_sw/cell_crossing.hpp"
+#include "flight_sw/airborne_phases.hpp"
 #include "flight_sw/command_phases.hpp"
 #include "flight_sw/config.hpp"
-#include "flight_sw/control.hpp"
-#include "flight_sw/guidance.hpp"
 #include "flight_sw/inventory.hpp"
 #include "flight_sw/mission.hpp"
 #include "flight_sw/mission_facts.hpp"
 #include "flight_sw/mission_phases.hpp"
-#include "flight_sw/navigation.hpp"
-#include "flight_sw/perception.hpp"
-#include "flight_sw/shelf_survey.hpp"
 #include "flight_sw/sticks.hpp"
-#include "flight_sw/target_approach.hpp"
 #include "flight_sw/telemetry.hpp"
-#include "flight_sw/transfer_flight.hpp"
 #include "flight_sw/video_intake.hpp"
 #include "shelfcross/camera.hpp"
 #include "shelfcross/sdk_messages.hpp"
@@ -151,54 +142,31 @@ class FlightSoftware final : private Mission {
   bool finished() const { return phase() == Phase::Done; }
   MissionResult result() const { return commands_.result(); }
   /// The inventory of the current shelf (the only one with a single-shelf layout).
-  const Inventory& inventory() const { return survey_.inventory(); }
+  const Inventory& inventory() const { return shelves_.survey().inventory(); }
   /// Inventories of the shelves finished before the current one.
-  const std::vector<Inventory>& finished_inventories() const { return survey_.finished(); }
+  const std::vector<Inventory>& finished_inventories() const { return shelves_.survey().finished(); }
   /// Every decided box of every shelf so far, labelled with its shelf index.
   std::vector<BoxEntry> all_boxes() const;
   /// One shelf: Inventory::to_json. Several: {"shelves":[<Inventory::to_json>, ...]}.
   std::string inventory_json() const;
-  int shelf_index() const { return shelf_; }
+  int shelf_index() const { return shelves_.shelf(); }
   const FlightConfig& config() const { return *config_; }
 
  private:
-  // Transitions (Mission): the one place a phase is entered
+  // The transitions (Mission): every phase entered in one place, `enter`
   void enter(Phase phase, const std::string& event) override;
   void land(Outcome outcome, const std::string& reason) override;
   void emit_rc(bool force) override;
-  // Input handlers
-  void on_reply(const SdkReply& reply);
-  void on_state(const StateRecord& state);
+  // Pictures and timers (replies and state records: `step` hands them to the units)
   void on_frame(const CameraFrame& frame);
   void supervise();
-  // Phase behaviours on a frame
-  void fly(const SurveyStep& step);
-  /// Flies an approach step and takes the transition it asks for (target_approach.hpp).
-  void follow(const ApproachStep& step);
-  /// What an approach step works with (target_approach.hpp).
-  ApproachTools approach_tools() { return {facts_, sticks_, survey_}; }
-  void find_shelf(const Picture& pic);
-  void go_to_viewpoint(const Picture& pic, bool view_fresh);
-  void take_inventory(const Picture& pic);
-  // Actions
-  void hold_or_hover();
-  // Several shelves and the conventional strategies
-  bool last_shelf() const { return shelf_ + 1 >= config_->layout.shelf_count; }
-  void next_shelf(const std::string& event);
-  void start_transfer();
-  void transfer();
 
   std::shared_ptr<const FlightConfig> config_;  ///< the one configuration every unit reads
-  MissionFacts facts_;        ///< now, the phase, the last state record, the odometry, the telemetry
-  CommandPhases commands_;  ///< the non-rc commands, what their replies mean, the result
-  Sticks sticks_;  ///< the velocity flown, its PI loops and its rc datagrams
-  VideoIntake video_;  ///< the pictures' worth, the damaged rows blanked, the video's stall
-  ShelfSurvey survey_;  ///< FindShelf, GoToViewpoint, TakeInventory; the inventories
-  TransferFlight transfer_;  ///< the conventional strategies' waypoints
-  TargetApproach approach_;  ///< the target, its approach, the crossing gate
-  CellCrossing crossing_;    ///< the crossing's height hold, watch and end
-
-  int shelf_ = 0;
+  MissionFacts facts_;       ///< now, the phase, the last state record, the odometry, the telemetry
+  CommandPhases commands_;   ///< the non-rc commands, what their replies mean, the result
+  Sticks sticks_;            ///< the velocity flown, its PI loops and its rc datagrams
+  VideoIntake video_;        ///< the pictures' worth, the damaged rows blanked, the video's stall
+  AirbornePhases shelves_;   ///< the airborne phases across the shelves, their units
   std::vector<SdkCommand> out_;  ///< the commands of the input being handled
 };
 
