@@ -1,7 +1,8 @@
 #pragma once
 // The flight software's one entry point, used unchanged by the co-simulation and by
 // tello_pilot: stamped camera frames, state records and SDK replies in, SDK commands out.
-// This is the mission; guidance.hpp, target_tracker.hpp, odometry.hpp (README "Files") the rest.
+// This is the mission (its phases' work: command_phases.hpp, airborne_phases.hpp); guidance.hpp,
+// target_tracker.hpp, odometry.hpp (README "Files") the rest.
 //   FlightSoftware fsw(load_flight_config("shelf.yaml"));
 //   send(fsw.start(t0));                 // "command"; then "streamon", "takeoff" after "ok"s
 //   for (each input in stamp order) send(fsw.step(input));
@@ -96,28 +97,19 @@
 // sent as d = -yaw_rate * rc_per_radps_yaw, the SDK's d being clockwise).
 
 #include <memory>
-#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
 
-#include <opencv2/core.hpp>
-
-#include "flight_sw/cell_crossing.hpp"
+#include "flight_sw/airborne_phases.hpp"
+#include "flight_sw/command_phases.hpp"
 #include "flight_sw/config.hpp"
-#include "flight_sw/control.hpp"
-#include "flight_sw/guidance.hpp"
 #include "flight_sw/inventory.hpp"
+#include "flight_sw/mission.hpp"
 #include "flight_sw/mission_facts.hpp"
 #include "flight_sw/mission_phases.hpp"
-#include "flight_sw/navigation.hpp"
-#include "flight_sw/perception.hpp"
-#include "flight_sw/mission_commands.hpp"
-#include "flight_sw/shelf_survey.hpp"
 #include "flight_sw/sticks.hpp"
-#include "flight_sw/target_approach.hpp"
 #include "flight_sw/telemetry.hpp"
-#include "flight_sw/transfer_flight.hpp"
 #include "flight_sw/video_intake.hpp"
 #include "shelfcross/camera.hpp"
 #include "shelfcross/sdk_messages.hpp"
@@ -134,22 +126,8 @@ struct ClockTick {
 
 using Input = std::variant<CameraFrame, StateRecord, SdkReply, ClockTick>;
 
-enum class Outcome {
-  Running,
-  Crossed,      ///< inventory taken, an empty cell crossed, landed beyond the shelf (every shelf)
-  Completed,    ///< over_tops / around_ends: every shelf inventoried and passed, landed beyond
-  NoEmptyCell,  ///< inventory taken, no crossable empty cell: landed in front of the shelf
-  Aborted       ///< gave up (reason says why); landed if it had taken off
-};
-const char* outcome_name(Outcome outcome);
-
-struct MissionResult {
-  Outcome outcome = Outcome::Running;
-  std::string reason;   ///< why it ended ("crossed cell L2 C3", "video lost", ...)
-  bool landed = false;  ///< a land command was acknowledged (false if it never took off)
-};
-
-class FlightSoftware {
+/// The mission (mission.hpp): the phases' units take their transitions through it.
+class FlightSoftware final : private Mission {
  public:
   /// Throws std::invalid_argument for an invalid configuration (validate_flight_config).
   explicit FlightSoftware(FlightConfig config);
@@ -160,68 +138,35 @@ class FlightSoftware {
   std::vector<SdkCommand> step(const Input& input);
 
   const Telemetry& telemetry() const { return facts_.telemetry; }
-  Phase phase() const { return phase_; }
-  bool finished() const { return phase_ == Phase::Done; }
-  MissionResult result() const { return result_; }
+  Phase phase() const { return facts_.phase.current(); }
+  bool finished() const { return phase() == Phase::Done; }
+  MissionResult result() const { return commands_.result(); }
   /// The inventory of the current shelf (the only one with a single-shelf layout).
-  const Inventory& inventory() const { return survey_.inventory(); }
+  const Inventory& inventory() const { return shelves_.survey().inventory(); }
   /// Inventories of the shelves finished before the current one.
-  const std::vector<Inventory>& finished_inventories() const { return survey_.finished(); }
+  const std::vector<Inventory>& finished_inventories() const { return shelves_.survey().finished(); }
   /// Every decided box of every shelf so far, labelled with its shelf index.
   std::vector<BoxEntry> all_boxes() const;
   /// One shelf: Inventory::to_json. Several: {"shelves":[<Inventory::to_json>, ...]}.
   std::string inventory_json() const;
-  int shelf_index() const { return shelf_; }
+  int shelf_index() const { return shelves_.shelf(); }
   const FlightConfig& config() const { return *config_; }
 
  private:
-  // Input handlers
-  void on_reply(const SdkReply& reply);
-  void on_state(const StateRecord& state);
+  // The transitions (Mission): every phase entered in one place, `enter`
+  void enter(Phase phase, const std::string& event) override;
+  void land(Outcome outcome, const std::string& reason) override;
+  void emit_rc(bool force) override;
+  // Pictures and timers (replies and state records: `step` hands them to the units)
   void on_frame(const CameraFrame& frame);
-  void on_completion(const MissionCommands::Completion& c);
   void supervise();
-  // Phase behaviours on a frame
-  void fly(const SurveyStep& step);
-  /// Flies an approach step and takes the transition it asks for (target_approach.hpp).
-  void follow(const ApproachStep& step);
-  /// What an approach step works with (target_approach.hpp).
-  ApproachTools approach_tools() { return {facts_, sticks_, survey_}; }
-  void find_shelf(const Picture& pic);
-  void go_to_viewpoint(const Picture& pic, bool view_fresh);
-  void take_inventory(const Picture& pic);
-  // Actions
-  void enter(Phase phase, const std::string& event);
-  void command_takeoff_if_ready();
-  void land(Outcome outcome, const std::string& reason);
-  /// Ends the Land phase (Done) with the pending outcome; `landed` false: not acknowledged.
-  void finish_landing(bool landed, const std::string& why);
-  /// The Land phase has lasted longer than a landing may take (timeouts.land_reply_s).
-  bool land_given_up() const;
-  void abort_on_ground(const std::string& reason);
-  void hold_or_hover();
-  void emit_rc(bool force);
-  // Several shelves and the conventional strategies
-  bool last_shelf() const { return shelf_ + 1 >= config_->layout.shelf_count; }
-  void next_shelf(const std::string& event);
-  void start_transfer();
-  void transfer();
 
   std::shared_ptr<const FlightConfig> config_;  ///< the one configuration every unit reads
-  MissionFacts facts_;        ///< now, the last state record, the odometry, the telemetry
-  MissionCommands commands_;  ///< the non-rc commands, their retries and re-asks
-  Sticks sticks_;  ///< the velocity flown, its PI loops and its rc datagrams
-  VideoIntake video_;  ///< the pictures' worth, the damaged rows blanked, the video's stall
-  ShelfSurvey survey_;  ///< FindShelf, GoToViewpoint, TakeInventory; the inventories
-  TransferFlight transfer_;  ///< the conventional strategies' waypoints
-  TargetApproach approach_;  ///< the target, its approach, the crossing gate
-  CellCrossing crossing_;    ///< the crossing's height hold, watch and end
-
-  Phase phase_ = Phase::Idle;
-  TimeNs phase_start_ns_ = 0;
-  MissionResult result_;
-  Outcome pending_outcome_ = Outcome::Aborted;  ///< the outcome a Land phase ends in
-  int shelf_ = 0;
+  MissionFacts facts_;       ///< now, the phase, the last state record, the odometry, the telemetry
+  CommandPhases commands_;   ///< the non-rc commands, what their replies mean, the result
+  Sticks sticks_;            ///< the velocity flown, its PI loops and its rc datagrams
+  VideoIntake video_;        ///< the pictures' worth, the damaged rows blanked, the video's stall
+  AirbornePhases shelves_;   ///< the airborne phases across the shelves, their units
   std::vector<SdkCommand> out_;  ///< the commands of the input being handled
 };
 

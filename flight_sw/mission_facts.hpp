@@ -1,10 +1,12 @@
 #pragma once
 // The facts the mission's units share on every input (flight_software.hpp): the time of the
-// input being handled, the last state record, the odometry integrated from the records, and the
-// telemetry every unit writes. The mission owns one; each unit gets it per call.
+// input being handled, the phase and since when, the last state record, the odometry
+// integrated from the records, and the telemetry every unit writes. The mission owns one; each
+// unit gets it per call.
 
 #include <optional>
 
+#include "flight_sw/mission_phases.hpp"
 #include "flight_sw/odometry.hpp"
 #include "flight_sw/telemetry.hpp"
 #include "shelfcross/sdk_messages.hpp"
@@ -16,9 +18,19 @@ constexpr double kStateFresh_s = 0.3;
 
 struct MissionFacts {
   TimeNs now_ns = 0;                 ///< the stamp of the input being handled (never decreasing)
+  PhaseClock phase;                  ///< the phase now (only the mission's `enter` changes it)
   std::optional<StateRecord> state;  ///< the last state record
   StateOdometry odometry;            ///< frame O: the state records' velocities integrated, their height
   Telemetry telemetry;               ///< what the mission is doing, written by every unit
+
+  /// A state record received: the odometry integrates it, it becomes the last one, the
+  /// telemetry shows its battery and height.
+  void on_state(const StateRecord& s) {
+    odometry.on_state(s);
+    state = s;
+    telemetry.link.battery_pct = s.battery_pct;
+    telemetry.link.height_m = s.height_m;
+  }
 
   /// A state record within kStateFresh_s of now.
   bool state_fresh() const {

@@ -3,6 +3,8 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <stdexcept>
+#include <string>
 
 namespace shelfcross::flight_sw {
 
@@ -73,5 +75,13 @@ bool airborne(Phase p) {
 }
 
 bool vision_phase(Phase p) { return airborne(p) && p != Phase::Cross && p != Phase::Transfer; }
+
+void PhaseClock::enter(Phase to, TimeNs now_ns) {
+  if (!may_enter(phase_, to)) {
+    throw std::logic_error(std::string("mission: no transition from ") + phase_name(phase_) + " to " + phase_name(to));
+  }
+  phase_ = to;
+  start_ns_ = now_ns;
+}
 
 }  // namespace shelfcross::flight_sw
