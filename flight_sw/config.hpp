@@ -184,7 +184,7 @@ struct Timeouts {
   double go_to_viewpoint_s = 40.0;
   double take_inventory_s = 15.0;
   double approach_s = 40.0;
-  double target_lost_s = 3.0;    ///< hovering to re-acquire the target, then re-read (grid in view) or land
+  double target_lost_s = 3.0;    ///< hovering to re-acquire the target, then backing out to re-read
   double back_off_s = 5.0;       ///< backing off an off-centre approach, then re-read the shelf
   double video_hover_s = 0.5;    ///< no frame for this long: hover
   double video_land_s = 3.0;     ///< no frame for this long: land
@@ -232,10 +232,10 @@ struct TargetParams {
   /// The target's identity (cell_identity.hpp): lost with the pose continuity, it is
   /// re-established while backing off along the cell normal (the view widening until an edge
   /// or a known marker is in it); not within identity_confirm_s, or contradicted, the shelf is
-  /// re-read from the optimal viewpoint and the target chosen anew. A target lost with the
-  /// grid in view and an approach that could not centre are re-read the same way; the
-  /// identity_rereads+1-th doubt of any kind in a mission aborts it (landing where it hovers,
-  /// in front of the shelf).
+  /// re-read from the optimal viewpoint and the target chosen anew. A target lost for
+  /// target_lost_s and an approach that could not centre are re-read the same way (backing
+  /// straight out first); the identity_rereads+1-th doubt of any kind in a mission aborts it
+  /// (backing out to give_up_clearance_m and landing there, in front of the shelf).
   /// Continuity: a pose within pose_jump_window_s of the last identified one keeps the
   /// identity; up to this time, only with the box found within 0.3 of its width of where it
   /// was last identified (target_tracker.cpp, TargetTracker::measure).

@@ -207,12 +207,12 @@ std::optional<ApproachStep> TargetApproach::supervise(MissionFacts& facts, const
   if (in_phase_s > to.approach_s) return landing("approach timed out");
   const std::optional<TimeNs>& lost = timers_.lost_since_ns;
   if (lost && ns_to_seconds(facts.now_ns - *lost) > to.target_lost_s) {
-    // The shelf's grid still in nearly whole pictures, only the target not found again
-    // near where it was last seen (the view moved on while the pictures were damaged, or
-    // the pose checks refused every candidate): choose it anew from the viewpoint. No
-    // grid in view: nothing to re-read from here; land where it hovers.
-    if (timers_.grid_in_view_while_lost) return reread("target lost", std::string("target lost"), facts, survey);
-    return landing("target lost");
+    // The target not found again near where it was last seen (the view moved on while the
+    // pictures were damaged, the pose checks refused every candidate, or the tags left a view
+    // too close to hold them): choose it anew from the viewpoint. The re-read first backs
+    // straight out the way the approach came, seeing nothing or not, and after
+    // identity_rereads of them the mission gives up, backing out to land clear of the shelf.
+    return reread("target lost", std::string("target lost"), facts, survey);
   }
   const std::optional<TimeNs>& back_off = timers_.back_off_since_ns;
   if (back_off && ns_to_seconds(facts.now_ns - *back_off) > to.back_off_s) {
@@ -396,8 +396,6 @@ ApproachStep TargetApproach::without_target(const Picture& pic, ApproachTools to
   if (reacquire(pic, tracker_, tools)) {
     timers_.lost_since_ns.reset();
     f.telemetry.event = "target re-acquired";
-  } else if (pic.decides) {
-    timers_.grid_in_view_while_lost = tools.survey.view().grid.valid;
   }
   return s;
 }

@@ -84,14 +84,10 @@ class TargetApproach {
   struct Timers {
     std::optional<TimeNs> hold_since_ns;  ///< holding short of the shelf to settle
     std::optional<TimeNs> lost_since_ns;
-    bool grid_in_view_while_lost = false;  ///< the last nearly whole picture since then showed the shelf's grid
     std::optional<TimeNs> back_off_since_ns;
-    /// The target's loss begins (once): the grid is not known to be in view until a nearly
-    /// whole picture shows it.
+    /// The target's loss begins (once).
     void start_losing(TimeNs now_ns) {
-      if (lost_since_ns) return;
-      lost_since_ns = now_ns;
-      grid_in_view_while_lost = false;
+      if (!lost_since_ns) lost_since_ns = now_ns;
     }
   };
   /// A declined crossing backs out until then, then lands with the reason.

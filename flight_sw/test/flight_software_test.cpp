@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <deque>
 #include <functional>
 #include <memory>
@@ -524,26 +525,44 @@ TEST(FlightSoftware, LowBatteryInFlightLands) {
   EXPECT_TRUE(h.fsw().result().landed);
 }
 
-TEST(FlightSoftware, TargetLostHoversThenGivesUp) {
+TEST(FlightSoftware, TargetLostHoversThenBacksOutToReread) {
+  // The pictures go blank 4 s into the approach, closer than the viewpoint (nothing in view,
+  // not even the grid): the vehicle hovers target_lost_s to re-acquire, then backs straight
+  // out to re-read the shelf (never landing where it hovered, close to the shelf); with
+  // nothing ever in view again the shelf is not found and it lands there, out from the shelf.
   Options o;
-  o.blank_after_approach_s = 1.0;
+  o.blank_after_approach_s = 4.0;
   Harness h(o);
-  h.run(40.0);
+  h.run(90.0);
   ASSERT_TRUE(h.fsw().finished());
-  EXPECT_EQ(h.fsw().result().reason, "target lost");
+  EXPECT_EQ(h.fsw().result().reason, "shelf not found");
   EXPECT_TRUE(h.fsw().result().landed);
-  // After the target vanished: only hover commands until the land.
-  const auto& cmds = h.commands();
-  const auto land = std::find_if(cmds.begin(), cmds.end(), [](const SdkCommand& c) { return c.text == "land"; });
-  ASSERT_NE(land, cmds.end());
+  // Approach, then FindShelf again (the re-read), never Cross.
+  const std::vector<FrameStep>& steps = h.frame_steps();
+  const auto in_approach = std::find_if(steps.begin(), steps.end(), [](const FrameStep& s) { return s.before == Phase::Approach; });
+  ASSERT_NE(in_approach, steps.end());
+  const auto reread = std::find_if(in_approach, steps.end(), [](const FrameStep& s) { return s.after == Phase::FindShelf; });
+  ASSERT_NE(reread, steps.end()) << "no re-read after the target was lost";
+  EXPECT_FALSE(h.saw_phase(Phase::Cross));
+  // The 3 s before the re-read: hover only; then backing straight out (b < 0, the rest 0).
+  const TimeNs reread_ns = reread->t_ns;
   int hovers = 0;
-  for (auto it = cmds.begin(); it != land; ++it) {
-    if (land->t_ns - it->t_ns < 3 * kNsPerSecond && it->text.rfind("rc", 0) == 0) {
-      EXPECT_EQ(it->text, "rc 0 0 0 0");
+  std::optional<std::string> first_move;
+  for (const SdkCommand& c : h.commands()) {
+    if (c.text.rfind("rc ", 0) != 0) continue;
+    if (c.t_ns < reread_ns && reread_ns - c.t_ns < 3 * kNsPerSecond) {
+      EXPECT_EQ(c.text, "rc 0 0 0 0");
       ++hovers;
     }
+    if (c.t_ns >= reread_ns && !first_move && c.text != "rc 0 0 0 0") first_move = c.text;
   }
   EXPECT_GT(hovers, 20);
+  ASSERT_TRUE(first_move.has_value());
+  int a = 0, b = 0, c = 0, d = 0;
+  ASSERT_EQ(std::sscanf(first_move->c_str(), "rc %d %d %d %d", &a, &b, &c, &d), 4) << *first_move;
+  EXPECT_LT(b, 0) << *first_move;
+  EXPECT_EQ(a, 0) << *first_move;
+  EXPECT_EQ(d, 0) << *first_move;
 }
 
 TEST(FlightSoftware, NeverCrossesWithoutRoomBacksOutAndGivesUp) {
