@@ -3,7 +3,8 @@
 // the full view, followed, measured, re-acquired and its identity judged (target_tracker.hpp);
 // the laws of eq. 10-15 and Fig. 19 on its pose (guidance.hpp); when to hold short, back off,
 // re-read the shelf, give up or cross (the gate: crossing_gate.hpp). Each step says what to fly
-// and what happens next; the mission keeps the phase, takes the transition and sends the rc.
+// and what happens next; AirbornePhases (airborne_phases.hpp) flies it and has the mission
+// take the transition.
 
 #include <optional>
 #include <string>
