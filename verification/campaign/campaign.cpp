@@ -113,7 +113,7 @@ std::vector<std::pair<std::string, std::optional<double>>> named_summary_values(
   }
   v.push_back({"inventory_precision", m.inventory.precision});
   v.push_back({"inventory_recall", m.inventory.recall});
-  // What the link did (sdk: datagrams; ideal: whole frames and commands).
+  // What the link did (sdk: datagrams; ideal: whole messages).
   const LinkMetrics& l = m.link;
   const auto count = [](std::int64_t n) { return Value(static_cast<double>(n)); };
   v.push_back({"link_video_datagrams", count(l.video_datagrams)});

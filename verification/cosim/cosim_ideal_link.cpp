@@ -1,6 +1,19 @@
-// The ideal link of the co-simulation: whole messages through LinkModel (a frame, a state
-// record, a command delivered or lost whole), the flight software alone, no driver and no
-// decoder. The world advances to every event time, not only to autopilot ticks.
+// The ideal link of the co-simulation: whole messages (a frame, a state record, a command, a
+// reply, delivered or lost whole), the flight software alone, no driver and no decoder. The
+// world advances to every event time, not only to autopilot ticks.
+//
+// Its faults are the sdk link's: one DatagramFaults from the same settings (link_faults) and
+// the same seed (the run's) as the simulated Tello's, each message drawn as the Tello draws
+// its datagram: a frame's loss (frame_lost, the video stall), a command's, a state record's
+// and a reply's fate (lost, twice, late), each channel's arrival (due: delay, jitter, order
+// kept). A message sent twice is delivered twice at the same instant, as the sdk link does:
+// the firmware answers a second command as it answers any (a second `takeoff` in the air is
+// refused "error"), and the flight software drops a reply that answers nothing as stale.
+// What the ideal link has no part for: video datagrams (video.loss: a lost datagram gives an
+// error-concealed picture on the sdk link, not a lost frame, and the ideal link has no
+// decoder to damage a picture, so its pictures are always whole and per-datagram loss is not
+// applied), the firmware's injected refusals (not_joystick, no_valid_imu: the simulated
+// Tello's command interpreter answers them; here the plant's firmware answers every command).
 
 #include <algorithm>
 #include <memory>
@@ -10,7 +23,7 @@
 
 #include "sdk/state_record.hpp"
 #include "verification/cosim/cosim_run.hpp"
-#include "verification/cosim/link_model.hpp"
+#include "verification/cosim/link_faults.hpp"
 #include "verification/world/tello_state_format.hpp"
 
 namespace shelfcross::verification {
@@ -28,7 +41,8 @@ class IdealLink {
  public:
   IdealLink(RunContext& run)
       : run_(run),
-        link_(run.cs.link, run.setup.seed),
+        faults_(link_faults(run.cs.link), run.setup.seed),
+        compute_ns_(seconds_to_ns(run.cs.link.compute_latency_s)),
         world_(run.setup, run.shelf_count),
         fsw_(run.flight_config),
         tick_mhz_(millihertz(run.sc.autopilot.rate_hz)),
@@ -38,9 +52,8 @@ class IdealLink {
 
  private:
   void send_commands(const std::vector<SdkCommand>& commands);
-  void reply_to_fsw(TimeNs t_sent, const std::string& text) {
-    to_fsw_.emplace(link_.state_arrival(t_sent), seq_++, SdkReply{0, text});
-  }
+  void reply_to_fsw(TimeNs t_sent, const std::string& text);
+  void send_state(TimeNs t);
   void step_fsw(const flight_sw::Input& input, TimeNs t);
   /// Commands due at t, to the firmware; its replies to the flight software. False when the
   /// firmware's plant failed.
@@ -51,7 +64,10 @@ class IdealLink {
   cv::Mat& free_frame_buffer();
 
   RunContext& run_;
-  LinkModel link_;
+  DatagramFaults faults_;
+  /// The flight software's step time (compute_latency_s), added to a command before its
+  /// channel's delay: not a fault of the link.
+  const TimeNs compute_ns_;
   TelloWorld world_;
   flight_sw::FlightSoftware fsw_;
   const std::int64_t tick_mhz_, fsw_tick_mhz_;
@@ -69,15 +85,40 @@ class IdealLink {
 void IdealLink::send_commands(const std::vector<SdkCommand>& commands) {
   LinkMetrics& l = run_.result.metrics.link;
   for (const SdkCommand& c : commands) {
-    const std::optional<TimeNs> arrival = link_.command_arrival(c.t_ns);
-    run_.log_event(c.t_ns, "send " + c.text + (arrival ? "" : " (lost)"));
+    const DatagramFaults::Fate fate = faults_.command(c.text);
+    run_.log_event(c.t_ns, "send " + c.text + (fate.lost ? " (lost)" : ""));
     ++l.commands_sent;
-    if (arrival) {
-      to_vehicle_.push({*arrival, seq_++, c.text});
-    } else {
+    if (fate.lost) {
       ++l.commands_lost;
+      continue;
     }
+    const TimeNs arrival = faults_.due(DatagramFaults::Channel::command, c.t_ns + compute_ns_);
+    to_vehicle_.push({arrival, seq_++, c.text});
+    if (fate.twice) to_vehicle_.push({arrival, seq_++, c.text});
   }
+}
+
+void IdealLink::reply_to_fsw(TimeNs t_sent, const std::string& text) {
+  const DatagramFaults::Fate fate = faults_.reply();
+  if (fate.lost) {
+    ++run_.result.metrics.link.replies_lost;
+    return;
+  }
+  const TimeNs arrival = faults_.reply_due(fate, t_sent);
+  to_fsw_.emplace(arrival, seq_++, SdkReply{0, text});
+  if (fate.twice) to_fsw_.emplace(arrival, seq_++, SdkReply{0, text});
+}
+
+void IdealLink::send_state(TimeNs t) {
+  const StateText record{format_state_record(world_.state_record(t))};
+  const DatagramFaults::Fate fate = faults_.state();
+  if (fate.lost) {
+    ++run_.result.metrics.link.state_records_lost;
+    return;
+  }
+  const TimeNs arrival = faults_.due(DatagramFaults::Channel::state, t);
+  to_fsw_.push({arrival, seq_++, record});
+  if (fate.twice) to_fsw_.push({arrival, seq_++, record});
 }
 
 void IdealLink::step_fsw(const flight_sw::Input& input, TimeNs t) {
@@ -133,17 +174,19 @@ void IdealLink::capture(TimeNs t) {
   if (!capture || !video_on_) return;
   LinkMetrics& l = run_.result.metrics.link;
   ++l.frames_captured;
-  if (const auto arrival = link_.video_arrival(t)) {
-    cv::Mat& frame_bgr = free_frame_buffer();
-    if (run_.cs.motion_blur_samples > 1) {
-      run_.renderer.render_blurred_into(capture->X_WC_prev, capture->X_WC, capture->noise_seed, frame_bgr);
-    } else {
-      run_.renderer.render_into(capture->X_WC, capture->noise_seed, frame_bgr);
-    }
-    to_fsw_.push({*arrival, seq_++, CameraFrame{*arrival, capture->index, frame_bgr}});
-  } else {
+  const bool lost = faults_.frame_lost();  // drawn for every capture, stalled or not, as the Tello does
+  if (lost || faults_.video_stalled(t)) {
     ++l.frames_lost;
+    return;
   }
+  const TimeNs arrival = faults_.due(DatagramFaults::Channel::video, t);
+  cv::Mat& frame_bgr = free_frame_buffer();
+  if (run_.cs.motion_blur_samples > 1) {
+    run_.renderer.render_blurred_into(capture->X_WC_prev, capture->X_WC, capture->noise_seed, frame_bgr);
+  } else {
+    run_.renderer.render_into(capture->X_WC, capture->noise_seed, frame_bgr);
+  }
+  to_fsw_.push({arrival, seq_++, CameraFrame{arrival, capture->index, frame_bgr}});
 }
 
 void IdealLink::deliver_to_fsw(TimeNs t) {
@@ -188,9 +231,7 @@ RunResult IdealLink::fly() {
     if (t == event_time(k_tick_, tick_mhz_)) ++k_tick_;
     if (!commands_to_vehicle(t)) break;
     capture(t);
-    if (world_.state_due(t) && sdk_on_) {
-      to_fsw_.push({link_.state_arrival(t), seq_++, StateText{format_state_record(world_.state_record(t))}});
-    }
+    if (world_.state_due(t) && sdk_on_) send_state(t);
     deliver_to_fsw(t);
     if (run_.outcome) break;
     if (t == event_time(k_fsw_tick_, fsw_tick_mhz_)) {  // the flight computer's own timer
@@ -201,6 +242,9 @@ RunResult IdealLink::fly() {
     run_.sample_trajectory(t, world_.tello().state(), fsw_);
     if (fsw_.finished() && world_.tello().mode() == plant::FlightMode::landed) break;
   }
+  // No driver here: the replies that answered nothing (duplicates, late ones) the flight
+  // software dropped itself.
+  run_.result.metrics.link.stale_replies = fsw_.telemetry().link.stale_replies;
   return run_.finish(world_, fsw_, "");
 }
 

@@ -110,7 +110,8 @@ void inject_process_faults(const CosimSettings& cs, TimeNs t);
 /// The sdk link: the simulated Tello (TelloEmulator on in-memory datagrams) against
 /// tello_pilot's loop, in simulated time. Flies the run and returns its verdict.
 RunResult fly_sdk_link(RunContext& run);
-/// The ideal link: whole messages through LinkModel, the flight software alone.
+/// The ideal link: whole messages with the sdk link's faults (link_faults.hpp), the flight
+/// software alone.
 RunResult fly_ideal_link(RunContext& run);
 
 }  // namespace shelfcross::verification

@@ -9,33 +9,11 @@
 #include "flight_sw/tello/datagram_channel.hpp"
 #include "flight_sw/tello/pilot_loop.hpp"
 #include "verification/cosim/cosim_run.hpp"
-#include "verification/cosim/link_model.hpp"
+#include "verification/cosim/link_faults.hpp"
 #include "verification/world/tello_emulator.hpp"
 
 namespace shelfcross::verification {
 namespace {
-
-/// The sdk link's datagram faults, from the scenario's link settings (LinkSettings explains
-/// how each key maps): the emulator's fault model is the co-simulation's link.
-EmulatorFaults sdk_faults(const LinkSettings& l) {
-  EmulatorFaults f;
-  f.commands = {l.command_loss_probability, 1e3 * l.command_latency_mean_s, 1e3 * l.command_latency_jitter_s,
-                l.duplicate_probability};
-  f.replies = {l.reply_loss, 1e3 * l.state_latency_mean_s, 1e3 * l.state_latency_jitter_s, l.duplicate_probability};
-  f.state = {l.state_loss, 1e3 * l.state_latency_mean_s, 1e3 * l.state_latency_jitter_s, l.duplicate_probability};
-  f.video = {l.video_datagram_loss, 1e3 * l.video_latency_mean_s, 1e3 * l.video_latency_jitter_s, 0.0};
-  f.video_frame_loss = l.frame_drop_probability;
-  f.late_replies = l.late_reply_probability;
-  f.late_reply_ms = 1e3 * l.late_reply_s;
-  f.not_joystick = l.not_joystick_probability;
-  f.no_valid_imu = l.no_valid_imu_probability;
-  f.lost_command_prefix = l.lost_command;
-  if (l.video_stall_start_s >= 0.0 && l.video_stall_duration_s > 0.0) {
-    f.video_stall_start_s = l.video_stall_start_s;
-    f.video_stall_duration_s = l.video_stall_duration_s;
-  }
-  return f;
-}
 
 // The addresses of the in-memory link: the Tello's own (docs/tello_sdk.md) and a computer on its
 // Wi-Fi, so that the driver's and the receiver's sender checks run as they do in flight.
@@ -77,7 +55,7 @@ EmulatorConfig drone_config(const CosimSettings& cs) {
   ec.bind_ip = kDroneCommand.ip;
   ec.client_state_port = kPilotState.port;
   ec.client_video_port = kPilotVideo.port;
-  ec.faults = sdk_faults(cs.link);
+  ec.faults = link_faults(cs.link);  // drawn with the run's seed (TelloEmulator: setup.seed)
   ec.slices_per_frame = cs.link.video_slices;
   ec.key_interval_frames = cs.link.key_interval_frames;
   ec.linger_s = 1e9;  // the co-simulation ends the run itself

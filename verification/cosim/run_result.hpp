@@ -46,13 +46,13 @@ struct LinkMetrics {
   std::int64_t frames_decoded = 0;        ///< pictures the receiver decoded (ideal: frames delivered)
   std::int64_t frames_damaged = 0;        ///< of those handed over, error-concealed (sdk only)
   std::int64_t frames_handed = 0;         ///< handed to the flight software
-  std::int64_t commands_sent = 0;         ///< command datagrams, rc and keep-alives included
-  std::int64_t commands_lost = 0;
+  std::int64_t commands_sent = 0;         ///< command datagrams, rc and keep-alives (sdk) included
+  std::int64_t commands_lost = 0;         ///< drawn lost or lost by cosim.link.lost_command
   std::int64_t replies_lost = 0;
   std::int64_t state_records_lost = 0;
-  std::int64_t command_retries = 0;       ///< the driver's re-sends after a reply timeout
-  std::int64_t stale_replies = 0;         ///< replies the driver dropped as stale
-  std::int64_t injected_errors = 0;       ///< "error Not joystick" / "error No valid imu" answers
+  std::int64_t command_retries = 0;       ///< the driver's re-sends after a reply timeout (sdk only)
+  std::int64_t stale_replies = 0;         ///< replies dropped as stale (sdk: by the driver; ideal: by the flight software)
+  std::int64_t injected_errors = 0;       ///< "error Not joystick" / "error No valid imu" answers (sdk only)
   /// Fraction of video datagrams lost (0 when none was sent).
   double video_datagram_loss() const {
     return video_datagrams > 0 ? static_cast<double>(video_datagrams_lost) / static_cast<double>(video_datagrams) : 0.0;

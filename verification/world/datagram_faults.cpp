@@ -33,10 +33,12 @@ DatagramFaults::DatagramFaults(const EmulatorFaults& faults, std::uint64_t seed)
       state_jitter_(mix64(seed ^ 9), StreamId::link_faults),
       video_jitter_(mix64(seed ^ 10), StreamId::link_faults) {}
 
-DatagramFaults::Fate DatagramFaults::command() {
+DatagramFaults::Fate DatagramFaults::command(std::string_view text) {
   Fate f;
   f.lost = command_.bernoulli(faults_.commands.loss);
   f.twice = command_.bernoulli(faults_.commands.duplicate);
+  const std::string& prefix = faults_.lost_command_prefix;
+  if (!prefix.empty() && text.starts_with(prefix)) f.lost = true;
   return f;
 }
 
@@ -66,7 +68,10 @@ DatagramFaults::Refusal DatagramFaults::refusal() {
   return r;
 }
 
-TimeNs DatagramFaults::late_reply_hold_ns() const { return ms_to_ns(faults_.late_reply_ms); }
+bool DatagramFaults::video_stalled(TimeNs t) const {
+  const std::optional<double>& start_s = faults_.video_stall_start_s;
+  return start_s && t >= seconds_to_ns(*start_s) && t < seconds_to_ns(*start_s + faults_.video_stall_duration_s);
+}
 
 TimeNs DatagramFaults::due(Channel channel, TimeNs t) {
   const ChannelFaults& c = channel == Channel::command ? faults_.commands
@@ -80,6 +85,11 @@ TimeNs DatagramFaults::due(Channel channel, TimeNs t) {
   TimeNs& last = last_due_[static_cast<int>(channel)];
   last = std::max(last, t + jittered_ms(jitter, c.delay_ms, c.jitter_ms));
   return last;
+}
+
+TimeNs DatagramFaults::reply_due(const Fate& fate, TimeNs t) {
+  const TimeNs due_ns = due(Channel::reply, t);
+  return fate.late ? due_ns + ms_to_ns(faults_.late_reply_ms) : due_ns;
 }
 
 }  // namespace shelfcross::verification

@@ -1,13 +1,16 @@
 #pragma once
-// The simulated Tello's link faults, drawn datagram by datagram: each channel's losses,
-// duplicates and late replies from a stream of its own, seeded from the run's seed (so one
-// setting never shifts another's draws, and every fate draws the same count whatever it
-// turns out), and each channel's delivery times: the delay plus a normal jitter truncated at
-// +-3 sigma, never before the channel's previous datagram (one Wi-Fi hop does not reorder).
+// The link's faults, one model per channel for both links of the co-simulation: the simulated
+// Tello draws them datagram by datagram (the sdk link, and tello-sim), the ideal link message
+// by message from the same model with the same seed. Each channel's losses, duplicates and
+// late replies come from a stream of its own, seeded from the run's seed (so one setting
+// never shifts another's draws, and every fate draws the same count whatever it turns out),
+// and each channel's delivery times: the delay plus a normal jitter truncated at +-3 sigma,
+// never before the channel's previous datagram (one Wi-Fi hop does not reorder).
 
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "shelfcross/random.hpp"
 #include "shelfcross/time.hpp"
@@ -55,10 +58,13 @@ class DatagramFaults {
     bool no_valid_imu = false;
   };
 
+  /// Requires faults checked (validate_emulator_config, or mapped from checked scenario keys:
+  /// probabilities in [0, 1], delays and jitters >= 0); not checked again here. Any seed.
   DatagramFaults(const EmulatorFaults& faults, std::uint64_t seed);
 
-  /// A command datagram: lost, twice (two draws, always).
-  Fate command();
+  /// A command datagram with this text: lost, twice (two draws, always); lost also when the
+  /// text begins with lost_command_prefix (applied after the draws, so it shifts none).
+  Fate command(std::string_view text);
   /// A reply: lost, late, twice (three draws, always).
   Fate reply();
   /// A state record: lost, twice (two draws, always).
@@ -69,11 +75,15 @@ class DatagramFaults {
   bool video_datagram_lost();
   /// A refusable manoeuvre: "error Not joystick", "error No valid imu" (two draws, always).
   Refusal refusal();
-  /// How much longer a late reply is held back.
-  TimeNs late_reply_hold_ns() const;
+  /// Whether a frame captured at t falls in the video stall [start, start + duration).
+  bool video_stalled(TimeNs t) const;
   /// When a datagram queued at t on `channel` arrives: t + delay + jitter, and never before the
   /// channel's previous one.
   TimeNs due(Channel channel, TimeNs t);
+  /// When a reply queued at t with this fate arrives: due(Channel::reply, t), and late_reply_ms
+  /// more when late (the hold does not hold back the replies after it: the channel keeps the
+  /// order of the on-time arrivals).
+  TimeNs reply_due(const Fate& fate, TimeNs t);
 
  private:
   EmulatorFaults faults_;

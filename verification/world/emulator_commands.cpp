@@ -35,8 +35,7 @@ bool is_manoeuvre_text(const std::string& text) {
 
 }  // namespace
 
-SdkCommandInterpreter::SdkCommandInterpreter(std::size_t max_datagram_bytes, std::string lost_command_prefix)
-    : max_datagram_bytes_(max_datagram_bytes), lost_command_prefix_(std::move(lost_command_prefix)) {}
+SdkCommandInterpreter::SdkCommandInterpreter(std::size_t max_datagram_bytes) : max_datagram_bytes_(max_datagram_bytes) {}
 
 void SdkCommandInterpreter::receive(TimeNs now_ns, EmulatorOutbox& outbox) {
   while (auto d = outbox.command_socket().receive()) {
@@ -49,9 +48,8 @@ void SdkCommandInterpreter::receive(TimeNs now_ns, EmulatorOutbox& outbox) {
       continue;
     }
     DatagramFaults& faults = outbox.faults_locked();
-    const DatagramFaults::Fate fate = faults.command();
-    const std::string& prefix = lost_command_prefix_;
-    if (fate.lost || (!prefix.empty() && d->bytes.rfind(prefix, 0) == 0)) {
+    const DatagramFaults::Fate fate = faults.command(d->bytes);
+    if (fate.lost) {
       ++counters.commands_dropped;
       continue;
     }

@@ -23,9 +23,9 @@ namespace shelfcross::verification {
 
 class SdkCommandInterpreter {
  public:
-  /// Longer command datagrams are malformed; lost_command_prefix: every command that begins
-  /// with it is lost (empty: none).
-  SdkCommandInterpreter(std::size_t max_datagram_bytes, std::string lost_command_prefix);
+  /// Longer command datagrams are malformed. Which datagrams are lost (drawn, or injected by
+  /// EmulatorFaults::lost_command_prefix) the outbox's DatagramFaults says.
+  explicit SdkCommandInterpreter(std::size_t max_datagram_bytes);
 
   /// Reads every pending command datagram (stamped now_ns) and queues the ones that arrive
   /// for their delivery time.
@@ -53,7 +53,6 @@ class SdkCommandInterpreter {
                                      EmulatorOutbox& outbox);
 
   std::size_t max_datagram_bytes_;
-  std::string lost_command_prefix_;
   std::priority_queue<IncomingCommand, std::vector<IncomingCommand>, std::greater<>> incoming_;
   std::uint64_t seq_ = 0;
   TimeNs last_datagram_ns_ = 0;

@@ -33,11 +33,8 @@ void EmulatorOutbox::send_reply_locked(TimeNs t, const std::string& text, const 
     ++counters_.replies_dropped;
     return;
   }
-  TimeNs due = faults_.due(DatagramFaults::Channel::reply, t);
-  if (fate.late) {
-    due += faults_.late_reply_hold_ns();
-    ++counters_.replies_late;
-  }
+  const TimeNs due = faults_.reply_due(fate, t);
+  if (fate.late) ++counters_.replies_late;
   queue_locked(due, Channel::reply, to, text);
   if (fate.twice) {
     ++counters_.replies_duplicated;

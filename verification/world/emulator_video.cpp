@@ -83,13 +83,11 @@ void EmulatorVideo::capture(const TelloWorld::Capture& capture, TimeNs t, TimeNs
     return;
   }
   const TimeNs frame_period_ns = capture.period_ns;
-  const EmulatorFaults& f = config_.faults;
-  const bool stalled = f.video_stall_start_s && t >= seconds_to_ns(*f.video_stall_start_s) &&
-                       t < seconds_to_ns(*f.video_stall_start_s + f.video_stall_duration_s);
   const auto lock = outbox_.lock();
   EmulatorCounters& counters = outbox_.counters_locked();
   ++counters.frames_captured;
-  const bool lost = outbox_.faults_locked().frame_lost();
+  const bool stalled = outbox_.faults_locked().video_stalled(t);
+  const bool lost = outbox_.faults_locked().frame_lost();  // drawn for every capture, stalled or not
   if (stalled) {
     ++counters.frames_stalled;
   } else if (lost) {

@@ -48,7 +48,7 @@ TelloEmulator::TelloEmulator(RunSetup setup, EmulatorConfig config, EmulatorChan
       on_tick_(std::move(on_tick)),
       outbox_(std::move(channels), config_),
       world_((check_landed(*setup_.scenario), setup_), mission_shelf_count(*setup_.scenario)),
-      commands_(config_.max_datagram_bytes, config_.faults.lost_command_prefix),
+      commands_(config_.max_datagram_bytes),
       video_(*setup_.scenario, config_, inline_renderer, outbox_),
       clock_{millihertz(setup_.scenario->autopilot.rate_hz)} {}
 

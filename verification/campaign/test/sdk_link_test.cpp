@@ -61,6 +61,20 @@ TEST(SdkLink, IdealModelCarriesWholeFramesWithoutDatagrams) {
   EXPECT_EQ(r.metrics.link.model, "ideal");
   EXPECT_EQ(r.metrics.link.video_datagrams, 0);
   EXPECT_GT(r.metrics.link.frames_decoded, 50);
+  // The sdk link's faults on whole messages: state records lost, the injected command loss,
+  // the video stall (a second of 30 fps captures).
+  s.cosim.link.state_loss = 0.5;
+  s.cosim.link.lost_command = "takeoff";
+  s.cosim.link.video_stall_start_s = 1.5;
+  s.cosim.link.video_stall_duration_s = 1.0;
+  s.dispersions.erase("video_stall_start_s");
+  const RunResult faulty = run_once(s, 5);
+  const LinkMetrics& l = faulty.metrics.link;
+  EXPECT_GT(l.state_records_lost, 5);
+  EXPECT_GE(l.commands_lost, 1);
+  EXPECT_NE(events_text(faulty).find("send takeoff (lost)"), std::string::npos) << events_text(faulty);
+  EXPECT_GE(l.frames_lost, 29);
+  EXPECT_LE(l.frames_handed, l.frames_captured - l.frames_lost);
 }
 
 // A lost `land` after the crossing (every land datagram lost) with the wall 1 m behind the
