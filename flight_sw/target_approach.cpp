@@ -204,7 +204,9 @@ std::optional<ApproachStep> TargetApproach::supervise(MissionFacts& facts, const
     if (facts.now_ns >= *retreat_.until_ns) return landing(retreat_.reason);
     return flying(back_off_velocity(config_.control));
   }
-  if (in_phase_s > to.approach_s) return landing("approach timed out");
+  // Too long short of the cell (a link too lossy to decide on, a target never settled on):
+  // backed straight out to land clear of the shelf, not where it hovers.
+  if (in_phase_s > to.approach_s) return give_up("approach timed out", 0.0, facts);
   const std::optional<TimeNs>& lost = timers_.lost_since_ns;
   if (lost && ns_to_seconds(facts.now_ns - *lost) > to.target_lost_s) {
     // The target not found again near where it was last seen (the view moved on while the

@@ -41,6 +41,9 @@ struct Options {
   double start_yaw_rad = 0.0;
   bool blank_frames = false;  ///< frames show only the wall
   double blank_after_approach_s = -1.0;  ///< >= 0: frames go blank this long into the approach
+  /// >= 0: from this long into the approach every picture is damaged throughout, with more lost
+  /// bands than steer_max_damage_events (a link too lossy to fly on): it neither decides nor steers.
+  double ruin_after_approach_s = -1.0;
   /// > 0: after the first re-read (FindShelf again, after an approach) the frames show only
   /// the wall this long: from close, the inside of a cell and no tag (run 242, commit bfd468c).
   double blank_after_reread_s = -1.0;
@@ -171,6 +174,12 @@ class Harness {
             continue;
           }
           if (o_.damage_group_frames > 0) damage(f);
+          if (o_.ruin_after_approach_s >= 0.0 && approach_t_ && t_ - *approach_t_ > seconds_to_ns(o_.ruin_after_approach_s)) {
+            f.damaged = true;
+            f.damage_events = config_.perception.steer_max_damage_events + 1;
+            f.damaged_rows = {{0, f.bgr.rows}};
+            if (!ruin_W_m_) ruin_W_m_ = p_WB_;
+          }
           step_frame(f);
         }
       }
@@ -190,6 +199,8 @@ class Harness {
   /// Where the first re-read started, and the pose at the last blank frame after it.
   const Eigen::Vector3d& reread_W_m() const { return reread_W_m_; }
   const Eigen::Vector3d& reread_end_W_m() const { return reread_end_W_m_; }
+  /// Where the vehicle was at the first ruined picture (Options::ruin_after_approach_s).
+  const std::optional<Eigen::Vector3d>& ruin_W_m() const { return ruin_W_m_; }
   double reread_end_yaw_rad() const { return reread_end_yaw_rad_; }
   bool saw_phase(Phase p) const { return std::find(phases_.begin(), phases_.end(), p) != phases_.end(); }
   const std::vector<Eigen::Vector4d>& track() const { return track_; }  // t, x, y, z
@@ -316,6 +327,7 @@ class Harness {
   std::optional<TimeNs> reread_t_;  ///< the first frame of the first re-read
   Eigen::Vector3d reread_W_m_ = Eigen::Vector3d::Zero(), reread_end_W_m_ = Eigen::Vector3d::Zero();
   double reread_end_yaw_rad_ = 0.0;
+  std::optional<Eigen::Vector3d> ruin_W_m_;
   bool slid_ = false;
   double height_bias_m_ = 0.0;  ///< the state height's error (slide_seen_by_height)
   Eigen::Vector3d p_WB_;
@@ -563,6 +575,30 @@ TEST(FlightSoftware, TargetLostHoversThenBacksOutToReread) {
   EXPECT_LT(b, 0) << *first_move;
   EXPECT_EQ(a, 0) << *first_move;
   EXPECT_EQ(d, 0) << *first_move;
+}
+
+// A link that stops giving a picture to fly on late in the approach, closer to the shelf than
+// give_up_clearance_m: the vehicle hovers short of the cell until the approach's time limit,
+// then backs straight out and lands clear of the shelf (not where it hovered), the mission
+// aborted with the reason.
+TEST(FlightSoftware, ApproachTimedOutBacksOutAndLandsClearOfTheShelf) {
+  Options o;
+  o.ruin_after_approach_s = 7.0;
+  Harness h(o);
+  const FlightConfig& c = h.fsw().config();
+  h.run(c.timeouts.approach_s + 40.0);
+  ASSERT_TRUE(h.fsw().finished()) << phase_name(h.fsw().phase()) << ": " << h.fsw().telemetry().event;
+  EXPECT_EQ(h.fsw().result().outcome, Outcome::Aborted);
+  EXPECT_EQ(h.fsw().result().reason, "approach timed out");
+  EXPECT_TRUE(h.fsw().result().landed);
+  EXPECT_FALSE(h.saw_phase(Phase::Cross));
+  ASSERT_TRUE(h.ruin_W_m().has_value());
+  const double clear_x_m = 3.0 - c.mission.line_hold.give_up_clearance_m;  // the shelf's face at x 3 m
+  EXPECT_GT(h.ruin_W_m()->x(), clear_x_m) << "the link should fail inside the clearance: x " << h.ruin_W_m()->x();
+  bool backed_off = false;
+  for (const auto& cmd : h.commands()) backed_off = backed_off || cmd.text == "rc 0 -20 0 0";
+  EXPECT_TRUE(backed_off);
+  EXPECT_LT(h.position().x(), clear_x_m + 0.1) << "landed clear of the shelf";
 }
 
 TEST(FlightSoftware, NeverCrossesWithoutRoomBacksOutAndGivesUp) {
