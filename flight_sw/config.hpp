@@ -186,8 +186,8 @@ struct Timeouts {
   /// The approach of one target, from entering it to the crossing. It hovers short of the
   /// cell whenever it cannot decide, and over a link losing 5-6 % of the video datagrams a
   /// picture clean enough to decide on comes only every few seconds (a 30-datagram key frame
-  /// arrives whole one time in five or six): approaches that crossed there took up to 69 s
-  /// (lossy_video.yaml, docs/results.md). Past this it backs out and lands clear of the shelf.
+  /// arrives whole one time in five or six): how long such approaches took to cross is in
+  /// docs/results.md ("A lossy video link"). Past this it backs out and lands clear of the shelf.
   double approach_s = 70.0;
   double target_lost_s = 3.0;    ///< hovering to re-acquire the target, then backing out to re-read
   double back_off_s = 5.0;       ///< backing off an off-centre approach, then re-read the shelf

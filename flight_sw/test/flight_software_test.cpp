@@ -577,6 +577,15 @@ TEST(FlightSoftware, TargetLostHoversThenBacksOutToReread) {
   EXPECT_EQ(d, 0) << *first_move;
 }
 
+// A give-up as seen from outside: a straight back-off (rc 0 -20 0 0, back_off_speed_mps) and a
+// landing within 10 cm of give_up_clearance_m in front of the shelf's face (x 3 m).
+void expect_backed_out_and_landed_clear(const Harness& h, const FlightConfig& c) {
+  bool backed_off = false;
+  for (const auto& cmd : h.commands()) backed_off = backed_off || cmd.text == "rc 0 -20 0 0";
+  EXPECT_TRUE(backed_off);
+  EXPECT_LT(h.position().x(), 3.0 - c.mission.line_hold.give_up_clearance_m + 0.1) << "landed clear of the shelf";
+}
+
 // A link that stops giving a picture to fly on late in the approach, closer to the shelf than
 // give_up_clearance_m: the vehicle hovers short of the cell until the approach's time limit,
 // then backs straight out and lands clear of the shelf (not where it hovered), the mission
@@ -595,10 +604,7 @@ TEST(FlightSoftware, ApproachTimedOutBacksOutAndLandsClearOfTheShelf) {
   ASSERT_TRUE(h.ruin_W_m().has_value());
   const double clear_x_m = 3.0 - c.mission.line_hold.give_up_clearance_m;  // the shelf's face at x 3 m
   EXPECT_GT(h.ruin_W_m()->x(), clear_x_m) << "the link should fail inside the clearance: x " << h.ruin_W_m()->x();
-  bool backed_off = false;
-  for (const auto& cmd : h.commands()) backed_off = backed_off || cmd.text == "rc 0 -20 0 0";
-  EXPECT_TRUE(backed_off);
-  EXPECT_LT(h.position().x(), clear_x_m + 0.1) << "landed clear of the shelf";
+  expect_backed_out_and_landed_clear(h, c);
 }
 
 TEST(FlightSoftware, NeverCrossesWithoutRoomBacksOutAndGivesUp) {
@@ -615,10 +621,7 @@ TEST(FlightSoftware, NeverCrossesWithoutRoomBacksOutAndGivesUp) {
   EXPECT_FALSE(h.saw_phase(Phase::Cross));
   EXPECT_EQ(h.fsw().result().reason.rfind(std::string(kCrossingDeclined) + kLineCannotBeHeld, 0), 0u)
       << h.fsw().result().reason;
-  bool backed_off = false;
-  for (const auto& cmd : h.commands()) backed_off = backed_off || cmd.text == "rc 0 -20 0 0";
-  EXPECT_TRUE(backed_off);
-  EXPECT_LT(h.position().x(), 3.0 - c.mission.line_hold.give_up_clearance_m + 0.1) << "landed clear of the shelf";
+  expect_backed_out_and_landed_clear(h, c);
 }
 
 // The gate's off-centre refusals: with the line-hold's hold short switched off by a calm wait
@@ -638,10 +641,7 @@ TEST(FlightSoftware, NeverCrossesOffCentreBacksOffAndGivesUp) {
   EXPECT_FALSE(h.saw_phase(Phase::Cross));
   EXPECT_EQ(h.fsw().result().reason, "could not centre on the target cell");
   EXPECT_EQ(h.fsw().telemetry().tracking.shelf_rereads, 1);
-  bool backed_off = false;
-  for (const auto& cmd : h.commands()) backed_off = backed_off || cmd.text == "rc 0 -20 0 0";
-  EXPECT_TRUE(backed_off);
-  EXPECT_LT(h.position().x(), 3.0 - c.mission.line_hold.give_up_clearance_m + 0.1) << "landed clear of the shelf";
+  expect_backed_out_and_landed_clear(h, c);
 }
 
 // A re-read from close that sees nothing (run 242 of the default sdk campaign, commit bfd468c:
