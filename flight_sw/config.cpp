@@ -204,6 +204,7 @@ void read_mission(const Map& m, MissionParams& p) {
   opt(m, "settle_s", p.approach.settle_s, kNonNegative);
   opt(m, "settle_z_m", p.approach.settle_z_m, kPositive);
   opt(m, "settle_psi_rad", p.approach.settle_psi_rad, kPositive);
+  opt(m, "settle_heading_band_rad", p.approach.settle_heading_band_rad, kPositive);
   opt(m, "settle_hold_s", p.approach.settle_hold_s, kNonNegative);
   opt(m, "pose_fresh_s", p.crossing.pose_fresh_s, kPositive);
   opt(m, "pose_jump_m", p.target.pose_jump_m, kPositive);

@@ -34,7 +34,7 @@
 //               viewpoint_settle_frames viewpoint_lost_s vehicle_size_m [x, y, z]
 //               crossing_margin_m crossing_yaw_tolerance_rad crossing_attempts cross_range_max_m
 //               beyond_distance_m edge_margin_px settle_s settle_z_m settle_psi_rad
-//               settle_hold_s pose_fresh_s pose_jump_m pose_jump_rad pose_jump_window_s coast_s
+//               settle_heading_band_rad settle_hold_s pose_fresh_s pose_jump_m pose_jump_rad pose_jump_window_s coast_s
 //               identity_continuity_s identity_confirm_s identity_rereads stop_distance_m
 //               min_beyond_distance_m level_check vertical_lag_s line_hold_window_s
 //               line_hold_min_span_s calm_wait_s give_up_clearance_m
@@ -213,7 +213,12 @@ struct ApproachParams {
   /// the autopilot's velocity time constant, so the last pose is not a moving one) ...
   double settle_s = 1.2;
   double settle_z_m = 0.03;        ///< ... and |e_z| is within this ...
-  double settle_psi_rad = 0.04;    ///< ... and |e_psi| within this.
+  double settle_psi_rad = 0.04;    ///< ... and |e_psi| within this ...
+  /// ... and the state record's yaw has stayed within a band this wide for settle_s: the
+  /// open-loop crossing flies on the heading it starts with, judged on a pose a video latency
+  /// old, so a heading still turning turns the blind line with it (docs/method.md section 7,
+  /// "A still heading"). One step of the SDK's whole degrees (0.01745 rad), no more.
+  double settle_heading_band_rad = 0.0175;
   double settle_hold_s = 10.0;     ///< holding short longer than this: go on anyway
   /// A pose from corner tags crossed by a damaged picture's guessed rows is compared with the
   /// last pose carried by the state odometry for at most this long after it (the odometry

@@ -5,11 +5,13 @@
 
 #include "flight_sw/crossing_gate.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
 #include "flight_sw/guidance.hpp"
 #include "flight_sw/mission_text.hpp"
+#include "shelfcross/rotation.hpp"
 
 namespace shelfcross::flight_sw {
 
@@ -19,13 +21,38 @@ void CrossingGate::new_target() {
   forward_gain_.restart();
 }
 
-// Quiet: no lateral command has acted for settle_s (more than the video latency plus the
-// autopilot's velocity lag), so what moves the vehicle sideways now nobody commanded.
+// The records of the last kKeep_s (more than settle_s plus a pose's age) whose yaw lies within
+// the band about each other: a record that widens the band past it ends the stretch before it.
+void HeadingStretch::on_state(TimeNs t_ns, double yaw_rad) {
+  constexpr double kKeep_s = 5.0;
+  yaw_.emplace_back(t_ns, yaw_rad);
+  const auto span = [&] {
+    double lo = 0.0, hi = 0.0;
+    for (const auto& r : yaw_) {
+      const double d = wrap_pi(r.second - yaw_rad);
+      lo = std::min(lo, d);
+      hi = std::max(hi, d);
+    }
+    return hi - lo;
+  };
+  bool left = false;
+  while (span() > band_rad_) {
+    yaw_.pop_front();
+    left = true;
+  }
+  if (left || yaw_.size() == 1) since_ns_ = yaw_.front().first;
+  while (ns_to_seconds(t_ns - yaw_.front().first) > kKeep_s) yaw_.pop_front();
+}
+
+// Quiet: no lateral command has acted and the heading has held still for settle_s (more than
+// the video latency plus the autopilot's velocity lag), so what moves the vehicle sideways now
+// nobody commanded.
 bool CrossingGate::quiet_at(TimeNs t_ns) const {
-  return ns_to_seconds(t_ns - lateral_active_ns_) >= config_.mission.approach.settle_s;
+  return ns_to_seconds(t_ns - still_since_ns()) >= config_.mission.approach.settle_s;
 }
 
 void CrossingGate::on_state(const StateRecord& s, bool approaching) {
+  heading_.on_state(s.t_ns, s.yaw_rad);
   cell_height_.on_state(s);
   if (approaching) line_hold_.on_state(s, quiet_at(s.t_ns));
 }
@@ -68,6 +95,7 @@ PoseEstimate CrossingGate::gate_pose(MissionFacts& facts, const TargetTracker& t
   PoseEstimate pose = *tracker.poses().decision_pose_K();
   gate.pose_age_s = ns_to_seconds(facts.now_ns - pose_t_ns);
   gate.still_for_s = ns_to_seconds(pose_t_ns - lateral_active_ns_);
+  gate.heading_still_for_s = ns_to_seconds(pose_t_ns - heading_.since_ns());
   double carried_s = 0.0;
   if (gate.pose_age_s > config_.mission.crossing.pose_fresh_s && facts.state_fresh()) {
     const auto c = line_hold_.carried(facts.now_ns, OdometryFix{facts.odometry.p_O_m(), facts.state->yaw_rad},
@@ -119,10 +147,12 @@ RoughAir CrossingGate::too_rough(MissionFacts& facts, const TargetTracker& track
 // The crossing gate (crossing_refusal) judged on the last pose from a nearly whole picture; if
 // it is clear, the crossing (or, with no room behind the shelf to stop, the landing), else the
 // refusal.
-GateVerdict CrossingGate::judge(MissionFacts& facts, const TargetTracker& tracker, const std::string& why_now) {
+GateVerdict CrossingGate::judge(MissionFacts& facts, const TargetTracker& tracker, const VelocityCommand& sticks,
+                                const std::string& why_now) {
   const ControlGains& g = config_.control;
   CrossingGateInput gate;
   const PoseEstimate pose = gate_pose(facts, tracker, gate);
+  gate.yaw_rate_cmd_radps = sticks.yaw_rate_radps;
   gate.identity = tracker.identification().identity();
   const std::optional<double> cell_centre_h_m = cell_height_.measured_m();
   if (cell_centre_h_m && facts.state_fresh()) {

@@ -6,8 +6,10 @@
 // gate judged on the last deciding pose (crossing_refusal, target_tracker.hpp): a refusal, or
 // the crossing to fly (cell_crossing.hpp).
 
+#include <deque>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "flight_sw/cell_crossing.hpp"
 #include "flight_sw/config.hpp"
@@ -31,10 +33,27 @@ struct RoughAir {
   std::optional<std::string> declined;  ///< no room for calm_wait_s: the crossing declined, this the reason
 };
 
+/// How long the heading has held still, by the state record: the newest stretch of records
+/// whose yaw stays within a band of `band_rad` (the SDK reports whole degrees: the band holds
+/// one step of flicker). A heading turning at w leaves the band within band / w.
+class HeadingStretch {
+ public:
+  explicit HeadingStretch(double band_rad) : band_rad_(band_rad) {}
+  void on_state(TimeNs t_ns, double yaw_rad);
+  /// The stretch's first record (0 before any record: nothing known to hold the heading back).
+  TimeNs since_ns() const { return since_ns_; }
+
+ private:
+  double band_rad_;
+  std::deque<std::pair<TimeNs, double>> yaw_;  ///< the stretch's records of the last kKeep_s, t and yaw
+  TimeNs since_ns_ = 0;
+};
+
 class CrossingGate {
  public:
   /// `config` must be valid and outlive this (the mission's one configuration).
-  explicit CrossingGate(const FlightConfig& config) : config_(config) {}
+  explicit CrossingGate(const FlightConfig& config)
+      : config_(config), heading_(config.mission.approach.settle_heading_band_rad) {}
 
   /// A new target: its cell height, line hold and forward gain measured anew.
   void new_target();
@@ -45,11 +64,12 @@ class CrossingGate {
 
   /// The lateral law commanded a sideways speed at t_ns (stillness to be shown anew).
   void moved_sideways(TimeNs t_ns) { lateral_active_ns_ = t_ns; }
-  /// Seconds since the last sideways command.
-  double laterally_still_s(TimeNs now_ns) const { return ns_to_seconds(now_ns - lateral_active_ns_); }
+  /// Seconds the vehicle has been still: since the last sideways command and since the heading
+  /// last left its band (HeadingStretch).
+  double still_s(TimeNs now_ns) const { return ns_to_seconds(now_ns - still_since_ns()); }
 
-  /// Each state record: the cell height's stillness; in the approach (`approaching`), the line
-  /// hold's across-line speed.
+  /// Each state record: the heading's stillness and the cell height's; in the approach
+  /// (`approaching`), the line hold's across-line speed.
   void on_state(const StateRecord& s, bool approaching);
   /// Each approach picture: the forward command held since the last (forward gain).
   void on_command_held(TimeNs now_ns, double vx_B_mps) { forward_gain_.on_command_held(now_ns, vx_B_mps); }
@@ -62,17 +82,20 @@ class CrossingGate {
   /// Inside commit_range_m with the identity confirmed: hold short while the forecast is not yet
   /// measured or leaves no room; declined after calm_wait_s of no room.
   RoughAir too_rough(MissionFacts& facts, const TargetTracker& tracker, const PoseEstimate& pose_K);
-  /// The gate on the last deciding pose (requires one, and a target); `why_now` begins the
-  /// crossing's event.
-  GateVerdict judge(MissionFacts& facts, const TargetTracker& tracker, const std::string& why_now);
+  /// The gate on the last deciding pose (requires one, and a target); `sticks`: the command in
+  /// effect; `why_now` begins the crossing's event.
+  GateVerdict judge(MissionFacts& facts, const TargetTracker& tracker, const VelocityCommand& sticks,
+                    const std::string& why_now);
 
  private:
+  TimeNs still_since_ns() const { return std::max(lateral_active_ns_, heading_.since_ns()); }
   bool quiet_at(TimeNs t_ns) const;
   LineHoldForecast forecast(MissionFacts& facts, const PoseEstimate& pose_K);
   PoseEstimate gate_pose(MissionFacts& facts, const TargetTracker& tracker, CrossingGateInput& gate);
 
   const FlightConfig& config_;
   TimeNs lateral_active_ns_ = 0;          ///< last time the lateral law commanded a speed
+  HeadingStretch heading_;                ///< since when the state's yaw has held still
   LineHoldMonitor line_hold_;             ///< line_hold.hpp
   std::optional<TimeNs> rough_since_ns_;  ///< held short since then: the forecast left no room
   ForwardGainEstimator forward_gain_;     ///< forward speed per commanded speed, for timing the crossing

@@ -71,12 +71,16 @@ double approach_lateral_mps(const ControlGains& g, const ApproachErrors& e) {
   return bang_off_bang(e.psi_cell_rad, g.psi_lateral_threshold_rad, g.lateral_speed_mps);  // Fig. 19
 }
 
-ApproachHold approach_hold(const FlightConfig& config, const ApproachErrors& e, double laterally_still_s,
+bool heading_turning(const FlightConfig& config, double yaw_rate_radps) {
+  return std::abs(yaw_rate_radps) > config.control.kp_psi * config.mission.approach.settle_psi_rad;
+}
+
+ApproachHold approach_hold(const FlightConfig& config, const ApproachErrors& e, double still_s,
                            double range_x_m) {
   const MissionParams& m = config.mission;
   const ControlGains& g = config.control;
   ApproachHold h;
-  h.settled = laterally_still_s >= m.approach.settle_s && std::abs(e.e_z_m) <= m.approach.settle_z_m &&
+  h.settled = still_s >= m.approach.settle_s && std::abs(e.e_z_m) <= m.approach.settle_z_m &&
               std::abs(e.e_psi_rad) <= m.approach.settle_psi_rad;
   h.in_cone = std::abs(e.psi_cell_rad) <= g.approach_cone_rad;
   h.settling = range_x_m <= g.commit_range_m && !h.settled;

@@ -71,15 +71,21 @@ ApproachErrors approach_errors(const CameraIntrinsics& k, const cv::Point2d& box
 /// The lateral law (Fig. 19): vy_B = bang_off_bang(psi_cell, psi_L, V_y).
 double approach_lateral_mps(const ControlGains& g, const ApproachErrors& e);
 
+/// The heading law turning the vehicle: |yaw_rate| above kp_psi * settle_psi_rad, what the law
+/// asks for a heading error at the settling tolerance. A crossing started on such a command
+/// goes on turning for about the autopilot's lag, and the blind line with it (the crossing
+/// gate refuses it; the state's yaw shows a turn that has already happened: HeadingStretch).
+bool heading_turning(const FlightConfig& config, double yaw_rate_radps);
+
 /// What holds the forward speed of eq. 10 at 0.
 struct ApproachHold {
-  bool settled = false;   ///< laterally still for settle_s, centred vertically and in heading
+  bool settled = false;   ///< still for settle_s, centred vertically and in heading
   bool in_cone = false;   ///< the line of sight within approach_cone_rad of the normal
   bool settling = false;  ///< inside commit_range_m and not yet settled
 };
-/// `laterally_still_s`: since the lateral law last commanded a speed; `range_x_m`: -x_K of the
-/// body.
-ApproachHold approach_hold(const FlightConfig& config, const ApproachErrors& e, double laterally_still_s,
+/// `still_s`: since the lateral law last commanded a speed and the heading last left its band
+/// (CrossingGate::still_s); `range_x_m`: -x_K of the body.
+ApproachHold approach_hold(const FlightConfig& config, const ApproachErrors& e, double still_s,
                            double range_x_m);
 
 /// Forward at the constant xdot_0 (eq. 10) along the cell normal: held at 0 while `hold` (the

@@ -294,7 +294,7 @@ ApproachStep TargetApproach::found(const Picture& pic, const TargetTracker::Pred
   // settle_hold_s (the crossing gate then decides).
   // Also held short while the air leaves the line no room (CrossingGate::too_rough: declined
   // after calm_wait_s).
-  const ApproachHold h = approach_hold(config_, e, gate_.laterally_still_s(f.now_ns), -pose.p_FB_m().x());
+  const ApproachHold h = approach_hold(config_, e, gate_.still_s(f.now_ns), -pose.p_FB_m().x());
   const RoughAir rough = gate_.too_rough(f, tracker_, pose);
   if (rough.declined) return give_up(*rough.declined, 0.0, f);
   const bool settling = h.settling || rough.hold_short;
@@ -314,7 +314,7 @@ ApproachStep TargetApproach::found(const Picture& pic, const TargetTracker::Pred
   // last one, its pose then too old to cross on (pose_fresh_s). A refusal here only lets
   // the approach go on.
   if (tracker_.corners().near_edge() && decides && -pose.p_FB_m().x() <= config_.mission.approach.cross_range_max_m) {
-    GateVerdict verdict = gate_.judge(f, tracker_, "corner tags leaving the view");
+    GateVerdict verdict = gate_.judge(f, tracker_, tools.sticks.velocity(), "corner tags leaving the view");
     if (!verdict.refusal) return crossing_step(std::move(verdict));
   }
   const ApproachStep s = flying(v);
@@ -348,7 +348,7 @@ ApproachStep TargetApproach::unseen(double dt, ApproachTools tools) {
   const ApproachErrors e = approach_errors(config_.camera, {b.x + 0.5 * b.width, b.y + 0.5 * b.height}, pose);
   VelocityCommand v = steer_on(e, dt, config_.control, tools, gate_);
   const ApproachHold h =
-      approach_hold(config_, e, gate_.laterally_still_s(tools.facts.now_ns), -pose.p_FB_m().x());
+      approach_hold(config_, e, gate_.still_s(tools.facts.now_ns), -pose.p_FB_m().x());
   v.vx_B_mps = forward_speed_mps(config_, tracker_, tools.survey, !h.in_cone, -pose.p_FB_m().x());  // eq. 10
   return flying(v);
 }
@@ -371,7 +371,7 @@ ApproachStep TargetApproach::without_target(const Picture& pic, ApproachTools to
   const std::optional<PoseEstimate>& decision_pose_K = tracker_.poses().decision_pose_K();
   if (decision_pose_K && tracker_.corners().near_edge() &&
       -decision_pose_K->p_FB_m().x() <= config_.mission.approach.cross_range_max_m) {
-    GateVerdict verdict = gate_.judge(f, tracker_, "corner tags left the view");
+    GateVerdict verdict = gate_.judge(f, tracker_, tools.sticks.velocity(), "corner tags left the view");
     if (!verdict.refusal) return crossing_step(std::move(verdict));
     const std::string& why = *verdict.refusal;
     if (!timers_.back_off_since_ns) {

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "flight_sw/guidance.hpp"
+
 namespace shelfcross::flight_sw {
 
 std::optional<std::string> crossing_refusal(const FlightConfig& config, CellIndex target, const PoseEstimate& pose,
@@ -18,6 +20,11 @@ std::optional<std::string> crossing_refusal(const FlightConfig& config, CellInde
   // sideways when it was taken: the video latency hides up to V_y (latency + tau) of motion.
   if (input.pose_age_s > m.crossing.pose_fresh_s) return "last pose too old";
   if (input.still_for_s < m.approach.settle_s) return "still moving sideways";
+  // The crossing flies on the heading it starts with: a heading that turned since the pose's
+  // picture, or that a turn commanded now carries on turning, turns the line with it.
+  if (input.heading_still_for_s < m.approach.settle_s || heading_turning(config, input.yaw_rate_cmd_radps)) {
+    return "heading still turning";
+  }
   if (psi > m.crossing.crossing_yaw_tolerance_rad) return "heading off the cell normal";
   if (d.x() <= 0.0 || room.offset_y_m() > tol_y) return "off-centre laterally";
   if (room.offset_z_m() > tol_z) return "off-centre vertically";

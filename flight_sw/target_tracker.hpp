@@ -26,6 +26,10 @@ namespace shelfcross::flight_sw {
 struct CrossingGateInput {
   double pose_age_s = 0.0;        ///< now less the pose's frame time
   double still_for_s = 0.0;       ///< the pose's frame time less the last lateral command
+  /// The pose's frame time less the start of the heading's still stretch (HeadingStretch,
+  /// crossing_gate.hpp): negative when the heading has turned since the pose.
+  double heading_still_for_s = 0.0;
+  double yaw_rate_cmd_radps = 0.0;  ///< the heading law's command in effect (a turn the vehicle goes on with)
   CellIdentity identity = CellIdentity::Unknown;  ///< the target's identity (never cross unless Confirmed)
   /// The vehicle's height above the target cell's centre now, m, from the state record: its
   /// height h less the cell centre's height in h's frame, measured in the approach. Empty when

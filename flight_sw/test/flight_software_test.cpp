@@ -204,6 +204,8 @@ class Harness {
   double reread_end_yaw_rad() const { return reread_end_yaw_rad_; }
   bool saw_phase(Phase p) const { return std::find(phases_.begin(), phases_.end(), p) != phases_.end(); }
   const std::vector<Eigen::Vector4d>& track() const { return track_; }  // t, x, y, z
+  /// The heading (rad) at each step of track().
+  const std::vector<double>& yaw_track() const { return yaw_track_; }
   const Eigen::Vector3d& position() const { return p_WB_; }
   TimeNs now() const { return t_; }
   const std::vector<FrameStep>& frame_steps() const { return frame_steps_; }
@@ -314,6 +316,7 @@ class Harness {
       }
       t_ += dt_ns;
       track_.push_back({ns_to_seconds(t_), p_WB_.x(), p_WB_.y(), p_WB_.z()});
+      yaw_track_.push_back(yaw_);
     }
   }
 
@@ -344,6 +347,7 @@ class Harness {
   std::vector<Phase> phases_;
   std::vector<FrameStep> frame_steps_;
   std::vector<Eigen::Vector4d> track_;
+  std::vector<double> yaw_track_;
 };
 
 // ---- SDK protocol and start-up ----
@@ -692,6 +696,41 @@ void expect_through_cell_2_3(const Harness& h, std::optional<Eigen::Vector2d> en
 }
 
 // ---- The whole mission ----
+
+// The crossing flies open loop on the heading it starts with, judged on a picture a video
+// latency old. With the yaw rate lagging the stick by 0.6 s and the video 0.35 s late, the
+// heading law still turned the vehicle as the corner tags left the view (0.013 rad in the
+// latency before the commit, 0.014 rad in the 1.5 s after it: 2.7 cm across at the back
+// face, a third of a 34 cm column's tolerance). The approach now waits until the state's yaw
+// has held within settle_heading_band_rad for settle_s: from the picture's capture to 1.5 s
+// into the crossing the heading turns by less than 0.012 rad.
+TEST(FlightSoftware, CrossesOnlyOnAStillHeading) {
+  Options o;
+  o.start_W_m = Eigen::Vector3d(0.3, 0.3, 0.0);
+  o.start_yaw_rad = -0.2;
+  o.video_latency_s = 0.35;
+  o.velocity_time_constant_s = 0.7;
+  o.yaw_time_constant_s = 0.6;
+  Harness h(o);
+  h.run(80.0);
+  ASSERT_TRUE(h.fsw().finished()) << phase_name(h.fsw().phase()) << ": " << h.fsw().telemetry().event;
+  EXPECT_EQ(h.fsw().result().outcome, Outcome::Crossed) << h.fsw().result().reason;
+  std::optional<double> t_cross_s;
+  for (const FrameStep& st : h.frame_steps()) {
+    if (st.after == Phase::Cross) {
+      t_cross_s = ns_to_seconds(st.t_ns);
+      break;
+    }
+  }
+  ASSERT_TRUE(t_cross_s);
+  const auto yaw_at = [&](double t_s) {
+    double yaw = 0.0;
+    for (size_t i = 0; i < h.track().size() && h.track()[i][0] <= t_s; ++i) yaw = h.yaw_track()[i];
+    return yaw;
+  };
+  EXPECT_LT(std::abs(yaw_at(*t_cross_s + 1.5) - yaw_at(*t_cross_s - o.video_latency_s)), 0.012);
+  expect_through_cell_2_3(h);
+}
 
 // The vehicle is carried one column aside (to the wide column L2 C2, which holds box
 // 4) while the video is blank during the approach; the target's box is re-acquired where it

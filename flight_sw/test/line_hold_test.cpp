@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "flight_sw/crossing_gate.hpp"
 #include "flight_sw/line_hold.hpp"
 #include "flight_sw/target_tracker.hpp"
 
@@ -50,6 +51,7 @@ LineWander hover(LineHoldMonitor& m, double seconds, Y y_of_t, Vy vy_of_t) {
 std::optional<std::string> gate_with(const LineHoldForecast& f) {
   CrossingGateInput gate;
   gate.still_for_s = 10.0;
+  gate.heading_still_for_s = 10.0;
   gate.identity = CellIdentity::Confirmed;
   gate.height_above_cell_m = 0.0;
   gate.line_hold = f;
@@ -57,6 +59,28 @@ std::optional<std::string> gate_with(const LineHoldForecast& f) {
 }
 
 double blind_s() { return blind_crossing_s(FlightConfig{}, 0.6); }
+
+// The heading's still stretch from the state record's whole degrees: a flicker of one degree
+// keeps it; a second degree ends it at the record before (a turn of 0.05 rad/s leaves the band
+// within 0.35 s); across +-pi the band is measured on the circle.
+TEST(HeadingStretch, HoldsOneDegreeOfFlickerAndEndsOnATurn) {
+  constexpr double kDeg = std::numbers::pi / 180.0;
+  HeadingStretch h(FlightConfig{}.mission.approach.settle_heading_band_rad);
+  const auto at = [](int k) { return static_cast<TimeNs>(k) * 100'000'000; };  // 10 Hz
+  EXPECT_EQ(h.since_ns(), 0);
+  for (int k = 1; k <= 30; ++k) h.on_state(at(k), (12 + k % 2) * kDeg);  // 12, 13, 12, ... degrees
+  EXPECT_EQ(h.since_ns(), at(1));
+  h.on_state(at(31), 14 * kDeg);  // two degrees above the 12s: the stretch starts after the last 12
+  EXPECT_EQ(h.since_ns(), at(31));
+  h.on_state(at(32), 13 * kDeg);
+  EXPECT_EQ(h.since_ns(), at(31));
+  for (int k = 33; k <= 45; ++k) h.on_state(at(k), (14 + 0.05 * 0.1 * (k - 32) / kDeg) * kDeg);  // 0.05 rad/s
+  EXPECT_GT(h.since_ns(), at(33));
+  EXPECT_LE(h.since_ns(), at(45));
+  HeadingStretch w(FlightConfig{}.mission.approach.settle_heading_band_rad);
+  for (int k = 1; k <= 10; ++k) w.on_state(at(k), (k % 2 ? 180 : -179.5) * kDeg);
+  EXPECT_EQ(w.since_ns(), at(1));
+}
 
 // A calm hover: the pose noise of a few millimetres, the state still. The forecast is a
 // centimetre at most and the gate lets the crossing go.

@@ -77,6 +77,7 @@ Outcome judge(const testing::Scene& scene, CellIndex seen, CellIndex believed, d
   gate.line_hold = {true, 0.0, 0.0};  // a calm hover measured
   gate.pose_age_s = 0.0;
   gate.still_for_s = 10.0;
+  gate.heading_still_for_s = 10.0;
   gate.identity = out.check.verdict;
   gate.height_above_cell_m = pose->p_FB_m().z();  // hovering: the state height agrees with the picture
   out.refusal = crossing_refusal(config, believed, *pose, gate);
@@ -195,6 +196,7 @@ TEST(CellIdentity, UniformGridWithoutMarkersIsNeverConfirmedWrongly) {
     CrossingGateInput gate;
     gate.line_hold = {true, 0.0, 0.0};  // a calm hover measured
     gate.still_for_s = 10.0;
+    gate.heading_still_for_s = 10.0;
     gate.identity = check.verdict;
     gate.height_above_cell_m = pose->p_FB_m().z();
     EXPECT_TRUE(crossing_refusal(config, believed, *pose, gate).has_value());
@@ -226,6 +228,7 @@ TEST(CrossingGate, RefusesAnUnidentifiedCellEvenPerfectlyCentred) {
   CrossingGateInput gate;
   gate.line_hold = {true, 0.0, 0.0};  // a calm hover measured
   gate.still_for_s = 10.0;
+  gate.heading_still_for_s = 10.0;
   gate.height_above_cell_m = 0.0;
   for (CellIdentity id : {CellIdentity::Unknown, CellIdentity::Contradicted}) {
     gate.identity = id;
@@ -237,6 +240,37 @@ TEST(CrossingGate, RefusesAnUnidentifiedCellEvenPerfectlyCentred) {
   EXPECT_FALSE(crossing_refusal(config, {2, 2}, pose, gate).has_value());
   gate.pose_age_s = 1.0;
   EXPECT_EQ(crossing_refusal(config, {2, 2}, pose, gate).value_or(""), "last pose too old");
+}
+
+// Centred, identified, a calm hover measured, the lateral law quiet: the heading alone refuses
+// the crossing, turned since the pose's picture (its still stretch shorter than settle_s at
+// the pose's time) or turning on under the heading law's command in effect.
+TEST(CrossingGate, RefusesWhileTheHeadingTurns) {
+  FlightConfig config;
+  PoseEstimate pose;
+  pose.X_FB.translation() = Eigen::Vector3d(-0.6, 0.0, 0.0);
+  pose.X_FC.translation() = Eigen::Vector3d(-0.555, 0.0, 0.0);
+  CrossingGateInput gate;
+  gate.identity = CellIdentity::Confirmed;
+  gate.line_hold = {true, 0.0, 0.0};
+  gate.still_for_s = 10.0;
+  gate.height_above_cell_m = 0.0;
+  gate.heading_still_for_s = config.mission.approach.settle_s;
+  EXPECT_FALSE(crossing_refusal(config, {2, 2}, pose, gate).has_value());
+  for (double still_s : {config.mission.approach.settle_s - 0.1, 0.0, -0.2}) {
+    gate.heading_still_for_s = still_s;
+    EXPECT_EQ(crossing_refusal(config, {2, 2}, pose, gate).value_or(""), "heading still turning") << still_s;
+  }
+  gate.heading_still_for_s = 10.0;
+  const double turning_radps = config.control.kp_psi * config.mission.approach.settle_psi_rad;  // 0.048
+  for (double w : {0.0, 0.03, -0.045}) {
+    gate.yaw_rate_cmd_radps = w;
+    EXPECT_FALSE(crossing_refusal(config, {2, 2}, pose, gate).has_value()) << w;
+  }
+  for (double w : {turning_radps + 0.005, -0.15}) {
+    gate.yaw_rate_cmd_radps = w;
+    EXPECT_EQ(crossing_refusal(config, {2, 2}, pose, gate).value_or(""), "heading still turning") << w;
+  }
 }
 
 // Run 19 of grid_2x2 seed 2 (ideal link), at its commit: the last pose (0.3 s old
@@ -259,6 +293,7 @@ TEST(CrossingGate, JudgesTheHeightByTheStateRecordNotOnlyByTheStalePose) {
   CrossingGateInput gate;
   gate.line_hold = {true, 0.0, 0.0};  // a calm hover measured
   gate.still_for_s = 10.0;
+  gate.heading_still_for_s = 10.0;
   gate.identity = CellIdentity::Confirmed;
   const double tol_z = 0.5 * (0.34 - 0.02 - config.mission.vehicle_size_m.z()) - config.mission.crossing_margin_m;
   // No height measured against the state: never crossed.
