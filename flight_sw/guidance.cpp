@@ -71,10 +71,6 @@ double approach_lateral_mps(const ControlGains& g, const ApproachErrors& e) {
   return bang_off_bang(e.psi_cell_rad, g.psi_lateral_threshold_rad, g.lateral_speed_mps);  // Fig. 19
 }
 
-bool heading_turning(const FlightConfig& config, double yaw_rate_radps) {
-  return std::abs(yaw_rate_radps) > config.control.kp_psi * config.mission.approach.settle_psi_rad;
-}
-
 ApproachHold approach_hold(const FlightConfig& config, const ApproachErrors& e, double still_s,
                            double range_x_m) {
   const MissionParams& m = config.mission;

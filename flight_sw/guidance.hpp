@@ -71,12 +71,6 @@ ApproachErrors approach_errors(const CameraIntrinsics& k, const cv::Point2d& box
 /// The lateral law (Fig. 19): vy_B = bang_off_bang(psi_cell, psi_L, V_y).
 double approach_lateral_mps(const ControlGains& g, const ApproachErrors& e);
 
-/// The heading law turning the vehicle: |yaw_rate| above kp_psi * settle_psi_rad, what the law
-/// asks for a heading error at the settling tolerance. A crossing started on such a command
-/// goes on turning for about the autopilot's lag, and the blind line with it (the crossing
-/// gate refuses it; the state's yaw shows a turn that has already happened: HeadingStretch).
-bool heading_turning(const FlightConfig& config, double yaw_rate_radps);
-
 /// What holds the forward speed of eq. 10 at 0.
 struct ApproachHold {
   bool settled = false;   ///< still for settle_s, centred vertically and in heading

@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cmath>
 
-#include "flight_sw/guidance.hpp"
-
 namespace shelfcross::flight_sw {
+
+bool heading_turning(const FlightConfig& config, double yaw_rate_radps) {
+  return std::abs(yaw_rate_radps) > config.control.kp_psi * config.mission.approach.settle_psi_rad;
+}
 
 std::optional<std::string> crossing_refusal(const FlightConfig& config, CellIndex target, const PoseEstimate& pose,
                                             const CrossingGateInput& input) {

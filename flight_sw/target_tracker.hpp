@@ -41,6 +41,11 @@ struct CrossingGateInput {
   LineHoldForecast line_hold;
 };
 
+/// The heading law turning the vehicle: |yaw_rate| above kp_psi * settle_psi_rad, what the law
+/// asks for a heading error at the settling tolerance. A crossing started on such a command
+/// goes on turning for about the autopilot's lag, and the blind line with it (the crossing
+/// gate refuses it; the state's yaw shows a turn that has already happened: HeadingStretch).
+bool heading_turning(const FlightConfig& config, double yaw_rate_radps);
 
 /// The crossing gate (flight_sw/README.md): empty when the crossing of `target` from `pose_K`
 /// may start, otherwise why not. Refused unless the cell's identity is confirmed; then on the
