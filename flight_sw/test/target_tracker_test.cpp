@@ -25,6 +25,26 @@ Inventory inventory_of(const std::vector<testing::DrawnBox>& boxes) {
   return inv;
 }
 
+// The gate's input of a calm, still hover (line hold measured with no wander, no lateral
+// command or turn for 10 s): `identity` and the height above the cell as given.
+CrossingGateInput calm_still_gate(CellIdentity identity, std::optional<double> height_above_cell_m) {
+  CrossingGateInput gate;
+  gate.line_hold = {true, 0.0, 0.0};
+  gate.still_for_s = 10.0;
+  gate.heading_still_for_s = 10.0;
+  gate.identity = identity;
+  gate.height_above_cell_m = height_above_cell_m;
+  return gate;
+}
+
+// A pose 0.6 m in front of the cell centre, level, facing it (camera 4.5 cm ahead of the body).
+PoseEstimate centred_pose() {
+  PoseEstimate pose;
+  pose.X_FB.translation() = Eigen::Vector3d(-0.6, 0.0, 0.0);
+  pose.X_FC.translation() = Eigen::Vector3d(-0.555, 0.0, 0.0);
+  return pose;
+}
+
 // What the tracker measured: the camera `range_m` in front of the physical cell `seen` (body on
 // its normal, heading 0), the box on that cell's four corner tags; the pose is solved as if the
 // box were `believed`. Returns the identity verdict and the crossing gate's answer for a pose
@@ -73,13 +93,8 @@ Outcome judge(const testing::Scene& scene, CellIndex seen, CellIndex believed, d
   EXPECT_TRUE(pose.has_value());
   Outcome out;
   out.check = check_cell_identity(believed, *pose, tags, markers, inventory_of(shelf.boxes), config);
-  CrossingGateInput gate;
-  gate.line_hold = {true, 0.0, 0.0};  // a calm hover measured
-  gate.pose_age_s = 0.0;
-  gate.still_for_s = 10.0;
-  gate.heading_still_for_s = 10.0;
-  gate.identity = out.check.verdict;
-  gate.height_above_cell_m = pose->p_FB_m().z();  // hovering: the state height agrees with the picture
+  // Hovering: the state height agrees with the picture.
+  const CrossingGateInput gate = calm_still_gate(out.check.verdict, pose->p_FB_m().z());
   out.refusal = crossing_refusal(config, believed, *pose, gate);
   return out;
 }
@@ -193,12 +208,7 @@ TEST(CellIdentity, UniformGridWithoutMarkersIsNeverConfirmedWrongly) {
     if (range >= 2.4) {
       EXPECT_EQ(check.verdict, CellIdentity::Contradicted) << check.why;
     }
-    CrossingGateInput gate;
-    gate.line_hold = {true, 0.0, 0.0};  // a calm hover measured
-    gate.still_for_s = 10.0;
-    gate.heading_still_for_s = 10.0;
-    gate.identity = check.verdict;
-    gate.height_above_cell_m = pose->p_FB_m().z();
+    const CrossingGateInput gate = calm_still_gate(check.verdict, pose->p_FB_m().z());
     EXPECT_TRUE(crossing_refusal(config, believed, *pose, gate).has_value());
   }
 }
@@ -222,14 +232,8 @@ TEST(CellIdentity, ShelfBehindChangesNoVerdict) {
 
 TEST(CrossingGate, RefusesAnUnidentifiedCellEvenPerfectlyCentred) {
   FlightConfig config;
-  PoseEstimate pose;
-  pose.X_FB.translation() = Eigen::Vector3d(-0.6, 0.0, 0.0);
-  pose.X_FC.translation() = Eigen::Vector3d(-0.555, 0.0, 0.0);
-  CrossingGateInput gate;
-  gate.line_hold = {true, 0.0, 0.0};  // a calm hover measured
-  gate.still_for_s = 10.0;
-  gate.heading_still_for_s = 10.0;
-  gate.height_above_cell_m = 0.0;
+  const PoseEstimate pose = centred_pose();
+  CrossingGateInput gate = calm_still_gate(CellIdentity::Unknown, 0.0);
   for (CellIdentity id : {CellIdentity::Unknown, CellIdentity::Contradicted}) {
     gate.identity = id;
     const auto r = crossing_refusal(config, {2, 2}, pose, gate);
@@ -247,14 +251,8 @@ TEST(CrossingGate, RefusesAnUnidentifiedCellEvenPerfectlyCentred) {
 // the pose's time) or turning on under the heading law's command in effect.
 TEST(CrossingGate, RefusesWhileTheHeadingTurns) {
   FlightConfig config;
-  PoseEstimate pose;
-  pose.X_FB.translation() = Eigen::Vector3d(-0.6, 0.0, 0.0);
-  pose.X_FC.translation() = Eigen::Vector3d(-0.555, 0.0, 0.0);
-  CrossingGateInput gate;
-  gate.identity = CellIdentity::Confirmed;
-  gate.line_hold = {true, 0.0, 0.0};
-  gate.still_for_s = 10.0;
-  gate.height_above_cell_m = 0.0;
+  const PoseEstimate pose = centred_pose();
+  CrossingGateInput gate = calm_still_gate(CellIdentity::Confirmed, 0.0);
   gate.heading_still_for_s = config.mission.approach.settle_s;
   EXPECT_FALSE(crossing_refusal(config, {2, 2}, pose, gate).has_value());
   for (double still_s : {config.mission.approach.settle_s - 0.1, 0.0, -0.2}) {
@@ -290,11 +288,7 @@ TEST(CrossingGate, JudgesTheHeightByTheStateRecordNotOnlyByTheStalePose) {
   PoseEstimate pose;  // camera 4.5 cm ahead of the body (mount), level, facing the cell
   pose.X_FB.translation() = Eigen::Vector3d(-0.83, 0.0, 0.13);
   pose.X_FC.translation() = Eigen::Vector3d(-0.785, 0.0, 0.13);
-  CrossingGateInput gate;
-  gate.line_hold = {true, 0.0, 0.0};  // a calm hover measured
-  gate.still_for_s = 10.0;
-  gate.heading_still_for_s = 10.0;
-  gate.identity = CellIdentity::Confirmed;
+  CrossingGateInput gate = calm_still_gate(CellIdentity::Confirmed, std::nullopt);
   const double tol_z = 0.5 * (0.34 - 0.02 - config.mission.vehicle_size_m.z()) - config.mission.crossing_margin_m;
   // No height measured against the state: never crossed.
   EXPECT_EQ(crossing_refusal(config, target, pose, gate).value_or(""), "cell height not measured against the state height");
