@@ -49,10 +49,11 @@ bool AirbornePhases::supervise(AirborneTools t) {
   MissionFacts& facts = t.facts;
   const Timeouts& to = config_.timeouts;
   const double in_phase_s = facts.phase.elapsed_s(facts.now_ns);
-  // The phase's time limit passed: land, aborted with `reason`.
+  const bool out_of_time = facts.out_of_time(to.mission_s);
+  // The phase's time limit or the mission's passed: land, aborted with `reason`.
   auto timed_out = [&](double limit_s, const char* reason) {
-    if (in_phase_s > limit_s) {
-      t.mission.land(Outcome::Aborted, reason);
+    if (in_phase_s > limit_s || out_of_time) {
+      t.mission.land(Outcome::Aborted, out_of_time ? kMissionTimeSpent : reason);
       return true;
     }
     return false;
@@ -62,9 +63,9 @@ bool AirbornePhases::supervise(AirborneTools t) {
     case Phase::GoToViewpoint: return timed_out(to.go_to_viewpoint_s, "viewpoint not reached");
     case Phase::TakeInventory: return timed_out(to.take_inventory_s, "inventory not completed");
     case Phase::Approach:
-      // A declined crossing backing out (goes on), or landing; the time limit; the target lost
+      // A declined crossing backing out (goes on), or landing; the time limits; the target lost
       // or an off-centre back-off too long (TargetApproach::supervise).
-      if (const std::optional<ApproachStep> step = approach_.supervise(facts, survey_, in_phase_s)) {
+      if (const std::optional<ApproachStep> step = approach_.supervise(facts, survey_, in_phase_s, out_of_time)) {
         follow(*step, t);
         return step->next != ApproachStep::Next::Stay;
       }

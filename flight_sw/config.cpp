@@ -139,6 +139,7 @@ void read_control(const Map& m, ControlGains& c) {
   opt(m, "yaw_rate_max_radps", c.yaw_rate_max_radps, kPositive);
   opt(m, "lateral_speed_mps", c.lateral_speed_mps, kNonNegative);
   opt(m, "psi_lateral_threshold_rad", c.psi_lateral_threshold_rad, kNonNegative);
+  opt(m, "lateral_threshold_m", c.lateral_threshold_m, kNonNegative);
   opt(m, "viewpoint_kp", c.viewpoint_kp, kPositive);
   opt(m, "viewpoint_speed_max_mps", c.viewpoint_speed_max_mps, kPositive);
   opt(m, "viewpoint_yaw_kp", c.viewpoint_yaw_kp, kNonNegative);
@@ -175,7 +176,8 @@ void read_timeouts(const Map& m, Timeouts& t) {
                             {"target_lost_s", &t.target_lost_s},
                             {"back_off_s", &t.back_off_s},
                             {"video_hover_s", &t.video_hover_s},
-                            {"video_land_s", &t.video_land_s}};
+                            {"video_land_s", &t.video_land_s},
+                            {"mission_s", &t.mission_s}};
   for (const auto& [key, value] : seconds) {
     opt(m, key, *value, kPositive);
   }

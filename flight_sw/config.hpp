@@ -20,7 +20,7 @@
 //               pipeline (fast | reference), tag_seed_stride_px
 //   control:    forward_speed_mps kp_z ki_z z_integral_limit_m_s z_speed_max_mps kp_psi ki_psi
 //               psi_integral_limit_rad_s yaw_rate_max_radps lateral_speed_mps
-//               psi_lateral_threshold_rad viewpoint_kp viewpoint_speed_max_mps viewpoint_yaw_kp
+//               psi_lateral_threshold_rad lateral_threshold_m viewpoint_kp viewpoint_speed_max_mps viewpoint_yaw_kp
 //               search_yaw_rate_radps back_off_speed_mps crossing_speed_mps max_control_dt_s
 //               approach_cone_rad commit_range_m crossing_kp_z crossing_z_speed_max_mps
 //               unsteered_hold_s
@@ -28,7 +28,7 @@
 //               keepalive_s
 //   timeouts:   command_reply_s takeoff_reply_s land_reply_s command_retries command_gap_s
 //               video_start_s find_shelf_s go_to_viewpoint_s take_inventory_s approach_s
-//               target_lost_s back_off_s video_hover_s video_land_s
+//               target_lost_s back_off_s video_hover_s video_land_s mission_s
 //   mission:    low_battery_pct takeoff_min_battery_pct airborne_height_m viewpoint_margin
 //               viewpoint_position_tolerance_m viewpoint_yaw_tolerance_rad
 //               viewpoint_settle_frames viewpoint_lost_s vehicle_size_m [x, y, z]
@@ -137,6 +137,9 @@ struct ControlGains {
   double yaw_rate_max_radps = 0.8;
   double lateral_speed_mps = 0.08;          ///< V_y of the bang-off-bang law
   double psi_lateral_threshold_rad = 0.04;  ///< psi_L of the bang-off-bang law
+  /// ... never narrower than this offset across the line of sight (guidance.cpp,
+  /// approach_lateral_mps: a sideways step's coast ends inside the band).
+  double lateral_threshold_m = 0.04;
   double viewpoint_kp = 0.8;                ///< (m/s) per m toward the optimal viewpoint
   double viewpoint_speed_max_mps = 0.4;
   double viewpoint_yaw_kp = 1.0;            ///< (rad/s) per rad toward facing the shelf
@@ -193,6 +196,12 @@ struct Timeouts {
   double back_off_s = 5.0;       ///< backing off an off-centre approach, then re-read the shelf
   double video_hover_s = 0.5;    ///< no frame for this long: hover
   double video_land_s = 3.0;     ///< no frame for this long: land
+  /// The mission's time budget from its start (the first command): an operator's limit (the
+  /// Tello flies about 13 min on a charge; the battery failsafe lands it at low_battery_pct).
+  /// Once spent, the airborne mission gives up where that is safe: an approach backs out to
+  /// land clear of the shelf, a crossing is finished, a transfer flies its leg, the other
+  /// phases land where they are (in front of a shelf or beyond it, never in it).
+  double mission_s = 600.0;
 };
 
 /// Reaching and reading the optimal viewpoint (GoToViewpoint; mission: viewpoint_* keys).

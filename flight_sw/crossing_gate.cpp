@@ -25,6 +25,7 @@ void CrossingGate::new_target() {
 // the band about each other: a record that widens the band past it ends the stretch before it.
 void HeadingStretch::on_state(TimeNs t_ns, double yaw_rad) {
   constexpr double kKeep_s = 5.0;
+  if (!yaw_.empty() && ns_to_seconds(t_ns - yaw_.back().first) > max_gap_s_) yaw_.clear();
   yaw_.emplace_back(t_ns, yaw_rad);
   const auto span = [&] {
     double lo = 0.0, hi = 0.0;

@@ -35,16 +35,18 @@ struct RoughAir {
 
 /// How long the heading has held still, by the state record: the newest stretch of records
 /// whose yaw stays within a band of `band_rad` (the SDK reports whole degrees: the band holds
-/// one step of flicker). A heading turning at w leaves the band within band / w.
+/// one step of flicker). A heading turning at w leaves the band within band / w. A gap of more
+/// than `max_gap_s` between records ends the stretch: nothing vouches for the heading across
+/// a gap as long as the stillness it is to show (it may have turned and come back).
 class HeadingStretch {
  public:
-  explicit HeadingStretch(double band_rad) : band_rad_(band_rad) {}
+  HeadingStretch(double band_rad, double max_gap_s) : band_rad_(band_rad), max_gap_s_(max_gap_s) {}
   void on_state(TimeNs t_ns, double yaw_rad);
   /// The stretch's first record (0 before any record: nothing known to hold the heading back).
   TimeNs since_ns() const { return since_ns_; }
 
  private:
-  double band_rad_;
+  double band_rad_, max_gap_s_;
   std::deque<std::pair<TimeNs, double>> yaw_;  ///< the stretch's records of the last kKeep_s, t and yaw
   TimeNs since_ns_ = 0;
 };
@@ -53,7 +55,8 @@ class CrossingGate {
  public:
   /// `config` must be valid and outlive this (the mission's one configuration).
   explicit CrossingGate(const FlightConfig& config)
-      : config_(config), heading_(config.mission.approach.settle_heading_band_rad) {}
+      : config_(config),
+        heading_(config.mission.approach.settle_heading_band_rad, config.mission.approach.settle_s) {}
 
   /// A new target: its cell height, line hold and forward gain measured anew.
   void new_target();

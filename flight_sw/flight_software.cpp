@@ -26,6 +26,7 @@ std::vector<SdkCommand> FlightSoftware::start(TimeNs t_ns) {
   std::vector<SdkCommand> out;
   if (facts_.phase.current() != Phase::Idle) return out;
   facts_.now_ns = t_ns;
+  facts_.started_ns = t_ns;
   facts_.telemetry.t_ns = t_ns;
   enter(Phase::EnterSdk, "entering SDK mode");
   commands_.poll(facts_.now_ns, out);

@@ -64,11 +64,21 @@ ApproachErrors approach_errors(const CameraIntrinsics& k, const cv::Point2d& box
   e.e_z_m = (k.cy_px - c.y) * range_m / k.fy_px;     // eq. 11
   e.e_psi_rad = std::atan((k.cx_px - c.x) / k.fx_px);  // eq. 13, 14
   e.psi_cell_rad = pose_K.yaw_rad + e.e_psi_rad;
+  e.range_m = range_m;
   return e;
 }
 
+// A fixed angle psi_L narrows the lateral law's band with the range (0.04 rad: 2.8 cm either
+// side at 0.7 m) while a sideways step's coast does not shrink: V_y over the video latency plus
+// the autopilot's lag, 0.08 m/s x (0.35 + 0.5) s = 6.8 cm, more than that band's 5.6 cm width,
+// so the law stepped left and right in front of the cell, and each step restarted the
+// stillness the crossing waits for. Held at lateral_threshold_m (4 cm: an 8 cm band) the step
+// ends inside the band. The crossing does not need the vehicle closer to the normal: it flies
+// the line from the last pose through the cell centre at mid-depth, on which an offset y0 at
+// range r leaves y0 (D/2) / (r + D/2) at either face (4 cm at 0.6 m: 0.9 cm).
 double approach_lateral_mps(const ControlGains& g, const ApproachErrors& e) {
-  return bang_off_bang(e.psi_cell_rad, g.psi_lateral_threshold_rad, g.lateral_speed_mps);  // Fig. 19
+  const double threshold_rad = std::max(g.psi_lateral_threshold_rad, std::atan(g.lateral_threshold_m / e.range_m));
+  return bang_off_bang(e.psi_cell_rad, threshold_rad, g.lateral_speed_mps);  // Fig. 19
 }
 
 ApproachHold approach_hold(const FlightConfig& config, const ApproachErrors& e, double still_s,

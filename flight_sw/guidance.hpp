@@ -64,11 +64,15 @@ struct ApproachErrors {
   /// keeps the yaw loop's lag (a second or more with the video latency) out of the lateral
   /// loop; with that lag the law pushed sideways the wrong way while the yaw caught up.
   double psi_cell_rad = 0.0;
+  /// The range to the cell's tag plane by the pose (at least 5 cm), metres.
+  double range_m = 0.0;
 };
 ApproachErrors approach_errors(const CameraIntrinsics& k, const cv::Point2d& box_centre_px,
                                const PoseEstimate& pose_K);
 
-/// The lateral law (Fig. 19): vy_B = bang_off_bang(psi_cell, psi_L, V_y).
+/// The lateral law (Fig. 19): vy_B = bang_off_bang(psi_cell, threshold, V_y), the threshold
+/// psi_L or, closer than lateral_threshold_m / tan(psi_L), the bearing of lateral_threshold_m
+/// across the line of sight, atan(lateral_threshold_m / range), whichever is wider.
 double approach_lateral_mps(const ControlGains& g, const ApproachErrors& e);
 
 /// What holds the forward speed of eq. 10 at 0.

@@ -15,6 +15,8 @@ namespace shelfcross::flight_sw {
 
 /// A state record older than this is not the vehicle's height now (they come at 10 Hz).
 constexpr double kStateFresh_s = 0.3;
+/// The abort reason once the mission's time budget (timeouts.mission_s) is spent.
+constexpr const char* kMissionTimeSpent = "mission time limit reached";
 
 struct MissionFacts {
   TimeNs now_ns = 0;                 ///< the stamp of the input being handled (never decreasing)
@@ -22,6 +24,7 @@ struct MissionFacts {
   std::optional<StateRecord> state;  ///< the last state record
   StateOdometry odometry;            ///< frame O: the state records' velocities integrated, their height
   Telemetry telemetry;               ///< what the mission is doing, written by every unit
+  TimeNs started_ns = 0;             ///< the mission's start (its time budget counts from it)
 
   /// A state record received: the odometry integrates it, it becomes the last one, the
   /// telemetry shows its battery and height.
@@ -31,6 +34,9 @@ struct MissionFacts {
     telemetry.link.battery_pct = s.battery_pct;
     telemetry.link.height_m = s.height_m;
   }
+
+  /// The mission's time budget (timeouts.mission_s from its start) spent.
+  bool out_of_time(double mission_s) const { return ns_to_seconds(now_ns - started_ns) > mission_s; }
 
   /// A state record within kStateFresh_s of now.
   bool state_fresh() const {

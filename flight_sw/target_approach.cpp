@@ -198,7 +198,7 @@ ApproachStep TargetApproach::give_up(const std::string& reason, double flown_in_
 }
 
 std::optional<ApproachStep> TargetApproach::supervise(MissionFacts& facts, const ShelfSurvey& survey,
-                                                      double in_phase_s) {
+                                                      double in_phase_s, bool out_of_time) {
   const Timeouts& to = config_.timeouts;
   if (retreat_.until_ns) {  // a declined crossing: back out, then land clear of the shelf
     if (facts.now_ns >= *retreat_.until_ns) return landing(retreat_.reason);
@@ -207,6 +207,7 @@ std::optional<ApproachStep> TargetApproach::supervise(MissionFacts& facts, const
   // Too long short of the cell (a link too lossy to decide on, a target never settled on):
   // backed straight out to land clear of the shelf, not where it hovers.
   if (in_phase_s > to.approach_s) return give_up("approach timed out", 0.0, facts);
+  if (out_of_time) return give_up(kMissionTimeSpent, 0.0, facts);
   const std::optional<TimeNs>& lost = timers_.lost_since_ns;
   if (lost && ns_to_seconds(facts.now_ns - *lost) > to.target_lost_s) {
     // The target not found again near where it was last seen (the view moved on while the

@@ -63,9 +63,11 @@ class TargetApproach {
   /// The approach on a picture (phase Approach).
   ApproachStep step(const Picture& pic, ApproachTools tools);
   /// The approach's timers at each input (phase Approach), `in_phase_s` into it: a declined
-  /// crossing backing out, then landing; the approach's time limit; the target lost too long
-  /// or an off-centre back-off too long (re-read). Nothing when none acts.
-  std::optional<ApproachStep> supervise(MissionFacts& facts, const ShelfSurvey& survey, double in_phase_s);
+  /// crossing backing out, then landing; the approach's time limit, or the mission's
+  /// (`out_of_time`), backing out the same way; the target lost too long or an off-centre
+  /// back-off too long (re-read). Nothing when none acts.
+  std::optional<ApproachStep> supervise(MissionFacts& facts, const ShelfSurvey& survey, double in_phase_s,
+                                        bool out_of_time);
   /// The in-crossing watch stopped the crossing (the mission is back in the approach, backing
   /// off): a refusal of the crossing; at the crossing_attempts-th the approach gives up.
   ApproachStep crossing_stopped(const CrossingStop& stop, MissionFacts& facts);

@@ -1,10 +1,12 @@
-// Control laws: PI step response and anti-windup, bang-off-bang, rc conversion and saturation.
+// Control laws: PI step response and anti-windup, bang-off-bang and the approach's lateral law,
+// rc conversion and saturation.
 
 #include <cmath>
 
 #include <gtest/gtest.h>
 
 #include "flight_sw/control.hpp"
+#include "flight_sw/guidance.hpp"
 
 namespace shelfcross::flight_sw {
 namespace {
@@ -51,6 +53,26 @@ TEST(BangOffBang, ThresholdsAndSigns) {
   // looking at the cell centre has psi = atan2(-y, -x) < 0, and must move right (vy_B < 0).
   const double psi = std::atan2(-0.2, 1.0);
   EXPECT_LT(bang_off_bang(psi, psi_l, v), 0.0);
+}
+
+// The approach's lateral law: psi_L far out; closer than lateral_threshold_m / tan(psi_L) (1 m
+// for the defaults), the bearing of lateral_threshold_m across the line of sight, so that the
+// band is never narrower than 4 cm either side.
+TEST(LateralLaw, BandNeverNarrowerThanItsOffset) {
+  const ControlGains g;
+  const auto lateral = [&](double range_m, double offset_m) {
+    ApproachErrors e;
+    e.range_m = range_m;
+    e.psi_cell_rad = std::atan2(-offset_m, range_m);  // left of the normal by offset_m
+    return approach_lateral_mps(g, e);
+  };
+  EXPECT_DOUBLE_EQ(lateral(2.0, 0.07), 0.0);                   // 0.035 rad: inside psi_L
+  EXPECT_DOUBLE_EQ(lateral(2.0, 0.09), -g.lateral_speed_mps);  // 0.045 rad: moved right
+  EXPECT_DOUBLE_EQ(lateral(2.0, -0.09), g.lateral_speed_mps);
+  EXPECT_DOUBLE_EQ(lateral(0.6, 0.035), 0.0);  // 0.058 rad, beyond psi_L, but 3.5 cm across
+  EXPECT_DOUBLE_EQ(lateral(0.6, -0.035), 0.0);
+  EXPECT_DOUBLE_EQ(lateral(0.6, 0.045), -g.lateral_speed_mps);
+  EXPECT_DOUBLE_EQ(lateral(0.6, -0.045), g.lateral_speed_mps);
 }
 
 // The crossing's height hold: climbs when below the target height, descends when above,

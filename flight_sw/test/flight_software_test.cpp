@@ -611,6 +611,33 @@ TEST(FlightSoftware, ApproachTimedOutBacksOutAndLandsClearOfTheShelf) {
   expect_backed_out_and_landed_clear(h, c);
 }
 
+// The mission's time budget spent in the approach: backed out and landed clear of the shelf,
+// like the approach's own limit, with its own reason; spent before the shelf is reached: landed
+// where it is, well in front of the shelf.
+TEST(FlightSoftware, MissionOutOfTimeGivesUpClearOfTheShelf) {
+  Options o;
+  o.ruin_after_approach_s = 7.0;
+  FlightConfig c;
+  c.timeouts.mission_s = 40.0;  // inside the approach's 70 s of pictures that cannot decide
+  Harness h(o, c);
+  h.run(c.timeouts.mission_s + 30.0);
+  ASSERT_TRUE(h.fsw().finished()) << phase_name(h.fsw().phase()) << ": " << h.fsw().telemetry().event;
+  EXPECT_EQ(h.fsw().result().outcome, Outcome::Aborted);
+  EXPECT_EQ(h.fsw().result().reason, kMissionTimeSpent);
+  EXPECT_TRUE(h.fsw().result().landed);
+  EXPECT_FALSE(h.saw_phase(Phase::Cross));
+  expect_backed_out_and_landed_clear(h, c);
+
+  FlightConfig early;
+  early.timeouts.mission_s = 1.0;  // spent by the end of the take-off
+  Harness e(Options{}, early);
+  e.run(30.0);
+  ASSERT_TRUE(e.fsw().finished()) << phase_name(e.fsw().phase()) << ": " << e.fsw().telemetry().event;
+  EXPECT_EQ(e.fsw().result().reason, kMissionTimeSpent);
+  EXPECT_TRUE(e.fsw().result().landed);
+  EXPECT_FALSE(e.saw_phase(Phase::Approach));
+}
+
 TEST(FlightSoftware, NeverCrossesWithoutRoomBacksOutAndGivesUp) {
   FlightConfig c;
   // Leave 0.25 mm of lateral tolerance in the 32 cm opening (less than the pose's own

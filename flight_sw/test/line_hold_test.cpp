@@ -65,7 +65,8 @@ double blind_s() { return blind_crossing_s(FlightConfig{}, 0.6); }
 // within 0.35 s); across +-pi the band is measured on the circle.
 TEST(HeadingStretch, HoldsOneDegreeOfFlickerAndEndsOnATurn) {
   constexpr double kDeg = std::numbers::pi / 180.0;
-  HeadingStretch h(FlightConfig{}.mission.approach.settle_heading_band_rad);
+  const ApproachParams a = FlightConfig{}.mission.approach;
+  HeadingStretch h(a.settle_heading_band_rad, a.settle_s);
   const auto at = [](int k) { return static_cast<TimeNs>(k) * 100'000'000; };  // 10 Hz
   EXPECT_EQ(h.since_ns(), 0);
   for (int k = 1; k <= 30; ++k) h.on_state(at(k), (12 + k % 2) * kDeg);  // 12, 13, 12, ... degrees
@@ -77,9 +78,26 @@ TEST(HeadingStretch, HoldsOneDegreeOfFlickerAndEndsOnATurn) {
   for (int k = 33; k <= 45; ++k) h.on_state(at(k), (14 + 0.05 * 0.1 * (k - 32) / kDeg) * kDeg);  // 0.05 rad/s
   EXPECT_GT(h.since_ns(), at(33));
   EXPECT_LE(h.since_ns(), at(45));
-  HeadingStretch w(FlightConfig{}.mission.approach.settle_heading_band_rad);
+  HeadingStretch w(a.settle_heading_band_rad, a.settle_s);
   for (int k = 1; k <= 10; ++k) w.on_state(at(k), (k % 2 ? 180 : -179.5) * kDeg);
   EXPECT_EQ(w.since_ns(), at(1));
+}
+
+// A gap in the state records longer than settle_s ends the stretch, whatever the yaw after it:
+// nothing shows the heading still across it. Shorter gaps (a few lost records) do not.
+TEST(HeadingStretch, AGapLongerThanTheSettleTimeEndsTheStretch) {
+  const ApproachParams a = FlightConfig{}.mission.approach;
+  HeadingStretch h(a.settle_heading_band_rad, a.settle_s);
+  const auto at = [](int k) { return static_cast<TimeNs>(k) * 100'000'000; };  // 10 Hz
+  for (int k = 1; k <= 20; ++k) h.on_state(at(k), 0.2);
+  h.on_state(at(31), 0.2);  // 1.1 s without a record: the stretch goes on
+  EXPECT_EQ(h.since_ns(), at(1));
+  h.on_state(at(44), 0.2);  // 1.3 s: it starts anew at the record after the gap
+  EXPECT_EQ(h.since_ns(), at(44));
+  h.on_state(at(45), 0.2);
+  EXPECT_EQ(h.since_ns(), at(44));
+  h.on_state(at(45 + 70), 0.2);  // longer than the 5 s the stretch keeps: anew as well
+  EXPECT_EQ(h.since_ns(), at(45 + 70));
 }
 
 // A calm hover: the pose noise of a few millimetres, the state still. The forecast is a

@@ -10,6 +10,9 @@
 namespace shelfcross::verification {
 
 namespace {
+
+constexpr double kGiveUpReserve_s = 10.0;  // flight_config_for: the mission's time budget
+
 /// The row's spacing when every shelf has shelf 0's geometry and heading and stands the same
 /// distance behind the previous one along shelf 0's normal (1 mm tolerance); nullopt otherwise.
 std::optional<double> row_spacing_m(const Scenario& sc) {
@@ -58,6 +61,12 @@ flight_sw::FlightConfig flight_config_for(const Scenario& sc, const CameraIntrin
   c.mount = sc.camera_mount;
   c.mission.target.level_check = sc.cosim.pilot.level_check;
   c.mission.vehicle_size_m = sc.vehicle.size_m;
+  // The run's time limit is the mission's budget: the operator gives the flight software that
+  // less what a give-up takes to finish safely (backing out from the closest hold to
+  // give_up_clearance_m, 2.5 s, and landing, about 4 s; or finishing a crossing, 4 s, then
+  // landing beyond the shelf), so that a mission out of time ends as a named safe abort rather
+  // than still flying at the limit.
+  c.timeouts.mission_s = sc.cosim.timeout_s - std::min(kGiveUpReserve_s, 0.5 * sc.cosim.timeout_s);
   c.layout.shelf_count = mission_shelf_count(sc);
   c.layout.shelf_spacing_m = mission_shelf_spacing_m(sc);
   if (const auto strategy = flight_sw::parse_strategy(sc.cosim.strategy)) {

@@ -24,7 +24,8 @@ double mission_shelf_spacing_m(const Scenario& scenario);
 
 /// The flight software's configuration for a scenario: the known geometry of shelf 0, the
 /// layout (mission_shelf_count shelves at their spacing), the strategy (cosim.strategy), the
-/// camera it believes (calibration error included), the mount; tunables at their defaults.
+/// camera it believes (calibration error included), the mount; the mission's time budget from
+/// cosim.timeout_s (less a give-up's reserve); tunables at their defaults.
 /// Requires at least one shelf; throws std::invalid_argument for an unknown cosim.strategy.
 flight_sw::FlightConfig flight_config_for(const Scenario& scenario, const CameraIntrinsics& believed_camera);
 
