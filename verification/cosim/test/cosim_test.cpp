@@ -104,6 +104,18 @@ Eigen::Isometry3d grid_pose_W(const ShelfSpec& shelf) {
   return shelf_pose_W(shelf) * X_SG;
 }
 
+TEST(MissionSetup, TheMissionsTimeBudgetEndsTenSecondsBeforeTheRunsLimit) {
+  // A campaign's run ends at cosim.timeout_s; the flight software is given 10 s less, so that a
+  // mission out of time backs out and lands before the run is cut ("mission time limit
+  // reached", not "timeout"). Runs of 20 s or less (tests of a mission's first seconds) keep the
+  // flight software's own default.
+  Scenario s = load_scenario(kDefault);
+  s.cosim.timeout_s = 120.0;
+  EXPECT_DOUBLE_EQ(flight_config_for(s, s.camera).timeouts.mission_s, 110.0);
+  s.cosim.timeout_s = 20.0;
+  EXPECT_DOUBLE_EQ(flight_config_for(s, s.camera).timeouts.mission_s, flight_sw::FlightConfig{}.timeouts.mission_s);
+}
+
 TEST(RenderedFrames, InventoryOfTheDefaultShelfIsExact) {
   const Scenario s = load_scenario(kDefault);
   const flight_sw::FlightConfig config = flight_config_for(s, s.camera);
