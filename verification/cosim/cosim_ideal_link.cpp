@@ -216,8 +216,8 @@ RunResult IdealLink::fly() {
                          run_.next_sample_ns(), event_time(k_fsw_tick_, fsw_tick_mhz_)});
     if (!to_vehicle_.empty()) t = std::min(t, to_vehicle_.top().t_ns);
     if (!to_fsw_.empty()) t = std::min(t, to_fsw_.top().t_ns);
-    if (t > run_.timeout_ns) {
-      run_.time_out();
+    if (const TimeNs limit = run_.limit_ns(fsw_); t > limit) {
+      run_.time_out(limit);
       break;
     }
     inject_process_faults(run_.cs, t);

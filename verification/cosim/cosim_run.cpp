@@ -147,9 +147,18 @@ void inject_process_faults(const CosimSettings& cs, TimeNs t) {
   }
 }
 
-void RunContext::time_out() {
+namespace {
+constexpr double kLandingGrace_s = 30.0;  // RunContext::limit_ns
+}  // namespace
+
+TimeNs RunContext::limit_ns(const flight_sw::FlightSoftware& fsw) const {
+  const bool landing = fsw.phase() == flight_sw::Phase::Land || fsw.phase() == flight_sw::Phase::Done;
+  return landing ? timeout_ns + seconds_to_ns(kLandingGrace_s) : timeout_ns;
+}
+
+void RunContext::time_out(TimeNs limit) {
   outcome = RunOutcome::timeout;
-  result.detail = "not finished after " + std::to_string(cs.timeout_s) + " s";
+  result.detail = "not finished after " + std::to_string(ns_to_seconds(limit)) + " s";
 }
 
 void RunContext::started(const flight_sw::FlightSoftware& fsw) {

@@ -72,8 +72,14 @@ class RunContext {
   /// the chosen cells kept.
   void after_fsw_step(const flight_sw::FlightSoftware& fsw, TimeNs t);
   void flight_software_threw(TimeNs t, const std::string& what);
-  /// Past cosim.timeout_s: the run's outcome.
-  void time_out();
+  /// The run's limit now: cosim.timeout_s, or up to kLandingGrace_s more while the flight
+  /// software lands (phases Land and Done). A run is not cut in the middle of its landing: the
+  /// mission's own time budget ends 10 s before the limit (flight_config_for), but one lost
+  /// `land` costs the driver's 7 s reply timeout before it goes again, and a descent from a
+  /// cell's height takes seconds more. Runs that end before cosim.timeout_s are unchanged.
+  TimeNs limit_ns(const flight_sw::FlightSoftware& fsw) const;
+  /// Past the limit (limit_ns): the run's outcome.
+  void time_out(TimeNs limit);
   /// The phase the flight software starts in, logged.
   void started(const flight_sw::FlightSoftware& fsw);
 

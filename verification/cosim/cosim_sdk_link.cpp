@@ -161,8 +161,8 @@ RunResult fly_sdk_link(RunContext& run) {
     t = link.drone.next_due_ns();
     if (!link.pilot_exit) t = std::min(t, link.k_poll * kPilotPollNs);
     if (!link.to_drone.empty()) t = std::min(t, link.to_drone.top().t_ns);
-    if (t > run.timeout_ns) {
-      run.time_out();
+    if (const TimeNs limit = run.limit_ns(*fsw_view); t > limit) {
+      run.time_out(limit);
       break;
     }
     inject_process_faults(run.cs, t);
@@ -200,7 +200,7 @@ RunResult fly_sdk_link(RunContext& run) {
     // leaves it to the drone's own 15 s watchdog).
     if (link.pilot_exit && link.drone.world().tello().mode() == plant::FlightMode::landed && link.to_drone.empty()) break;
   }
-  run.t_end_ns = std::max(run.t_end_ns, std::min(t, run.timeout_ns));
+  run.t_end_ns = std::max(run.t_end_ns, std::min(t, run.limit_ns(*fsw_view)));
   run.result.metrics.link = link_metrics(run.result.metrics.link, link.drone.report().counters, *link.pilot);
   return run.finish(link.drone.world(), link.pilot->flight_software(), link.failsafe);
 }

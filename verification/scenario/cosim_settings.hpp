@@ -76,7 +76,7 @@ struct PilotSettings {
 struct CosimSettings {
   double state_rate_hz = 10.0;        ///< the Tello pushes a state record every 100 ms
   double fsw_tick_hz = 20.0;          ///< the flight computer's timer (flight_sw::ClockTick)
-  double timeout_s = 120.0;           ///< a run not finished by then ends as "timeout"
+  double timeout_s = 120.0;           ///< a run not finished by then ends as "timeout" (one landing then gets 30 s more)
   double trajectory_rate_hz = 50.0;   ///< trajectory.csv and plot sampling
   double vehicle_margin_m = 0.0;      ///< added around the vehicle box for contacts
   double battery_start_pct = 100.0;

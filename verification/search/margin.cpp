@@ -69,10 +69,11 @@ RunMargins run_margins(const Scenario& nominal, const std::string& outcome, cons
     const double room_z = 0.5 * (pitch_z - shelf.beam_thickness_m) - s_z - std::abs(e_z);
     m.crossing_m = std::min(room_y, room_z);
   }
-  // Mission: a success by the share of the timeout left; a failure by the share of the shelves
-  // not crossed through the target (-1 to -0.1).
+  // Mission: a success by the share of the timeout left (0 for one that landed in the grace
+  // after it, RunContext::limit_ns: a success, with no time to spare); a failure by the share of
+  // the shelves not crossed through the target (-1 to -0.1).
   if (outcome == "success") {
-    m.mission = metrics ? 1.0 - metrics->mission_time_s / nominal.cosim.timeout_s : kNaN;
+    m.mission = metrics ? std::max(0.0, 1.0 - metrics->mission_time_s / nominal.cosim.timeout_s) : kNaN;
   } else {
     const double shelves = metrics ? std::max(1.0, static_cast<double>(metrics->shelves)) : 1.0;
     const double crossed = metrics ? static_cast<double>(metrics->shelves_crossed_target) : 0.0;

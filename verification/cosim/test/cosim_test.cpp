@@ -48,6 +48,25 @@ TEST(CoSimulation, SameSeedGivesTheSameRunHash) {
   EXPECT_GT(a.metrics.truth.path_length_m, 0.9);  // it took off
 }
 
+TEST(CoSimulation, ARunLandingAtItsLimitIsGivenTimeToLand) {
+  // Run 27 of the default campaign of seed 1, one of its shortest missions (under 20 s, so the
+  // flight software's time budget is the same whatever the limit: flight_config_for). Its limit
+  // moved into its final landing, it is the same run: landed after the limit, the same hash.
+  const std::uint64_t seed = 9278260739365459447ULL;
+  const RunResult a = run_once(*default_with([](Scenario&) {}), seed);
+  ASSERT_EQ(a.outcome, RunOutcome::success);
+  ASSERT_LT(a.metrics.mission_time_s, 20.0) << "the run is longer now: pick a run shorter than 20 s";
+  double t_land_s = -1.0;
+  for (const std::string& e : a.events)
+    if (e.find(" phase land") != std::string::npos) t_land_s = std::stod(e);
+  ASSERT_GT(a.metrics.mission_time_s - t_land_s, 1.0) << "no landing phase to cut";
+  const double limit_s = 0.5 * (t_land_s + a.metrics.mission_time_s);
+  const RunResult b = run_once(*default_with([&](Scenario& s) { s.cosim.timeout_s = limit_s; }), seed);
+  EXPECT_EQ(b.outcome, RunOutcome::success) << b.detail;
+  EXPECT_GT(b.metrics.mission_time_s, limit_s);
+  EXPECT_EQ(b.run_hash, a.run_hash);
+}
+
 // With the sdk link (the default): the same runs on one or two worker threads; the MPI test
 // (app/test/cmd_mpi_campaign_test.cpp) and `replay` (cmd_campaign_test.cpp) check ranks and
 // single replays on the same default scenario.

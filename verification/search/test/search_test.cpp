@@ -66,6 +66,11 @@ TEST(SearchPieces, MarginsFromStoredMetrics) {
   EXPECT_NEAR(r.crossing_m, 0.1295, 1e-12);
   EXPECT_NEAR(r.mission, 1.0 - 24.0 / 120.0, 1e-12);
   EXPECT_FALSE(r.failed(FailureClass::contact) || r.failed(FailureClass::crossing) || r.failed(FailureClass::mission));
+  // A success that landed in the grace after the run's 120 s limit: no time to spare, not failed.
+  m.mission_time_s = 125.0;
+  EXPECT_DOUBLE_EQ(run_margins(s, "success", m).mission, 0.0);
+  EXPECT_FALSE(run_margins(s, "success", m).failed(FailureClass::mission));
+  m.mission_time_s = 24.0;
   // Wide off the centre of a narrow column (0.34): y room 0.16 - 0.04625 - 0.13 < 0.
   m.truth.crossed = CellIndex{2, 1};
   m.truth.entry_offset_y_m = -0.13;
