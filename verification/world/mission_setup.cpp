@@ -65,8 +65,10 @@ flight_sw::FlightConfig flight_config_for(const Scenario& sc, const CameraIntrin
   // less what a give-up takes to finish safely (backing out from the closest hold to
   // give_up_clearance_m, 2.5 s, and landing, about 4 s; or finishing a crossing, 4 s, then
   // landing beyond the shelf), so that a mission out of time ends as a named safe abort rather
-  // than still flying at the limit. Runs of 20 s or less (tests and studies of a mission's
-  // first seconds: take-off alone takes 4 s) keep the default budget; the limit cuts them.
+  // than still flying at the limit (a lost `land` on top of that is what the co-simulation's
+  // landing grace covers: RunContext::limit_ns). Runs of 20 s or less (tests and studies of a
+  // mission's first seconds: take-off alone takes 4 s) keep the default budget; the limit cuts
+  // them.
   if (sc.cosim.timeout_s > 2.0 * kGiveUpReserve_s) c.timeouts.mission_s = sc.cosim.timeout_s - kGiveUpReserve_s;
   c.layout.shelf_count = mission_shelf_count(sc);
   c.layout.shelf_spacing_m = mission_shelf_spacing_m(sc);
