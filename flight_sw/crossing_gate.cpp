@@ -15,7 +15,14 @@
 
 namespace shelfcross::flight_sw {
 
+namespace {
+// A quiet stretch this fraction of line_hold_window_s or longer is a whole window (the
+// records' and pictures' spacing leaves the stretch a little short of the window).
+constexpr double kWholeWindow = 0.9;
+}  // namespace
+
 void CrossingGate::new_target() {
+  rough_seen_ns_.reset();
   cell_height_.clear();
   line_hold_.clear();
   forward_gain_.restart();
@@ -127,7 +134,14 @@ RoughAir CrossingGate::too_rough(MissionFacts& facts, const TargetTracker& track
   // Not measured yet (the quiet stretch shorter than line_hold_min_span_s): hold short until
   // it is, or the settling's hold is given up (settle_hold_s).
   if (!f.measured) return {true, std::nullopt};
-  const bool rough = f.y_m > room.tol_y_m || f.z_m > room.tol_z_m;
+  // Rough: no room now, or calm for less than the blind crossing since a whole window left
+  // none (crossing_refusal). A shorter quiet stretch (the hold just begun, the settling's
+  // last motion in it) is scaled up by sqrt(T / s) and holds the vehicle short, but is too
+  // short a sample of the air to be remembered.
+  const bool no_room = f.y_m > room.tol_y_m || f.z_m > room.tol_z_m;
+  if (no_room && f.span_s >= kWholeWindow * m.line_hold.line_hold_window_s) rough_seen_ns_ = facts.now_ns;
+  const bool rough = no_room || (rough_seen_ns_ && ns_to_seconds(facts.now_ns - *rough_seen_ns_) <
+                                                       blind_crossing_s(config_, -pose_K.p_FB_m().x()));
   if (!rough) {
     rough_since_ns_.reset();
     return {};
@@ -160,6 +174,7 @@ GateVerdict CrossingGate::judge(MissionFacts& facts, const TargetTracker& tracke
     gate.height_above_cell_m = facts.state->height_m - *cell_centre_h_m;
     gate.vz_mps = facts.state->vz_H_mps;
   }
+  if (rough_seen_ns_) gate.calm_for_s = ns_to_seconds(facts.now_ns - *rough_seen_ns_);
   const std::optional<std::string> refusal = crossing_refusal(config_, *tracker.target(), pose, gate);
   if (refusal) return {refusal, std::nullopt, std::nullopt};
   // Past the back face by beyond_distance_m, or less where a shelf stands behind

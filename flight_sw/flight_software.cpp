@@ -66,6 +66,7 @@ std::vector<SdkCommand> FlightSoftware::step(const Input& input) {
   const TrackerRecord& counts = shelves_.tracker().record();
   facts_.telemetry.tracking.rejected_poses = counts.rejected_poses;
   facts_.telemetry.tracking.wrong_level_poses = counts.wrong_level_poses;
+  facts_.telemetry.tracking.level_unsure_poses = counts.level_unsure_poses;
   facts_.telemetry.tracking.behind_tags_dropped = counts.behind_tags_dropped;
   facts_.telemetry.tracking.identity_checks = counts.identity_checks;
   facts_.telemetry.tracking.hidden_target_pictures = counts.hidden_target_pictures;

@@ -134,6 +134,7 @@ LineHoldForecast forecast_line_hold(const MissionParams& m, const LineWander& w,
   LineHoldForecast f;
   f.measured = w.poses >= kLineHoldMinPoses && w.measured >= kLineHoldMinMeasured && w.span_s >= m.line_hold.line_hold_min_span_s;
   if (!f.measured) return f;
+  f.span_s = w.span_s;
   // Random-walk growth of the spread from the quiet stretch to the blind crossing (never below
   // the spread seen), and the carry of the speed seen (file comment).
   const double growth = std::sqrt(std::max(1.0, blind_s / w.span_s));

@@ -87,6 +87,7 @@ struct LineHoldForecast {
   bool measured = false;  ///< enough quiet samples and measured poses over line_hold_min_span_s
   double y_m = 0.0;
   double z_m = 0.0;
+  double span_s = 0.0;    ///< the quiet stretch it was measured on (at most line_hold_window_s)
 };
 
 /// Collects the quiet poses and state records of the approach (file comment).

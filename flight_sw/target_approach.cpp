@@ -47,9 +47,9 @@ void note_measurement(const TargetTracker& tracker, Telemetry& telemetry) {
 
 // The target lost: the shelf's view analysed anew, the target looked for near its last box
 // (target_tracker.hpp, TargetTracker::reacquire).
-bool reacquire(const Picture& pic, TargetTracker& tracker, ApproachTools tools) {
+bool reacquire(const Picture& pic, TargetTracker& tracker, const RecentStates& states, ApproachTools tools) {
   tools.survey.analyse(pic.bgr, tools.facts.telemetry);
-  if (!tracker.reacquire(pic, tools.survey.view(), tools.survey.tag_detector(), tools.facts.state)) return false;
+  if (!tracker.reacquire(pic, tools.survey.view(), tools.survey.tag_detector(), states)) return false;
   note_measurement(tracker, tools.facts.telemetry);
   tools.facts.telemetry.tracking.tracked_box_px = tracker.corners().box_px();
   return true;
@@ -258,13 +258,13 @@ ApproachStep TargetApproach::step(const Picture& pic, ApproachTools tools) {
   if (f.state_fresh()) odometry = OdometryFix{f.odometry.p_O_m(), f.state->yaw_rad};
   const TargetTracker::Prediction predicted = tracker_.predict(pic, odometry);
   f.telemetry.tracking.tracker_ok = predicted.tracker_ok;
-  const bool measured = tracker_.measure(pic, predicted.box_px, tools.survey.tag_detector(), f.state);
+  const bool measured = tracker_.measure(pic, predicted.box_px, tools.survey.tag_detector(), states_);
   if (measured) note_measurement(tracker_, f.telemetry);
   gate_.on_picture(f, tracker_, measured, odometry);
   f.telemetry.tracking.tracked_box_px = tracker_.corners().box_px();
   const double dt = tools.sticks.control_dt_s(f.now_ns);
   if (measured) return found(pic, predicted, dt, tools);
-  if (tracker_.record().hidden_by_damage && !timers_.back_off_since_ns) return unseen(dt, tools);
+  if (tracker_.record().hidden && !timers_.back_off_since_ns) return unseen(dt, tools);
   return without_target(pic, tools);
 }
 
@@ -331,9 +331,11 @@ ApproachStep TargetApproach::found(const Picture& pic, const TargetTracker::Pred
   return s;
 }
 
-// A picture whose guessed rows hide the corner tags (or show them where they no longer are):
-// the target is not lost, only unseen until a picture shows it clear of the damage, which the
-// next key frame brings; the approach's own time limit bounds the wait. Farther out than
+// A picture whose guessed rows hide the corner tags (or show them where they no longer are),
+// or whose pose's level the state records of the video latency cannot tell (the vehicle
+// tipping or climbing as it starts: target_pose.hpp, PoseVerdict::LevelUnsure): the target
+// is not lost, only unseen until a picture shows it clear of the damage (the next key frame)
+// or under a steadier attitude; the approach's own time limit bounds the wait. Farther out than
 // commit_range_m, for at most coast_s after the last pose, the loops steer on that pose
 // carried by the state odometry (its drift, 5 cm/s, is far inside what the approach corrects
 // later); closer, where the crossing's last centimetres are judged, the vehicle holds.
@@ -396,7 +398,7 @@ ApproachStep TargetApproach::without_target(const Picture& pic, ApproachTools to
   timers_.start_losing(f.now_ns);
   ApproachStep s;
   s.hover = true;
-  if (reacquire(pic, tracker_, tools)) {
+  if (reacquire(pic, tracker_, states_, tools)) {
     timers_.lost_since_ns.reset();
     f.telemetry.event = "target re-acquired";
   }

@@ -71,8 +71,12 @@ class TargetApproach {
   /// The in-crossing watch stopped the crossing (the mission is back in the approach, backing
   /// off): a refusal of the crossing; at the crossing_attempts-th the approach gives up.
   ApproachStep crossing_stopped(const CrossingStop& stop, MissionFacts& facts);
-  /// Each state record: the gate's measures (`approaching`: in phase Approach).
-  void on_state(const StateRecord& s, bool approaching) { gate_.on_state(s, approaching); }
+  /// Each state record: the level check's window and the gate's measures (`approaching`: in
+  /// phase Approach).
+  void on_state(const StateRecord& s, bool approaching) {
+    states_.on_state(s);
+    gate_.on_state(s, approaching);
+  }
   /// Every phase change: the loss, back-off, rough-air and give-up timers end.
   void on_phase_change();
   /// The next shelf: the target forgotten, its measures and off-centre arrivals with it.
@@ -116,6 +120,7 @@ class TargetApproach {
 
   const FlightConfig& config_;
   TargetTracker tracker_;  ///< the cell, its corner tags tracked, its pose, its identity
+  RecentStates states_;    ///< the state records of the last second (the level check's window)
   CrossingGate gate_;      ///< stillness, line hold, cell height, forward gain; the gate
   Timers timers_;
   Retreat retreat_;

@@ -3,6 +3,7 @@
 // plausibility filter a new one passes first (judge_pose: jump, damage, level). The corner
 // tags the pose is measured on: corner_tags.hpp; the tracker: target_tracker.hpp.
 
+#include <deque>
 #include <numbers>
 #include <optional>
 
@@ -21,16 +22,38 @@ namespace shelfcross::flight_sw {
 std::optional<double> cell_height_m(const std::optional<StateRecord>& state, double z_K_m);
 
 /// Height above the take-off point of a point on the shelf's front at image row v_px, seen from
-/// range_m in front of it: the state's height h plus range * tan(elevation), the elevation being
-/// the row's angle above the optical axis, atan((cy - v) / fy), less the axis' tilt down (the
-/// body's pitch from the state record plus the mount's). The body's roll is neglected (the cell
-/// is near the image's vertical centre line). Empty without a state record.
-std::optional<double> row_height_m(const FlightConfig& config, const std::optional<StateRecord>& state,
-                                   double v_px, double range_m);
+/// range_m in front of it by a vehicle at height_m pitched pitch_rad: height_m plus range *
+/// tan(elevation), the elevation being the row's angle above the optical axis,
+/// atan((cy - v) / fy), less the axis' tilt down (the body's pitch plus the mount's). The
+/// body's roll is neglected (the cell is near the image's vertical centre line).
+double row_height_m(const FlightConfig& config, double height_m, double pitch_rad, double v_px, double range_m);
 
 /// The pose's pitch agrees with the state record's within this (whole degrees in the record,
 /// and a video latency newer than the picture), rad: its height is the level check's.
 constexpr double kLevelPitchAgreement_rad = 3.0 * std::numbers::pi / 180.0;
+
+/// The state records that may describe the vehicle when a picture arriving at t was taken: a
+/// video latency (0.1-0.35 s) before t, the records coming at 10 Hz, so those of
+/// [t - kLevelWindow_s, t]. The level check judges a pose under each of them.
+constexpr double kLevelWindow_s = 0.45;
+
+/// The range of pitch and height over the state records of a window (RecentStates::span).
+struct StateSpan {
+  double pitch_min_rad = 0.0, pitch_max_rad = 0.0;
+  double height_min_m = 0.0, height_max_m = 0.0;
+};
+
+/// The state records of the last second, for the level check's window.
+class RecentStates {
+ public:
+  void on_state(const StateRecord& s);
+  /// The span of the records of [t_ns - kLevelWindow_s, t_ns]; the newest record alone when none
+  /// is that recent (a stale state); empty without a record.
+  std::optional<StateSpan> span(TimeNs t_ns) const;
+
+ private:
+  std::deque<StateRecord> records_;
+};
 
 /// How far apart two poses of the target, a frame apart, may lie and still be one: the pose's
 /// position error grows as R^2 sigma / (f L) with the range R (depth from the tags' apparent
@@ -87,6 +110,10 @@ enum class PoseVerdict {
   Jumped,      ///< too far or too turned from the last pose: a wrong corner tag
   WrongLevel,  ///< the cell centre's height disagrees with the target's: another level's tags
   Hidden,      ///< from tags the damage touched, and not where the odometry carried the last pose
+  /// Its level cannot be told: the target's under some of the window's records, another
+  /// level's under others (the attitude or height changing within the video latency). Not a
+  /// measurement, and not a sign that the target is lost.
+  LevelUnsure,
 };
 
 /// A new pose of the target and what it was measured on.
@@ -101,8 +128,8 @@ struct PoseCandidate {
 /// "The target's level"), in this order: the jump test against `history`'s last pose, the
 /// agreement of a touched pose with the last pose carried by the odometry, and, with
 /// mission.level_check and the target's centre height `target_height_m` known, the level by
-/// the state record `state`.
+/// the state records that may describe the picture (`states`, RecentStates::span).
 PoseVerdict judge_pose(const FlightConfig& config, const PoseCandidate& candidate, const TargetPoses& history,
-                       const std::optional<StateRecord>& state, const std::optional<double>& target_height_m);
+                       const std::optional<StateSpan>& states, const std::optional<double>& target_height_m);
 
 }  // namespace shelfcross::flight_sw

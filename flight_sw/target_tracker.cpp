@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "flight_sw/mission_text.hpp"
+
 namespace shelfcross::flight_sw {
 
 bool heading_turning(const FlightConfig& config, double yaw_rate_radps) {
@@ -41,6 +43,15 @@ std::optional<std::string> crossing_refusal(const FlightConfig& config, CellInde
   // The blind crossing: what the hover before it says the vehicle may wander (line_hold.hpp).
   const LineHoldForecast& f = input.line_hold;
   if (!f.measured) return std::string(kLineHoldNotMeasured);
+  // Air that has just left the line no room is not trusted on the next quiet window: the
+  // window is 2.5 s of a gust process of about 1 s correlation, a noisy estimate of the next
+  // blind seconds, and a lull right after a rough window vouches for little. The calm since
+  // must outlast the blind crossing (docs/method.md section 7, "A calm after rough air").
+  const double blind_s = blind_crossing_s(config, -pose.p_FB_m().x());
+  if (input.calm_for_s && *input.calm_for_s < blind_s) {
+    return std::string(kLineCannotBeHeld) + " (calm for " + format_m(*input.calm_for_s) +
+           " s since the air left no room, less than the blind crossing's " + format_m(blind_s) + " s)";
+  }
   if (room.offset_y_m() + f.y_m > tol_y) {
     return std::string(kLineCannotBeHeld) + " across (offset " + centimetres_text(room.offset_y_m()) + " + wander " + centimetres_text(f.y_m) +
            " > " + centimetres_text(tol_y) + ")";
@@ -99,10 +110,10 @@ void TargetTracker::correct(const Picture& pic, const Prediction& prediction) {
 }
 
 bool TargetTracker::measure(const Picture& pic, const cv::Rect2d& predicted, TagDetector& detector,
-                            const std::optional<StateRecord>& state) {
+                            const RecentStates& states) {
   const TimeNs now_ns = pic.t_ns;
   identification_.begin_picture();
-  record_.hidden_by_damage = false;
+  record_.hidden = false;
   const PerceptionParams& p = config_.perception;
   search_.detect(pic, predicted, corners_.tag_side_px(), detector, p);
   // Where the box puts each corner: the old corners moved and scaled with the box.
@@ -133,11 +144,12 @@ bool TargetTracker::measure(const Picture& pic, const cv::Rect2d& predicted, Tag
   if (!pose) return false;
   const std::array<cv::Point2d, 4>& img = search_.picked_px();
   const bool touched = search_.touched();
-  switch (judge_pose(config_, {*pose, now_ns, touched, 0.25 * (img[0] + img[1] + img[2] + img[3])}, poses_, state,
-                     target_height_m_)) {
+  switch (judge_pose(config_, {*pose, now_ns, touched, 0.25 * (img[0] + img[1] + img[2] + img[3])}, poses_,
+                     states.span(now_ns), target_height_m_)) {
     case PoseVerdict::Plausible: break;
     case PoseVerdict::Jumped: ++record_.rejected_poses; return false;
     case PoseVerdict::Hidden: return record_.hide();
+    case PoseVerdict::LevelUnsure: return record_.level_unsure();
     case PoseVerdict::WrongLevel:
       ++record_.rejected_poses;
       ++record_.wrong_level_poses;
@@ -162,7 +174,7 @@ std::optional<TargetTracker::Carried> TargetTracker::carried_target(TimeNs now_n
 }
 
 bool TargetTracker::reacquire(const Picture& pic, const ShelfView& view, TagDetector& detector,
-                              const std::optional<StateRecord>& state) {
+                              const RecentStates& states) {
   // The target is a cell of the (possibly partial) grid near the last box: the nearest one
   // whose corner tags give a plausible pose of the right level (measure's tests), so that a
   // neighbour above or below is passed over.
@@ -186,7 +198,7 @@ bool TargetTracker::reacquire(const Picture& pic, const ShelfView& view, TagDete
     std::array<cv::Point2d, 4> q;
     for (size_t k = 0; k < 4; ++k) q[k] = view.tags[static_cast<size_t>(idx[k])].centre_px;
     corners_.set_corners(q);
-    if (measure(pic, corners_.box_px(), detector, state)) {
+    if (measure(pic, corners_.box_px(), detector, states)) {
       follower_.start(pic.bgr, corners_.box_px(), pic.t_ns);
       return true;
     }

@@ -39,6 +39,9 @@ struct CrossingGateInput {
   /// What the blind crossing may add to the line's offsets (line_hold.hpp); not measured: the
   /// crossing is refused.
   LineHoldForecast line_hold;
+  /// Since the last forecast of this target that left the line no room (CrossingGate::
+  /// too_rough), s; empty: none did. A calm shorter than the blind crossing is refused.
+  std::optional<double> calm_for_s;
 };
 
 /// The heading law turning the vehicle: |yaw_rate| above kp_psi * settle_psi_rad, what the law
@@ -66,19 +69,27 @@ constexpr double kMotionPredictAfter_s = 0.1;
 /// What the tracker's last measure found beside the pose, and its counters for the telemetry
 /// (never reset).
 struct TrackerRecord {
-  /// The last measure found nothing because the picture's damage hides the target: nothing is
+  /// The last measure found nothing because the picture hides the target: its damage, or an
+  /// attitude changing too fast within the video latency to tell the pose's level. Nothing is
   /// to be decided on it, and the target is not lost.
-  bool hidden_by_damage = false;
+  bool hidden = false;
   std::optional<double> behind_m;  ///< nearest tag behind the target seen through it, from the front tags, m
   int rejected_poses = 0;          ///< implausible jumps of the target's pose, ignored
   int wrong_level_poses = 0;       ///< of which on another level's tags (state height disagrees)
   int behind_tags_dropped = 0;     ///< tags in the target's window too small for the front shelf
   int identity_checks = 0;         ///< pictures judged while the target was unidentified
-  int hidden_target_pictures = 0;  ///< pictures whose damage hid the target (hidden_by_damage)
-  /// The picture hides the target: counted; returns false (measure's result).
+  int hidden_target_pictures = 0;  ///< pictures whose damage hid the target
+  int level_unsure_poses = 0;      ///< poses whose level could not be told (PoseVerdict::LevelUnsure)
+  /// The picture's damage hides the target: counted; returns false (measure's result).
   bool hide() {
-    hidden_by_damage = true;
+    hidden = true;
     ++hidden_target_pictures;
+    return false;
+  }
+  /// The pose's level cannot be told on this picture: counted; returns false.
+  bool level_unsure() {
+    hidden = true;
+    ++level_unsure_poses;
     return false;
   }
 };
@@ -117,21 +128,20 @@ class TargetTracker {
   Prediction predict(const Picture& pic, const std::optional<OdometryFix>& odometry);
   /// Looks for the target's four corner tags around `predicted`: tags in a window around it,
   /// eq. 1 inside the window, each corner the nearest tag to where the box puts it; the pose
-  /// from them, if plausible (jump, level by `state`), becomes the target's. False: not found.
+  /// from them, if plausible (jump, level by the state records of the picture's latency in
+  /// `states`), becomes the target's. False: not found.
   /// A damaged picture whose guessed rows cross a corner tag (or lie where a missing corner
   /// should be) may show the tag where it was a few pictures ago: its pose only steers
   /// (pose_decides() false), and only if it agrees with the last pose carried to now by the
-  /// state odometry; otherwise the picture hides the target (hidden_by_damage()).
-  bool measure(const Picture& pic, const cv::Rect2d& predicted, TagDetector& detector,
-               const std::optional<StateRecord>& state);
+  /// state odometry; otherwise the picture hides the target (TrackerRecord::hidden).
+  bool measure(const Picture& pic, const cv::Rect2d& predicted, TagDetector& detector, const RecentStates& states);
   /// After a measurement: the tracker follows the measured box (the reference pipeline's is
   /// re-seeded when it failed or drifted off the tags).
   void correct(const Picture& pic, const Prediction& prediction);
   /// The target lost: the nearest cell of the (possibly partial) grid of `view` near the last
   /// box whose corner tags give a plausible pose of the right level (measure's tests), so that
   /// a neighbour above or below is passed over.
-  bool reacquire(const Picture& pic, const ShelfView& view, TagDetector& detector,
-                 const std::optional<StateRecord>& state);
+  bool reacquire(const Picture& pic, const ShelfView& view, TagDetector& detector, const RecentStates& states);
   /// Judges the target's identity on `pic` (every tag and marker of it) against the pose
   /// `pose_K`; a confirmation identifies the target again. The verdict is the caller's to act on.
   IdentityCheck check_identity(const Picture& pic, const PoseEstimate& pose_K, TagDetector& tag_detector,

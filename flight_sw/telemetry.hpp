@@ -50,6 +50,7 @@ struct TrackingTelemetry {
   int shelf_rereads = 0;       ///< shelf re-read from the viewpoint because the target was in doubt
   int rejected_poses = 0;      ///< implausible jumps of the target's pose, ignored
   int wrong_level_poses = 0;   ///< of which on another level's tags (state height disagrees)
+  int level_unsure_poses = 0;  ///< poses whose level the state records of the video latency could not tell: held
   int behind_tags_dropped = 0; ///< tags in the target's window too small for the front shelf (eq. 1 against the tracked tags)
   int hidden_target_pictures = 0;  ///< damaged pictures whose guessed rows hid the target's corner tags: held
 };

@@ -330,6 +330,7 @@ class PilotLoop::Impl {
                             {"fsw_hidden_target_pictures", tm.tracking.hidden_target_pictures},
                             {"fsw_rejected_poses", tm.tracking.rejected_poses},
                             {"fsw_wrong_level_poses", tm.tracking.wrong_level_poses},
+                            {"fsw_level_unsure_poses", tm.tracking.level_unsure_poses},
                             {"fsw_stale_replies", tm.link.stale_replies},
                             {"fsw_bad_frames", tm.link.bad_frames}});
     std::ostringstream summary;
@@ -338,7 +339,8 @@ class PilotLoop::Impl {
             << "\n  flight software: damaged_frames=" << tm.link.damaged_frames
             << " band_decided_frames=" << tm.link.band_decided_frames << " unflown_frames=" << tm.link.unflown_frames
             << " hidden_target_pictures=" << tm.tracking.hidden_target_pictures
-            << " rejected_poses=" << tm.tracking.rejected_poses << " wrong_level_poses=" << tm.tracking.wrong_level_poses;
+            << " rejected_poses=" << tm.tracking.rejected_poses << " wrong_level_poses=" << tm.tracking.wrong_level_poses
+            << " level_unsure_poses=" << tm.tracking.level_unsure_poses;
     return summary.str();
   }
 
