@@ -32,19 +32,18 @@ void RecentStates::on_state(const StateRecord& s) {
 
 std::optional<StateSpan> RecentStates::span(TimeNs t_ns) const {
   if (records_.empty()) return std::nullopt;
+  const auto one = [](const StateRecord& r) { return StateSpan{r.pitch_rad, r.pitch_rad, r.height_m, r.height_m}; };
   const TimeNs from_ns = t_ns - seconds_to_ns(kLevelWindow_s);
   std::optional<StateSpan> span;
   for (const StateRecord& r : records_) {
     if (r.t_ns < from_ns || r.t_ns > t_ns) continue;
-    if (!span) span = StateSpan{r.pitch_rad, r.pitch_rad, r.height_m, r.height_m};
+    if (!span) span = one(r);
     span->pitch_min_rad = std::min(span->pitch_min_rad, r.pitch_rad);
     span->pitch_max_rad = std::max(span->pitch_max_rad, r.pitch_rad);
     span->height_min_m = std::min(span->height_min_m, r.height_m);
     span->height_max_m = std::max(span->height_max_m, r.height_m);
   }
-  if (span) return span;
-  const StateRecord& r = records_.back();
-  return StateSpan{r.pitch_rad, r.pitch_rad, r.height_m, r.height_m};
+  return span ? *span : one(records_.back());
 }
 
 // ---- TargetPoses ----
