@@ -84,7 +84,7 @@ class CrossingGate {
   void on_deciding_pose(MissionFacts& facts, const PoseEstimate& pose_K);
   /// Inside commit_range_m with the identity confirmed: hold short while the forecast is not yet
   /// measured or leaves no room, or has left room for less than the blind crossing lasts since
-  /// it last left none; declined after calm_wait_s of that.
+  /// a whole window last left none; declined after calm_wait_s of that.
   RoughAir too_rough(MissionFacts& facts, const TargetTracker& tracker, const PoseEstimate& pose_K);
   /// The gate on the last deciding pose (requires one, and a target); `sticks`: the command in
   /// effect; `why_now` begins the crossing's event.
@@ -102,7 +102,7 @@ class CrossingGate {
   HeadingStretch heading_;                ///< since when the state's yaw has held still
   LineHoldMonitor line_hold_;             ///< line_hold.hpp
   std::optional<TimeNs> rough_since_ns_;  ///< held short since then: the forecast left no room
-  std::optional<TimeNs> rough_seen_ns_;  ///< the last forecast of this target that left the line no room
+  std::optional<TimeNs> rough_seen_ns_;  ///< the last whole window of this target that left the line no room
   ForwardGainEstimator forward_gain_;     ///< forward speed per commanded speed, for timing the crossing
   CellHeightEstimator cell_height_;       ///< the target cell centre's height in the frame of the state height h
 };

@@ -28,8 +28,9 @@ std::optional<double> cell_height_m(const std::optional<StateRecord>& state, dou
 /// body's roll is neglected (the cell is near the image's vertical centre line).
 double row_height_m(const FlightConfig& config, double height_m, double pitch_rad, double v_px, double range_m);
 
-/// The pose's pitch agrees with the state record's within this (whole degrees in the record,
-/// and a video latency newer than the picture), rad: its height is the level check's.
+/// The pose's pitch agrees with the state records' (RecentStates::span) within this (whole
+/// degrees in the record, and a video latency newer than the picture), rad: its height is then
+/// the level check's.
 constexpr double kLevelPitchAgreement_rad = 3.0 * std::numbers::pi / 180.0;
 
 /// The state records that may describe the vehicle when a picture arriving at t was taken: a

@@ -39,8 +39,9 @@ struct CrossingGateInput {
   /// What the blind crossing may add to the line's offsets (line_hold.hpp); not measured: the
   /// crossing is refused.
   LineHoldForecast line_hold;
-  /// Since the last forecast of this target that left the line no room (CrossingGate::
-  /// too_rough), s; empty: none did. A calm shorter than the blind crossing is refused.
+  /// Since the last whole window of this target whose forecast left the line no room
+  /// (CrossingGate::too_rough), s; empty: none did. A calm shorter than the blind crossing is
+  /// refused.
   std::optional<double> calm_for_s;
 };
 
