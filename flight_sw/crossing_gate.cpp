@@ -149,12 +149,12 @@ RoughAir CrossingGate::too_rough(MissionFacts& facts, const TargetTracker& track
   if (!rough_since_ns_) {
     rough_since_ns_ = facts.now_ns;
     facts.telemetry.event = "holding short: the hover's wander (" + centimetres_text(f.y_m) + " across, " +
-                            centimetres_text(f.z_m) + " up) leaves the line no room";
+                            centimetres_text(f.z_m) + " up) leaves the line no room" + air_text(f);
   }
   if (ns_to_seconds(facts.now_ns - *rough_since_ns_) > m.line_hold.calm_wait_s) {
     return {true, std::string(kCrossingDeclined) + kLineCannotBeHeld + " (wander " + centimetres_text(f.y_m) +
                       " across, " + centimetres_text(f.z_m) + " up, for " +
-                      std::to_string(static_cast<int>(m.line_hold.calm_wait_s)) + " s)"};
+                      std::to_string(static_cast<int>(m.line_hold.calm_wait_s)) + " s)" + air_text(f)};
   }
   return {true, std::nullopt};
 }
@@ -198,7 +198,7 @@ GateVerdict CrossingGate::judge(MissionFacts& facts, const TargetTracker& tracke
                 " m past the back face; speed gain " + format_m(forward_gain_.gain()) + "; " +
                 format_m(*gate.height_above_cell_m) + " m above the cell centre by the state height; " +
                 "line-hold forecast " + format_m(gate.line_hold.y_m) + " m across, " + format_m(gate.line_hold.z_m) +
-                " m up" + (behind_m ? "; tags " + format_m(*behind_m) + " m behind)" : ")");
+                " m up" + air_text(gate.line_hold) + (behind_m ? "; tags " + format_m(*behind_m) + " m behind)" : ")");
   // Horizontally along the line; vertically the cell centre's height held by the state
   // height (CellCrossing), not the line's slope: that slope came from a pose a video latency
   // old, and open loop it flew a vehicle still settling vertically into the beam below.

@@ -65,7 +65,9 @@ void LineHoldMonitor::add(TimeNs t_ns, const Eigen::Vector3d& p_K_m, double yaw_
 }
 
 void LineHoldMonitor::on_state(const StateRecord& s, bool quiet) {
-  if (!quiet || poses_.empty() || s.t_ns < poses_.front().t_ns) return;
+  if (!quiet) return;
+  air_.on_state(s.t_ns, s.vy_H_mps);
+  if (poses_.empty() || s.t_ns < poses_.front().t_ns) return;
   // v_K = R_z(yaw_K) v_H: the across-line (y_K) component of the heading-frame velocity.
   const double across = std::sin(yaw_K_rad_) * s.vx_H_mps + std::cos(yaw_K_rad_) * s.vy_H_mps;
   across_mps_.emplace_back(s.t_ns, across);
@@ -103,6 +105,7 @@ LineFit fit_line(const std::vector<double>& t, const std::vector<double>& v) {
 LineWander LineHoldMonitor::wander(TimeNs now_ns, double window_s) const {
   const TimeNs from_ns = now_ns - seconds_to_ns(window_s);
   LineWander w;
+  w.air_rms_mps = air_.rms_mps(now_ns);
   auto first = poses_.begin();
   while (first != poses_.end() && first->t_ns < from_ns) ++first;
   if (first == poses_.end()) return w;
@@ -130,6 +133,22 @@ LineWander LineHoldMonitor::wander(TimeNs now_ns, double window_s) const {
   return w;
 }
 
+void AirMemory::on_state(TimeNs t_ns, double vy_H_mps) {
+  vy_.emplace_back(t_ns, vy_H_mps);
+  while (ns_to_seconds(t_ns - vy_.front().first) > kAirMemory_s) vy_.pop_front();
+}
+
+double AirMemory::rms_mps(TimeNs now_ns) const {
+  double sum = 0.0;
+  int n = 0;
+  for (const auto& [t, v] : vy_) {
+    if (ns_to_seconds(now_ns - t) > kAirMemory_s) continue;
+    sum += v * v;
+    ++n;
+  }
+  return n >= kAirMinRecords ? std::sqrt(sum / n) : 0.0;
+}
+
 LineHoldForecast forecast_line_hold(const MissionParams& m, const LineWander& w, double blind_s) {
   LineHoldForecast f;
   f.measured = w.poses >= kLineHoldMinPoses && w.measured >= kLineHoldMinMeasured && w.span_s >= m.line_hold.line_hold_min_span_s;
@@ -138,7 +157,10 @@ LineHoldForecast forecast_line_hold(const MissionParams& m, const LineWander& w,
   // Random-walk growth of the spread from the quiet stretch to the blind crossing (never below
   // the spread seen), and the carry of the speed seen (file comment).
   const double growth = std::sqrt(std::max(1.0, blind_s / w.span_s));
-  f.y_m = w.half_spread_y_m * growth + std::abs(w.drift_y_mps) * blind_s + w.across_speed_mps * kVelocityLag_s;
+  // The wander across: the window's, or the air remembered where that reaches further.
+  const double wander_y = w.half_spread_y_m * growth, air_y = kAirReach_s * w.air_rms_mps;
+  if (air_y > wander_y) f.air_rms_mps = w.air_rms_mps;
+  f.y_m = std::max(wander_y, air_y) + std::abs(w.drift_y_mps) * blind_s + w.across_speed_mps * kVelocityLag_s;
   f.z_m = w.half_spread_z_m * growth;
   return f;
 }
@@ -200,6 +222,13 @@ CrossingWatchVerdict crossing_watch(const CrossingEnd& end, const CrossingWatchP
   if (stops_at >= plan.stop_before_m) return v;  // committed: stopping would leave it in the frame
   v.back_out = std::abs(v.across_m) > plan.slack_y_m || std::abs(v.height_m) > plan.slack_z_m;
   return v;
+}
+
+std::string air_text(const LineHoldForecast& f) {
+  if (f.air_rms_mps <= 0.0) return {};
+  char text[64];
+  std::snprintf(text, sizeof text, " (the air remembered: %.3f m/s rms)", f.air_rms_mps);
+  return text;
 }
 
 std::string centimetres_text(double length_m) {

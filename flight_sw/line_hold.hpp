@@ -33,6 +33,16 @@
 //              it grows no more, so the square root is conservative there. A drift goes on for
 //              the whole crossing. A speed seen carries the vehicle about v tau further before
 //              the velocity loop turns it (as the gate's vertical_lag_s does for vz).
+//   air        the window is 2.5 s of a gust process of about 1 s correlation: a lull in it
+//              forecasts little. So the quiet state records' sideways speed (the heading
+//              frame's, in the state's 0.1 m/s steps) is remembered over kAirMemory_s, through
+//              the commands and re-reads that end a quiet stretch, and its rms sigma_v stands
+//              for the push the air gives: the wander across is max(wander_y sqrt(T_blind /
+//              span), kAirReach_s sigma_v). Calm air reads 0 (a quiet speed under 0.05 m/s
+//              rounds to 0). kAirReach_s (2.5 s) is above the ratio of a crossing's push off
+//              its line to the sigma_v before it on four of five crossings in strong gusts
+//              (1.3 to 1.8 s); a lull over every quiet record reads 0 and is not caught
+//              (docs/method.md section 7, "The air remembered").
 //
 // The gate (crossing_refusal) then requires the line's offset at either face plus the
 // forecast to leave crossing_margin_m inside the opening; a quiet stretch shorter than
@@ -80,6 +90,7 @@ struct LineWander {
   double half_spread_z_m = 0.0;  ///< (max - min) / 2 of z_K about its fitted line
   double drift_y_mps = 0.0;      ///< the fitted slope of y'
   double across_speed_mps = 0.0;  ///< largest |across-line speed| of quiet state records
+  double air_rms_mps = 0.0;       ///< the air remembered (AirMemory::rms_mps)
 };
 
 /// The forecast of what the blind crossing adds to the line's offset, m (file comment).
@@ -88,11 +99,34 @@ struct LineHoldForecast {
   double y_m = 0.0;
   double z_m = 0.0;
   double span_s = 0.0;    ///< the quiet stretch it was measured on (at most line_hold_window_s)
+  double air_rms_mps = 0.0;  ///< the air remembered, where its reach is the larger wander (else 0)
+};
+
+/// The air remembered (file comment, "air"): the quiet state records' sideways speed of the
+/// last kAirMemory_s, through every quiet stretch the line hold forgets.
+constexpr double kAirMemory_s = 20.0;
+/// Fewer remembered records than this (1 s of the state's 10 Hz) measure no air.
+constexpr int kAirMinRecords = 10;
+/// The air's reach: a vehicle whose quiet records show a sideways speed of rms sigma_v may be
+/// carried kAirReach_s sigma_v across in the blind crossing (file comment, "air").
+constexpr double kAirReach_s = 2.5;
+
+class AirMemory {
+ public:
+  /// A quiet state record at t_ns: its sideways speed (heading frame), m/s.
+  void on_state(TimeNs t_ns, double vy_H_mps);
+  /// The rms of the speeds of the kAirMemory_s before now_ns; 0 with fewer than kAirMinRecords.
+  double rms_mps(TimeNs now_ns) const;
+
+ private:
+  std::deque<std::pair<TimeNs, double>> vy_;
 };
 
 /// Collects the quiet poses and state records of the approach (file comment).
 class LineHoldMonitor {
  public:
+  /// Forgets the quiet stretch (the air remembered stays: a command or a re-read does not
+  /// change the air).
   void clear();
   /// The target pose of a nearly whole picture: body position p_K_m in the cell frame, taken at
   /// t_ns; `quiet`: no lateral command acted since settle_s before it. A loud pose ends the
@@ -107,9 +141,11 @@ class LineHoldMonitor {
   /// The anchor carried to `fix` at t_ns, at most carry_s after it, and the anchor's time.
   std::optional<std::pair<PoseEstimate, TimeNs>> carried(TimeNs t_ns, const OdometryFix& fix, double carry_s) const;
   /// A state record; `quiet` as for poses. Its heading-frame velocity is turned into the cell
-  /// frame by the last pose's yaw; only quiet records after the first quiet pose count.
+  /// frame by the last pose's yaw; only quiet records after the first quiet pose count. Every
+  /// quiet record goes to the air remembered.
   void on_state(const StateRecord& s, bool quiet);
-  /// The quiet stretch's wander, its poses no older than window_s before now_ns.
+  /// The quiet stretch's wander, its poses no older than window_s before now_ns, and the air
+  /// remembered at now_ns.
   LineWander wander(TimeNs now_ns, double window_s) const;
 
  private:
@@ -128,6 +164,7 @@ class LineHoldMonitor {
   std::optional<Anchor> anchor_;  ///< the last quiet pose from clean corner tags
   std::deque<std::pair<TimeNs, double>> across_mps_;  ///< quiet state records' across-line speed
   double yaw_K_rad_ = 0.0;
+  AirMemory air_;
 };
 
 /// The forecast from a wander, for a blind crossing lasting blind_s.
@@ -182,6 +219,10 @@ struct CrossingWatchVerdict {
 CrossingWatchVerdict crossing_watch(const CrossingEnd& end, const CrossingWatchPlan& plan, const MissionParams& m,
                                     const Eigen::Vector3d& p_O_m, const Eigen::Vector2d& v_O_mps,
                                     double height_above_cell_m, double vz_mps);
+
+/// For the reasons and events that give a forecast: " (the air remembered: 0.053 m/s rms)"
+/// where the air's reach is its wander across, else empty.
+std::string air_text(const LineHoldForecast& f);
 
 /// A length for the reasons the gate and the watch give: "4.2 cm" (one decimal).
 std::string centimetres_text(double length_m);

@@ -54,7 +54,7 @@ std::optional<std::string> crossing_refusal(const FlightConfig& config, CellInde
   }
   if (room.offset_y_m() + f.y_m > tol_y) {
     return std::string(kLineCannotBeHeld) + " across (offset " + centimetres_text(room.offset_y_m()) + " + wander " + centimetres_text(f.y_m) +
-           " > " + centimetres_text(tol_y) + ")";
+           " > " + centimetres_text(tol_y) + ")" + air_text(f);
   }
   if (std::max(room.offset_z_m(), std::abs(z_now)) + f.z_m > tol_z) {
     return std::string(kLineCannotBeHeld) + " vertically (offset " + centimetres_text(std::max(room.offset_z_m(), std::abs(z_now))) +

@@ -1,7 +1,8 @@
 // The line-hold gate and the in-crossing watch (line_hold.hpp) on synthetic hovers: a calm one
 // is allowed, a gusty one and a drifting one refused, and poses from touched tags widen nothing
 // when the wander is measured on clean poses carried by the odometry; the watch backs out of a
-// drift it sees before the cell and flies on once the vehicle could no longer stop short of it.
+// drift it sees before the cell and flies on once the vehicle could no longer stop short of it;
+// gusty air remembered from the approach refuses a narrow column even on a calm window.
 
 #include <cmath>
 #include <numbers>
@@ -150,6 +151,48 @@ TEST(LineHold, DriftingHoverIsRefused) {
   const auto refusal = gate_with(f);
   ASSERT_TRUE(refusal.has_value());
   EXPECT_EQ(refusal->rfind(kLineCannotBeHeld, 0), 0u) << *refusal;
+}
+
+// The air remembered: 20 s of quiet state records of which three in ten read a 0.1 m/s step
+// sideways (the gusts' beyond the envelope; calm air reads 0) give sigma_v = 0.1 sqrt(0.3),
+// 5.5 cm/s, and a reach of 2.5 s x 5.5 cm/s = 13.7 cm. A quiet window as calm as the calm
+// hover's then no longer lets the narrow column's crossing go (8.4 cm of tolerance), and the
+// reason names the air; the wide column's 16.4 cm still does. The memory forgets what is
+// older than kAirMemory_s, and measures nothing on fewer than kAirMinRecords.
+TEST(LineHold, GustyAirRememberedRefusesTheNarrowColumnOnACalmWindow) {
+  const auto at = [](int k) { return static_cast<TimeNs>(k) * 100'000'000; };  // 10 Hz
+  AirMemory few;
+  for (int k = 0; k < kAirMinRecords - 1; ++k) few.on_state(at(k), 0.1);
+  EXPECT_EQ(few.rms_mps(at(kAirMinRecords - 1)), 0.0);
+  AirMemory air;
+  for (int k = 0; k < 200; ++k) air.on_state(at(k), k % 10 < 3 ? (k % 2 ? 0.1 : -0.1) : 0.0);
+  const double sigma = air.rms_mps(at(199));
+  EXPECT_NEAR(sigma, 0.1 * std::sqrt(0.3), 1e-3);
+
+  LineHoldMonitor m;
+  LineWander w = hover(
+      m, 2.0, [](double t) { return 0.002 * std::sin(37.0 * t); }, [](double) { return 0.0; });
+  ASSERT_LT(forecast_line_hold(FlightConfig{}.mission, w, blind_s()).y_m, 0.01);  // the calm hover's
+  w.air_rms_mps = sigma;
+  const LineHoldForecast f = forecast_line_hold(FlightConfig{}.mission, w, blind_s());
+  ASSERT_TRUE(f.measured);
+  EXPECT_GE(f.y_m, kAirReach_s * sigma);
+  EXPECT_LT(f.y_m, kAirReach_s * sigma + 0.001);  // with the calm hover's drift and speed terms
+  EXPECT_EQ(f.air_rms_mps, sigma);
+  const auto refusal = gate_with(f);
+  ASSERT_TRUE(refusal.has_value());
+  EXPECT_EQ(refusal->rfind(kLineCannotBeHeld, 0), 0u) << *refusal;
+  EXPECT_NE(refusal->find("the air remembered: 0.055 m/s rms"), std::string::npos) << *refusal;
+  CrossingGateInput wide;
+  wide.still_for_s = wide.heading_still_for_s = 10.0;
+  wide.identity = CellIdentity::Confirmed;
+  wide.height_above_cell_m = 0.0;
+  wide.line_hold = f;
+  EXPECT_FALSE(crossing_refusal(FlightConfig{}, {2, 2}, pose_at(-0.6, 0.0, 0.0), wide).has_value());
+
+  // 20 s of calm records later the gusts are forgotten: calm air reads 0.
+  for (int k = 200; k < 400; ++k) air.on_state(at(k), 0.0);
+  EXPECT_EQ(air.rms_mps(at(400)), 0.0);
 }
 
 // The approach's forward creep on a heading 0.1 rad off the cell normal moves y_K by 2.5 cm/s:
