@@ -47,16 +47,17 @@ LineWander hover(LineHoldMonitor& m, double seconds, Y y_of_t, Vy vy_of_t) {
   return m.wander(at_s(seconds), FlightConfig{}.mission.line_hold.line_hold_window_s);
 }
 
-// The gate on a centred pose 0.6 m in front of L2 C3 (34 cm column: 8.4 cm of tolerance
-// across), everything else passing, with `f` as the forecast.
-std::optional<std::string> gate_with(const LineHoldForecast& f) {
+// The gate on a centred pose 0.6 m in front of `cell` (L2 C3: a 34 cm column, 8.4 cm of
+// tolerance across; L2 C2: a 48 cm one, 16.4 cm), everything else passing, with `f` as the
+// forecast.
+std::optional<std::string> gate_with(const LineHoldForecast& f, CellIndex cell = {2, 3}) {
   CrossingGateInput gate;
   gate.still_for_s = 10.0;
   gate.heading_still_for_s = 10.0;
   gate.identity = CellIdentity::Confirmed;
   gate.height_above_cell_m = 0.0;
   gate.line_hold = f;
-  return crossing_refusal(FlightConfig{}, {2, 3}, pose_at(-0.6, 0.0, 0.0), gate);
+  return crossing_refusal(FlightConfig{}, cell, pose_at(-0.6, 0.0, 0.0), gate);
 }
 
 double blind_s() { return blind_crossing_s(FlightConfig{}, 0.6); }
@@ -183,12 +184,7 @@ TEST(LineHold, GustyAirRememberedRefusesTheNarrowColumnOnACalmWindow) {
   ASSERT_TRUE(refusal.has_value());
   EXPECT_EQ(refusal->rfind(kLineCannotBeHeld, 0), 0u) << *refusal;
   EXPECT_NE(refusal->find("the air remembered: 0.055 m/s rms"), std::string::npos) << *refusal;
-  CrossingGateInput wide;
-  wide.still_for_s = wide.heading_still_for_s = 10.0;
-  wide.identity = CellIdentity::Confirmed;
-  wide.height_above_cell_m = 0.0;
-  wide.line_hold = f;
-  EXPECT_FALSE(crossing_refusal(FlightConfig{}, {2, 2}, pose_at(-0.6, 0.0, 0.0), wide).has_value());
+  EXPECT_FALSE(gate_with(f, {2, 2}).has_value()) << *gate_with(f, {2, 2});
 
   // 20 s of calm records later the gusts are forgotten: calm air reads 0.
   for (int k = 200; k < 400; ++k) air.on_state(at(k), 0.0);
