@@ -171,7 +171,7 @@ void AirbornePhases::follow(const ApproachStep& step, AirborneTools t) {
     case ApproachStep::Next::Cross:
       crossing_.begin(*step.crossing);
       t.mission.enter(Phase::Cross, step.crossing->event);
-      t.sticks.set(step.crossing->velocity, t.facts.now_ns);
+      t.sticks.fly_line(step.crossing->velocity, t.facts.now_ns);
       return;
     default: return;
   }

@@ -42,4 +42,16 @@ RcSticks to_rc(const VelocityCommand& v, const RcConversion& k) {
           stick(k.rc_per_mps_vertical * v.vz_mps), stick(-k.rc_per_radps_yaw * v.yaw_rate_radps)};
 }
 
+RcSticks to_rc_carried(const VelocityCommand& v, const RcConversion& k, StickCarry& carry) {
+  RcSticks rc = to_rc(v, k);
+  const double a = -k.rc_per_mps_horizontal * v.vy_B_mps + carry.a;
+  const double b = k.rc_per_mps_horizontal * v.vx_B_mps + carry.b;
+  rc.a = stick(a);
+  rc.b = stick(b);
+  // What a saturated stick could not send is not owed later: the carry stays within a stick.
+  carry.a = std::clamp(a - rc.a, -1.0, 1.0);
+  carry.b = std::clamp(b - rc.b, -1.0, 1.0);
+  return rc;
+}
+
 }  // namespace shelfcross::flight_sw

@@ -185,11 +185,12 @@ GateVerdict CrossingGate::judge(MissionFacts& facts, const TargetTracker& tracke
     return {std::nullopt, "no room behind the shelf to stop after crossing (tags " + format_m(*behind_m) + " m behind)",
             std::nullopt};
   }
-  // Along the line from the pose through the cell centre at mid-depth, heading held, ended
-  // by the distance the state odometry has flown (guidance.hpp, plan_crossing).
+  // Along the line from the pose through the cell centre at mid-depth, heading held, on the
+  // heading the vehicle settles on once the yaw stick is released; ended by the distance the
+  // state odometry has flown (guidance.hpp, plan_crossing).
   const double yaw_O = facts.state ? facts.state->yaw_rad : 0.0;
-  const CrossingPlan plan =
-      plan_crossing(config_, pose, beyond_m, forward_gain_.gain(), facts.odometry.p_O_m().head<2>(), yaw_O);
+  const CrossingPlan plan = plan_crossing(config_, pose, sticks.yaw_rate_radps, beyond_m, forward_gain_.gain(),
+                                          facts.odometry.p_O_m().head<2>(), yaw_O);
   CrossingStart start;
   start.end = plan.end;
   start.watch = plan_crossing_watch(config_, line_room(config_, *tracker.target(), pose), pose.p_FB_m(),

@@ -112,16 +112,17 @@ double crossing_beyond_m(const FlightConfig& config, const std::optional<double>
   return beyond_m;
 }
 
-CrossingPlan plan_crossing(const FlightConfig& config, const PoseEstimate& pose_K, double beyond_m,
-                           double forward_gain, const Eigen::Vector2d& start_O_m, double yaw_O_rad) {
+CrossingPlan plan_crossing(const FlightConfig& config, const PoseEstimate& pose_K, double yaw_rate_cmd_radps,
+                           double beyond_m, double forward_gain, const Eigen::Vector2d& start_O_m, double yaw_O_rad) {
   const MissionParams& mp = config.mission;
   const double distance = -pose_K.p_FB_m().x() + config.shelf.depth_m + 0.5 * mp.vehicle_size_m.x() + beyond_m;
   const Eigen::Vector3d d = crossing_direction_K(config.shelf, pose_K);
   CrossingPlan plan;
-  plan.dir_B = to_body_xy(d.head<2>(), pose_K.yaw_rad);  // |dir_B| = |d_xy|
+  const double turn_rad = yaw_rate_cmd_radps * kHeadingCarry_s;
+  plan.dir_B = to_body_xy(d.head<2>(), pose_K.yaw_rad + turn_rad);  // |dir_B| = |d_xy|
   plan.end.line_m = distance / d.x() * plan.dir_B.norm();
   plan.end.start_O_m = start_O_m;
-  plan.end.axis_O = Eigen::Rotation2Dd(yaw_O_rad) * plan.dir_B.normalized();
+  plan.end.axis_O = Eigen::Rotation2Dd(yaw_O_rad + turn_rad) * plan.dir_B.normalized();
   plan.end.timed_ns =
       seconds_to_ns(distance / (d.x() * config.control.crossing_speed_mps * forward_gain) + kVelocityLag_s);
   return plan;

@@ -107,24 +107,34 @@ VelocityCommand back_off_velocity(const ControlGains& g);
 /// short of it. Below min_beyond_distance_m the crossing is not to be flown.
 double crossing_beyond_m(const FlightConfig& config, const std::optional<double>& behind_m);
 
+/// How long a commanded turn goes on turning the heading after the pose it was judged on: the
+/// pose is a video latency old (0.12-0.35 s, about 0.2 s typical) and the autopilot's yaw
+/// reference lags the stick (a first-order response, its time constant unidentified; assumed
+/// 0.3 s). The crossing holds the heading (yaw stick 0), so a turn rate r still commanded at
+/// the gate leaves the vehicle r kHeadingCarry_s further round than its pose: 0.03 rad/s (two
+/// yaw sticks) turns it 0.9 deg, and a body-frame line turned so is 1.8 cm off at 1.2 m.
+constexpr double kHeadingCarry_s = 0.5;
+
 /// The crossing, planned on the last pose.
 struct CrossingPlan {
   Eigen::Vector2d dir_B = Eigen::Vector2d::UnitX();  ///< the line's horizontal part in B, |dir_B| = |d_xy|
   CrossingEnd end;  ///< where it ends (odometry.hpp)
 };
 /// Along the crossing line (crossing_direction_K, navigation.hpp) at crossing_speed_mps,
-/// heading held (yaw rate 0); the line in K turned into the body frame by the heading:
-/// v_B = R_z(-yaw) v_K. Ended by distance flown, not by time (crossing_flown): the line's
-/// horizontal length, distance / d_x along the normal times |d_xy|, along the line's direction
-/// in the odometry frame O (the body direction turned by the state heading `yaw_O_rad`), from
-/// `start_O_m`. Timed only as a fallback: at the speed the vehicle really flies (the commanded
-/// one times `forward_gain`, measured in the approach; the rc-to-speed gain of a Tello varies
-/// by tens of percent) plus the autopilot's lag (from rest, a first-order response flies
-/// v (T - tau (1 - e^(-T/tau))) >= v (T - tau) in T). Timed alone, a gain over-estimated by a
-/// fifth and the lag left a vehicle starting from rest 0.6 m short, landing onto the back
-/// face's beam (default campaign, ideal link, run 852 of seed 1).
-CrossingPlan plan_crossing(const FlightConfig& config, const PoseEstimate& pose_K, double beyond_m,
-                           double forward_gain, const Eigen::Vector2d& start_O_m, double yaw_O_rad);
+/// heading held (yaw rate 0); the line in K turned into the body frame by the heading the
+/// vehicle settles on once the yaw stick is released, v_B = R_z(-(yaw + r kHeadingCarry_s)) v_K
+/// with r `yaw_rate_cmd_radps`, the heading law's command at the gate. Ended by distance flown,
+/// not by time (crossing_flown): the line's horizontal length, distance / d_x along the normal
+/// times |d_xy|, along the line's direction in the odometry frame O (the body direction turned
+/// by the state heading `yaw_O_rad` and the same carried turn; the state's whole degrees hide
+/// the latency's part of it), from `start_O_m`. Timed only as a fallback: at the speed the
+/// vehicle really flies (the commanded one times `forward_gain`, measured in the approach; the
+/// rc-to-speed gain of a Tello varies by tens of percent) plus the autopilot's lag (from rest,
+/// a first-order response flies v (T - tau (1 - e^(-T/tau))) >= v (T - tau) in T). Timed
+/// alone, a gain over-estimated by a fifth and the lag left a vehicle starting from rest 0.6 m
+/// short, landing onto the back face's beam (default campaign, ideal link, run 852 of seed 1).
+CrossingPlan plan_crossing(const FlightConfig& config, const PoseEstimate& pose_K, double yaw_rate_cmd_radps,
+                           double beyond_m, double forward_gain, const Eigen::Vector2d& start_O_m, double yaw_O_rad);
 
 /// The crossing's vertical speed: the cell centre's height `cell_height_m` held by the state
 /// height h (control.hpp, height_hold_vz_mps, with crossing_kp_z and crossing_z_speed_max_mps).

@@ -15,10 +15,17 @@ Sticks::Sticks(const FlightConfig& config)
 void Sticks::set(const VelocityCommand& v, TimeNs now_ns) {
   velocity_ = v;
   set_ns_ = now_ns;
+  carry_.reset();
+}
+
+void Sticks::fly_line(const VelocityCommand& v, TimeNs now_ns) {
+  set(v, now_ns);
+  carry_.emplace();
 }
 
 void Sticks::hover() {
   velocity_ = {};
+  carry_.reset();
   restart_loops();
 }
 
@@ -34,7 +41,10 @@ void Sticks::restart_loops() {
 // very pictures that could have measured it. Holding the last command over a short gap keeps
 // the vehicle steady instead.
 void Sticks::hold_or_hover(TimeNs now_ns, bool leaving) {
-  if (leaving || !set_ns_ || ns_to_seconds(now_ns - *set_ns_) > gains_.unsteered_hold_s) velocity_ = {};
+  if (leaving || !set_ns_ || ns_to_seconds(now_ns - *set_ns_) > gains_.unsteered_hold_s) {
+    velocity_ = {};
+    carry_.reset();
+  }
 }
 
 VelocityCommand Sticks::steer(double e_z_m, double e_psi_rad, double dt_s) {
@@ -52,7 +62,7 @@ double Sticks::control_dt_s(TimeNs now_ns) const {
 std::optional<RcSticks> Sticks::due(TimeNs now_ns, bool force) {
   if (!force && last_rc_ns_ && ns_to_seconds(now_ns - *last_rc_ns_) < rc_.rc_period_s) return std::nullopt;
   last_rc_ns_ = now_ns;
-  return to_rc(velocity_, rc_);
+  return carry_ ? to_rc_carried(velocity_, rc_, *carry_) : to_rc(velocity_, rc_);
 }
 
 bool Sticks::keepalive_due(TimeNs now_ns) const {

@@ -20,6 +20,9 @@ class Sticks {
 
   /// Flies `v` from `now_ns` on (the time hold_or_hover counts from).
   void set(const VelocityCommand& v, TimeNs now_ns);
+  /// Flies the open-loop line `v` (the crossing): as set, and its horizontal sticks carry their
+  /// rounding (to_rc_carried) until the next set, hover or zeroing hold_or_hover.
+  void fly_line(const VelocityCommand& v, TimeNs now_ns);
   /// Zero velocity, the PI loops restarted.
   void hover();
   /// The PI loops restarted (their integrals to 0), the command kept.
@@ -54,6 +57,7 @@ class Sticks {
   PiController pi_z_, pi_psi_;
   VelocityCommand velocity_;
   std::optional<TimeNs> set_ns_;  ///< when set() last set velocity_ (hold_or_hover)
+  std::optional<StickCarry> carry_;  ///< flying a line (fly_line): the horizontal sticks' rounding carried
   std::optional<TimeNs> last_rc_ns_;
   std::optional<TimeNs> last_control_ns_;
 };

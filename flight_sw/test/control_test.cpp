@@ -1,12 +1,16 @@
 // Control laws: PI step response and anti-windup, bang-off-bang and the approach's lateral law,
-// rc conversion and saturation.
+// rc conversion and saturation, the crossing's carried rounding and the heading its line is
+// planned on.
 
 #include <cmath>
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
 #include "flight_sw/control.hpp"
 #include "flight_sw/guidance.hpp"
+#include "flight_sw/navigation.hpp"
+#include "flight_sw/sticks.hpp"
 
 namespace shelfcross::flight_sw {
 namespace {
@@ -94,6 +98,72 @@ TEST(RcConversion, SignsGainsRoundingAndSaturation) {
   EXPECT_EQ(r.text(), "rc -10 25 5 -20");
   EXPECT_EQ(to_rc({2.0, -3.0, -1.5, -4.0}, k), (RcSticks{100, 100, -100, 100}));
   EXPECT_EQ(to_rc({0.005, -0.005, 0.0049, 0.0}, k), (RcSticks{1, 1, 0, 0}));  // half away from 0
+}
+
+// The crossing's line at 0.3 m/s with a 1.9 cm/m aim asks for 0.57 of a stick sideways: plain
+// rounding sends 1 every time (75 % too much); carried, the sticks average the command.
+TEST(RcConversion, CarriedRoundingAveragesTheExactCommand) {
+  RcConversion k;
+  const VelocityCommand line{0.3 * 1.1, -0.3 * 0.019, 0.02, 0.0};  // forward 33, right 0.57
+  EXPECT_EQ(to_rc(line, k).a, 1);
+  StickCarry carry;
+  int sum_a = 0, sum_b = 0;
+  for (int i = 0; i < 100; ++i) {
+    const RcSticks r = to_rc_carried(line, k, carry);
+    EXPECT_TRUE(r.a == 0 || r.a == 1) << r.a;
+    EXPECT_EQ(r.c, 2);  // vertical and yaw round as to_rc
+    EXPECT_EQ(r.d, 0);
+    sum_a += r.a;
+    sum_b += r.b;
+    EXPECT_LE(std::abs(carry.a), 0.5 + 1e-12);
+  }
+  EXPECT_NEAR(sum_a / 100.0, 0.57, 0.01);
+  EXPECT_NEAR(sum_b / 100.0, 33.0, 0.01);
+  // Saturated: nothing owed later (the carry stays within a stick).
+  StickCarry sat;
+  for (int i = 0; i < 10; ++i) EXPECT_EQ(to_rc_carried({2.0, 0.0, 0.0, 0.0}, k, sat).b, 100);
+  EXPECT_LE(std::abs(sat.b), 1.0);
+  EXPECT_LE(std::abs(to_rc_carried({0.25, 0.0, 0.0, 0.0}, k, sat).b - 25), 1);
+}
+
+// Sticks carry the rounding only while they fly a line: set, hover or a zeroing hold ends it.
+TEST(Sticks, FlyLineCarriesTheRoundingUntilTheNextCommand) {
+  FlightConfig config;
+  Sticks sticks(config);
+  const VelocityCommand line{0.3, -0.003, 0.0, 0.0};  // 0.3 of a stick to the right
+  sticks.fly_line(line, 0);
+  int sum_a = 0;
+  for (int i = 1; i <= 10; ++i) sum_a += sticks.due(seconds_to_ns(0.1 * i), false)->a;
+  EXPECT_EQ(sum_a, 3);
+  sticks.set(line, seconds_to_ns(1.0));
+  for (int i = 11; i <= 20; ++i) EXPECT_EQ(sticks.due(seconds_to_ns(0.1 * i), false)->a, 0);
+  sticks.fly_line(line, seconds_to_ns(2.0));
+  sticks.hover();
+  for (int i = 21; i <= 25; ++i) EXPECT_EQ(*sticks.due(seconds_to_ns(0.1 * i), false), RcSticks{});
+}
+
+
+// The heading law still commanding a turn at the gate turns the vehicle on after the pose
+// (kHeadingCarry_s); the crossing holds the heading it settles on, so the body-frame line is
+// planned on that heading: turned by it, it lies along the line through the cell centre.
+TEST(CrossingPlan, FliesTheLineOnTheHeadingTheCommandedTurnSettlesOn) {
+  const FlightConfig config;
+  PoseEstimate pose;
+  pose.X_FB.translation() = Eigen::Vector3d(-0.6, 0.03, 0.01);
+  pose.yaw_rad = 0.02;
+  const Eigen::Vector2d d_K = crossing_direction_K(config.shelf, pose).head<2>();
+  const double rate = 0.03;  // two yaw sticks counter-clockwise
+  const CrossingPlan still = plan_crossing(config, pose, 0.0, 0.5, 1.0, Eigen::Vector2d::Zero(), 0.2);
+  const CrossingPlan turning = plan_crossing(config, pose, rate, 0.5, 1.0, Eigen::Vector2d::Zero(), 0.2);
+  const double settled = pose.yaw_rad + rate * kHeadingCarry_s;
+  EXPECT_LT((Eigen::Rotation2Dd(pose.yaw_rad) * still.dir_B - d_K).norm(), 1e-12);
+  EXPECT_LT((Eigen::Rotation2Dd(settled) * turning.dir_B - d_K).norm(), 1e-12);
+  // The turning plan aims 0.9 deg clockwise of the still one in the body: right of it.
+  EXPECT_NEAR(std::atan2(turning.dir_B.y(), turning.dir_B.x()) - std::atan2(still.dir_B.y(), still.dir_B.x()),
+              -rate * kHeadingCarry_s, 1e-12);
+  // The odometry's axis turns alike: the same line in O.
+  EXPECT_LT((turning.end.axis_O - still.end.axis_O).norm(), 1e-12);
+  EXPECT_DOUBLE_EQ(turning.end.line_m, still.end.line_m);
 }
 
 }  // namespace
