@@ -142,7 +142,6 @@ TEST(Sticks, FlyLineCarriesTheRoundingUntilTheNextCommand) {
   for (int i = 21; i <= 25; ++i) EXPECT_EQ(*sticks.due(seconds_to_ns(0.1 * i), false), RcSticks{});
 }
 
-
 // The heading law still commanding a turn at the gate turns the vehicle on after the pose
 // (kHeadingCarry_s); the crossing holds the heading it settles on, so the body-frame line is
 // planned on that heading: turned by it, it lies along the line through the cell centre.
