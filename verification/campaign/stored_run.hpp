@@ -1,6 +1,10 @@
 #pragma once
-// A stored run's columns read typed: its metrics (run_metrics_json.hpp's StoredMetrics) and its
-// drawn values. Every reader of stored runs goes through these, never a key spelt by hand.
+// A stored run's columns read typed: its metrics (run_metrics_json.hpp's StoredMetrics), its
+// drawn values and its trace. Every reader of stored runs goes through these, never a key spelt
+// by hand.
+
+#include <optional>
+#include <vector>
 
 #include "verification/campaign/results_store.hpp"
 #include "verification/cosim/run_metrics_json.hpp"
@@ -11,5 +15,16 @@ namespace shelfcross::verification {
 /// Both throw std::invalid_argument naming the run (and the key, for the metrics).
 StoredMetrics stored_metrics(const RunRecord& record);
 DrawnValues stored_draws(const RunRecord& record);
+
+/// A run's stored trajectory (campaign.hpp's trace_json): the body origin in W and its yaw at
+/// about 10 Hz, positions to 1 mm (NaN where a diverged run stored none), and when the approach
+/// and the crossing started.
+struct StoredTrace {
+  std::vector<double> t_s, x_W_m, y_W_m, z_W_m, yaw_rad;  ///< one entry per sample, in time order
+  std::optional<double> approach_start_s, cross_start_s;
+};
+/// Empty for a run that stored none (a worker that crashed measured nothing); throws
+/// std::invalid_argument naming the run when the trace does not read back.
+StoredTrace stored_trace(const RunRecord& record);
 
 }  // namespace shelfcross::verification

@@ -4,7 +4,9 @@
 #include <cmath>
 #include <fstream>
 #include <iomanip>
+#include <optional>
 #include <sstream>
+#include <utility>
 
 #include "config/strict_json.hpp"
 #include "verification/statistics/plot.hpp"
@@ -19,8 +21,9 @@ using nlohmann::json;
 const cv::Scalar kPoint(180, 110, 40), kDiagonal(120, 120, 120);
 
 /// The metrics drawn as histograms of their paired differences.
-const char* const kHistogramMetrics[] = {"min_clearance_m",      "mission_time_s",       "entry_offset_y_abs_m",
-                                         "entry_offset_z_abs_m", "altitude_settling_time_s", "cpu_s"};
+const char* const kHistogramMetrics[] = {"min_clearance_m",      "crossing_push_m",          "mission_time_s",
+                                         "entry_offset_y_abs_m", "entry_offset_z_abs_m", "altitude_settling_time_s",
+                                         "cpu_s"};
 
 constexpr const char* kIntervalMethod = "Newcombe's hybrid score interval for paired proportions (method 10)";
 
@@ -96,8 +99,26 @@ json contact_json(const EventComparison& c) {
           {"p_two_sided", c.mcnemar.p_two_sided}};
 }
 
+/// One side's least or largest value of a metric (MetricComparison::base_each or new_each) and
+/// its run; nothing when that side has the metric in no pair.
+std::optional<std::pair<std::int64_t, double>> extreme(const std::vector<std::pair<std::int64_t, double>>& each,
+                                                       bool least) {
+  if (each.empty()) return std::nullopt;
+  const auto by_value = [](const auto& a, const auto& b) { return a.second < b.second; };
+  return least ? *std::min_element(each.begin(), each.end(), by_value)
+               : *std::max_element(each.begin(), each.end(), by_value);
+}
+
+json extreme_json(const std::vector<std::pair<std::int64_t, double>>& each, bool least) {
+  const auto e = extreme(each, least);
+  return e ? json{{"run", e->first}, {"value", e->second}} : json(nullptr);
+}
+
 json metric_json(const MetricComparison& m) {
-  json j{{"pairs", m.pairs}, {"tolerance", m.tolerance}, {"moved_up", m.moved_up}, {"moved_down", m.moved_down}};
+  json j{{"pairs", m.pairs}, {"tolerance", m.tolerance}, {"moved_up", m.moved_up}, {"moved_down", m.moved_down},
+         {"base_runs_with_it", m.base_each.size()}, {"new_runs_with_it", m.new_each.size()},
+         {"base_min", extreme_json(m.base_each, true)}, {"base_max", extreme_json(m.base_each, false)},
+         {"new_min", extreme_json(m.new_each, true)}, {"new_max", extreme_json(m.new_each, false)}};
   if (m.pairs > 0) {
     j["median_difference"] = m.paired.median;
     j["hodges_lehmann"] = m.paired.hodges_lehmann;
@@ -256,6 +277,34 @@ std::string value_text(double v) {
   return s.str();
 }
 
+/// The margins' tails: each side's least clearance and largest push, with its run. A campaign is
+/// only as safe as its closest call, which a shift of the median does not show.
+std::string closest_calls_section(const PairedDiff& d) {
+  std::ostringstream md;
+  md << "## Closest calls\n\nEach side over every pair where it has the metric (a run that crossed on one side "
+        "only counts on that side).\n\n| | BASE | its run | NEW | its run |\n|---|---|---|---|---|\n";
+  const auto side = [&md](const std::vector<std::pair<std::int64_t, double>>& each, bool least) {
+    const auto e = extreme(each, least);
+    if (e) {
+      md << " | " << fixed(100.0 * e->second, 1) << " cm | " << e->first;
+    } else {
+      md << " | none | ";
+    }
+  };
+  const auto row = [&](const char* label, const char* name, bool least) {
+    const MetricComparison* m = find_metric(d, name);
+    if (!m) return;
+    md << "| " << label;
+    side(m->base_each, least);
+    side(m->new_each, least);
+    md << " |\n";
+  };
+  row("least clearance to the shelf", "min_clearance_m", true);
+  row("largest crossing push", "crossing_push_m", false);
+  md << "\n";
+  return md.str();
+}
+
 std::string metrics_section(const PairedDiff& d) {
   std::ostringstream md;
   md << "## Metrics, paired (NEW - BASE)\n\n"
@@ -279,8 +328,11 @@ std::string metrics_section(const PairedDiff& d) {
         "averages of the differences, zeros included) with its distribution-free interval; the Wilcoxon "
         "signed-rank test drops the zeros (exact for up to 50 untied differences, else normal with the tie "
         "correction). NEW higher / lower: runs that moved by more than the tolerance (from the unit: 5 mm, 0.1 s, "
-        "0.5 CPU s, 0.01 for fractions, any change of a count). CPU seconds depend on the machine and its load "
-        "when each campaign ran.\n\n";
+        "0.5 CPU s, 0.01 for fractions, any change of a count). crossing_push_m: the largest distance across the "
+        "cell of the vehicle from the crossed cell's centre line while it is within the shelf's depth, from the "
+        "stored 10 Hz trace (crossing_push.hpp). CPU seconds depend on the machine and its load when each campaign "
+        "ran.\n\n";
+  md << closest_calls_section(d);
   return md.str();
 }
 

@@ -10,6 +10,7 @@
 
 #include "verification/campaign/campaign.hpp"
 #include "verification/cosim/run_metrics_json.hpp"
+#include "verification/report/crossing_push.hpp"
 
 namespace shelfcross::verification {
 
@@ -171,10 +172,12 @@ EventComparison compare_event(const PairedTable& t, double confidence) {
   return e;
 }
 
-/// The metrics of one pair side by side: summary_metric_values() of each, then cpu_s.
-std::vector<std::optional<double>> metric_row(const StoredMetrics& stored, const RunRecord& r) {
+/// A run's metrics as compared: summary_metric_values(), the crossing's push from its trace,
+/// then cpu_s.
+std::vector<std::optional<double>> metric_row(const Scenario& scenario, const StoredMetrics& stored, const RunRecord& r) {
   std::vector<std::optional<double>> v = stored.run ? summary_metric_values(*stored.run)
                                                     : std::vector<std::optional<double>>(summary_metric_names().size());
+  v.push_back(crossing_push_m(scenario, stored, stored_trace(r)));
   v.push_back(r.cpu_s);
   return v;
 }
@@ -216,6 +219,7 @@ PairedDiff pair_campaigns(DiffSide base, DiffSide next, const DiffOptions& optio
   PairedTable failures, contacts;
   DrawTally draws;
   std::vector<std::string> names = summary_metric_names();
+  names.emplace_back("crossing_push_m");
   names.emplace_back("cpu_s");
   diff.metrics.resize(names.size());
   for (std::size_t k = 0; k < names.size(); ++k) {
@@ -249,8 +253,10 @@ PairedDiff pair_campaigns(DiffSide base, DiffSide next, const DiffOptions& optio
       diff.flips.push_back({b.index, n.index, b.seed, b.outcome, n.outcome, bs.detail, ns.detail, base_ok != new_ok,
                             base_contact != new_contact, bd, nd});
     }
-    const auto bv = metric_row(bs, b), nv = metric_row(ns, n);
+    const auto bv = metric_row(base.scenario, bs, b), nv = metric_row(next.scenario, ns, n);
     for (std::size_t k = 0; k < names.size(); ++k) {
+      if (bv[k]) diff.metrics[k].base_each.emplace_back(b.index, *bv[k]);
+      if (nv[k]) diff.metrics[k].new_each.emplace_back(n.index, *nv[k]);
       if (!bv[k] || !nv[k]) continue;
       diff.metrics[k].base.push_back(*bv[k]);
       diff.metrics[k].next.push_back(*nv[k]);

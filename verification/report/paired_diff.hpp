@@ -13,14 +13,16 @@
 // running, or resumed, is compared on what both have (counted in the report).
 //
 // Every value is read typed: outcomes by statistics.hpp's classes, metrics through
-// stored_metrics() and summary_metric_values() (the campaign summary's one list), draws through
-// stored_draws(), CPU seconds from RunRecord::cpu_s.
+// stored_metrics() and summary_metric_values() (the campaign summary's one list), the crossing's
+// push from the stored trace (crossing_push.hpp), draws through stored_draws(), CPU seconds from
+// RunRecord::cpu_s.
 
 #include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "verification/campaign/stored_run.hpp"
@@ -87,6 +89,9 @@ struct MetricComparison {
   std::int64_t moved_up = 0;   ///< NEW - BASE > tolerance
   std::int64_t moved_down = 0; ///< NEW - BASE < -tolerance
   std::vector<double> base, next;  ///< the paired values, for the plots
+  /// Each side's (run index, value) over every pair where that side has the metric, whether or
+  /// not the other has it: a run that crossed on one side only still counts for its closest call.
+  std::vector<std::pair<std::int64_t, double>> base_each, new_each;
 };
 
 /// A paired run whose outcome differs.
@@ -109,7 +114,7 @@ struct PairedDiff {
   std::int64_t pairs_with_other_draws = 0;  ///< pairs with any draw differing
   EventComparison failures;           ///< the event: the mission did not succeed
   EventComparison contacts;           ///< the event: a contact (shelf or wall)
-  std::vector<MetricComparison> metrics;  ///< summary_metric_names(), then cpu_s
+  std::vector<MetricComparison> metrics;  ///< summary_metric_names(), crossing_push_m, cpu_s
   std::vector<Flip> flips;            ///< in BASE's run order
 };
 

@@ -2,8 +2,10 @@
 // Small campaigns with known outcomes, written through the real results store: what the paired
 // comparison's tests (verification's and the `shelfcross diff` CLI's) read back. Every run has
 // its scenario's real draws for its seed and real metrics JSON; only the outcomes, clearances,
-// mission times and run hashes are chosen, so the flips, the tables and the shifts are known.
+// pushes, mission times and run hashes are chosen, so the flips, the tables and the shifts are
+// known.
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
@@ -14,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "shelfcross/random.hpp"
+#include "shelfcross/warehouse.hpp"
 #include "verification/campaign/campaign.hpp"
 #include "verification/campaign/results_store.hpp"
 #include "verification/cosim/run_metrics_json.hpp"
@@ -22,10 +25,34 @@
 
 namespace shelfcross::verification::test {
 
+/// A run's trajectory through cell (level 2, column 3) of shelf 0 as campaign.cpp stores it
+/// (trace_json, 10 Hz): straight along x_S at 0.3 m/s from 1 m before the front face to 1 m
+/// past the back face, its body origin `offset_y_m(x_S)` to the left of the cell's centre line.
+inline RunResult crossing_trajectory(const Scenario& scenario, const std::function<double(double)>& offset_y_m) {
+  const ShelfSpec& shelf = scenario.warehouse.shelves.front();
+  const Eigen::Isometry3d X_WS = shelf_pose_W(shelf);
+  const Eigen::Vector3d centre_S = cell_centre_S_m(shelf, 2, 3);
+  RunResult r;
+  for (int k = 0; k * 0.1 * 0.3 <= 2.0 + shelf.depth_m; ++k) {
+    const double x_S = -1.0 + k * 0.1 * 0.3;
+    TrajectorySample s;
+    s.t_s = 10.0 + 0.1 * k;
+    s.p_WB_m = X_WS * Eigen::Vector3d(x_S, centre_S.y() + offset_y_m(x_S), centre_S.z());
+    s.yaw_rad = shelf.yaw_rad;
+    r.trajectory.push_back(s);
+  }
+  r.approach_start_s = 2.0;
+  r.cross_start_s = 10.0 + 0.1 * 30;
+  return r;
+}
+
 /// What one stored run is made of.
 struct PlannedRun {
   std::string outcome = "success";
   double min_clearance_m = 0.10;
+  /// The crossing's push (crossing_push.hpp): a success crosses cell (2, 3) of shelf 0 drifting
+  /// linearly across the cell from its centre line to this far off it at the back face.
+  double push_m = 0.02;
   double mission_time_s = 25.0;
   std::string run_hash;  ///< empty: one made from the seed (the same on both sides)
   /// A draw stored other than the scenario's (as a build that draws differently would).
@@ -62,10 +89,15 @@ inline void write_planned_campaign(const std::filesystem::path& db, const Scenar
     RunMetrics m;
     m.mission_time_s = p.mission_time_s;
     m.truth.path_length_m = 4.0;
+    r.trace_json = "{}";
     if (p.outcome == "success") {
       m.truth.min_clearance_m = p.min_clearance_m;
-      m.truth.entry_offset_y_m = 0.004;
+      m.truth.entry_offset_y_m = 0.0;
       m.truth.entry_offset_z_m = -0.003;
+      m.truth.crossed = CellIndex{2, 3};
+      const double depth_m = scenario.warehouse.shelves.front().depth_m;
+      r.trace_json = trace_json(crossing_trajectory(
+          scenario, [&](double x_S) { return p.push_m * std::clamp(x_S / depth_m, 0.0, 1.0); }));
     }
     r.metrics_json = stored_metrics_json({m, p.outcome == "success" ? "" : "planned " + p.outcome, std::nullopt});
     char hash[33];
@@ -73,7 +105,6 @@ inline void write_planned_campaign(const std::filesystem::path& db, const Scenar
                   static_cast<unsigned long long>(mix64(r.seed)));
     r.run_hash = p.run_hash.empty() ? std::string(hash) : p.run_hash;
     r.wall_s = 1.0;
-    r.trace_json = "{}";
     r.cpu_s = 2.0;
     store.insert(r);
   }

@@ -33,8 +33,8 @@ PlannedRun base_plan(std::int64_t k) {
 }
 
 /// NEW: run 10 recovers; 5, 15, 25, 35, 45, 55 abort and 50 touches the shelf (7 lost, 1
-/// gained); runs 0-39 pass 1 cm closer to the shelf (other hashes); 40-59 are unchanged but
-/// for the flips.
+/// gained); runs 0-39 pass 1 cm closer to the shelf, pushed 1 cm further (other hashes); 40-59
+/// are unchanged but for the flips.
 PlannedRun new_plan(std::int64_t k) {
   PlannedRun p = base_plan(k);
   if (k == 10) p.outcome = "success";
@@ -42,6 +42,7 @@ PlannedRun new_plan(std::int64_t k) {
   if (k == 50) p.outcome = "collision";
   if (k < 40) {
     p.min_clearance_m -= 0.010;
+    p.push_m += 0.010;
     p.run_hash = "ffffffffffffffffffffffffffff" + std::to_string(1000 + k);
   }
   if (p.outcome != base_plan(k).outcome) p.run_hash = "eeeeeeeeeeeeeeeeeeeeeeeeeeee" + std::to_string(1000 + k);
@@ -119,6 +120,15 @@ TEST(PairedDiff, MetricsArePairedOverTheRunsBothHave) {
   EXPECT_LT(clearance.paired.interval.upper, 0.0);
   EXPECT_LT(clearance.paired.p_two_sided, 1e-6);
   EXPECT_DOUBLE_EQ(clearance.tolerance, 0.005);
+  // The push, from the stored traces, where both crossed: 2 cm, 3 cm for runs 0-39 in NEW.
+  const MetricComparison push = metric("crossing_push_m");
+  EXPECT_EQ(push.pairs, 51);
+  EXPECT_EQ(push.moved_up, 34);
+  EXPECT_EQ(push.moved_down, 0);
+  EXPECT_NEAR(push.paired.median, 0.010, 1.5e-3);
+  // Each side's values over every pair where it crossed: 58 successes in BASE, 52 in NEW.
+  EXPECT_EQ(push.base_each.size(), 58u);
+  EXPECT_EQ(push.new_each.size(), 52u);
   // Mission time and CPU seconds did not move.
   for (const char* name : {"mission_time_s", "cpu_s"}) {
     const MetricComparison m = metric(name);
@@ -223,7 +233,7 @@ TEST(PairedDiff, ReportStatesTheVerdictFlipsAndReplayCommands) {
   const fs::path out = c.base.parent_path() / "diff";
   const nlohmann::json j = write_diff_report(d, out, {.fail_if_worse_alpha = 0.05});
   for (const char* file : {"diff.md", "diff.json", "clearance_base_vs_new.png", "difference_min_clearance_m.png",
-                           "difference_mission_time_s.png", "difference_cpu_s.png"}) {
+                           "difference_crossing_push_m.png", "difference_mission_time_s.png", "difference_cpu_s.png"}) {
     EXPECT_TRUE(fs::exists(out / file)) << file;
   }
   EXPECT_EQ(j["pairs"], 60);
@@ -236,6 +246,11 @@ TEST(PairedDiff, ReportStatesTheVerdictFlipsAndReplayCommands) {
   ASSERT_EQ(j["flips"].size(), 8u);
   EXPECT_EQ(j["flips"][0]["replay"][0], "shelfcross replay " + c.base.string() + " --run 5 --video");
   EXPECT_EQ(j["flips"][0]["replay"][1], "shelfcross replay " + c.next.string() + " --run 5 --video");
+  // The closest calls: run 0, the first of the least clearance and the largest push on each side.
+  EXPECT_NEAR(j["metrics"]["min_clearance_m"]["new_min"]["value"].get<double>(), 0.070, 1e-12);
+  EXPECT_EQ(j["metrics"]["min_clearance_m"]["new_min"]["run"], 0);
+  EXPECT_NEAR(j["metrics"]["crossing_push_m"]["base_max"]["value"].get<double>(), 0.020, 1e-3);
+  EXPECT_EQ(j["metrics"]["crossing_push_m"]["new_runs_with_it"], 52);
   std::ifstream in(out / "diff.md");
   std::stringstream text;
   text << in.rdbuf();
@@ -245,6 +260,8 @@ TEST(PairedDiff, ReportStatesTheVerdictFlipsAndReplayCommands) {
   EXPECT_NE(md.find("| 50 | 50 | success | collision (planned collision) | **lost** | **new contact** |"),
             std::string::npos);
   EXPECT_NE(md.find("shelfcross replay " + c.next.string() + " --run 50 --video"), std::string::npos);
+  EXPECT_NE(md.find("| least clearance to the shelf | 8.0 cm | 0 | 7.0 cm | 0 |"), std::string::npos);
+  EXPECT_NE(md.find("| largest crossing push | 2.0 cm | 0 | 3.0 cm | 0 |"), std::string::npos);
 }
 
 }  // namespace
