@@ -3,6 +3,7 @@
 #include <cmath>
 #include <fstream>
 #include <iomanip>
+#include <map>
 #include <sstream>
 
 #include "config/strict_json.hpp"
@@ -109,6 +110,101 @@ std::string comparison_table_markdown(const std::vector<StrategyRow>& rows) {
         "Lower bound: one-sided Clopper-Pearson at 95 %. Safety apart from success: contacts (a shelf or a "
         "wall touched) with their one-sided 95 % Clopper-Pearson upper bound, safe aborts (gave up, landed "
         "without contact), inventory errors. Paper: docs/method.md section 6, Table 2.\n";
+  return md.str();
+}
+
+RunByRun compare_run_by_run(const std::vector<std::string>& strategies,
+                            const std::vector<std::vector<RunRecord>>& runs_per_strategy, std::int64_t runs_requested) {
+  if (strategies.size() < 2 || strategies.size() != runs_per_strategy.size()) {
+    throw std::invalid_argument("run by run: needs two or more strategies, each with its runs");
+  }
+  // (time, distance) of each strategy's successful runs, by run index.
+  struct Flown {
+    double time_s, distance_m;
+  };
+  std::vector<std::map<std::int64_t, Flown>> flown(strategies.size());
+  for (std::size_t k = 0; k < strategies.size(); ++k) {
+    for (const RunRecord& r : runs_per_strategy[k]) {
+      if (r.index >= runs_requested || r.outcome != "success") continue;
+      const RunMetrics m = stored_metrics(r).run.value();  // a success always measured its run
+      flown[k][r.index] = {m.mission_time_s, m.truth.path_length_m};
+    }
+  }
+  RunByRun out;
+  out.first = strategies.front();
+  std::vector<std::vector<double>> dt(strategies.size()), dd(strategies.size());
+  out.against.resize(strategies.size() - 1);
+  for (const auto& [index, first] : flown.front()) {
+    bool all = true, shortest = true, fastest = true;
+    for (std::size_t k = 1; k < strategies.size(); ++k) {
+      const auto it = flown[k].find(index);
+      if (it == flown[k].end()) {
+        all = false;
+        continue;
+      }
+      RunByRun::Against& a = out.against[k - 1];
+      ++a.pairs;
+      a.shorter += first.distance_m < it->second.distance_m;
+      a.faster += first.time_s < it->second.time_s;
+      dt[k].push_back(it->second.time_s - first.time_s);
+      dd[k].push_back(it->second.distance_m - first.distance_m);
+      shortest = shortest && first.distance_m < it->second.distance_m;
+      fastest = fastest && first.time_s < it->second.time_s;
+    }
+    if (!all) continue;
+    ++out.runs;
+    out.shortest += shortest;
+    out.fastest += fastest;
+    if (!fastest) out.not_fastest.push_back(index);
+  }
+  for (std::size_t k = 1; k < strategies.size(); ++k) {
+    RunByRun::Against& a = out.against[k - 1];
+    a.strategy = strategies[k];
+    if (a.pairs == 0) continue;
+    a.time_s = wilcoxon_signed_rank(dt[k], 0.95);
+    a.distance_m = wilcoxon_signed_rank(dd[k], 0.95);
+  }
+  if (out.runs > 0) {
+    out.shortest_lower_95 = clopper_pearson_lower(out.shortest, out.runs, 0.95);
+    out.fastest_lower_95 = clopper_pearson_lower(out.fastest, out.runs, 0.95);
+  }
+  return out;
+}
+
+std::string run_by_run_markdown(const RunByRun& r) {
+  if (r.runs == 0) return "";
+  const auto share = [&r](std::int64_t n, double lower) {
+    return std::to_string(n) + " of " + std::to_string(r.runs) + " (" +
+           fixed(100.0 * static_cast<double>(n) / static_cast<double>(r.runs), 1) + " %; at least " +
+           fixed(100.0 * lower, 1) + " %, one-sided 95 %)";
+  };
+  std::ostringstream md;
+  md << "## Run by run\n\nOver the " << r.runs << " runs every strategy flew successfully (the same seed and draws): "
+     << r.first << " the shortest in " << share(r.shortest, r.shortest_lower_95) << ", the fastest in "
+     << share(r.fastest, r.fastest_lower_95) << ".\n\n"
+     << "| against | runs both succeeded | " << r.first << " shorter | " << r.first
+     << " faster | time shift (other - " << r.first << ") | 95 % interval | Wilcoxon p | distance shift | 95 % interval |\n"
+     << "|---|---|---|---|---|---|---|---|---|\n";
+  for (const RunByRun::Against& a : r.against) {
+    md << "| " << a.strategy << " | " << a.pairs << " | " << a.shorter << " | " << a.faster << " | ";
+    if (a.pairs == 0) {
+      md << "| | | | |\n";
+      continue;
+    }
+    std::ostringstream p;
+    p << std::setprecision(3) << a.time_s.p_two_sided;
+    md << fixed(a.time_s.hodges_lehmann, 1) << " s | " << fixed(a.time_s.interval.lower, 1) << " to "
+       << fixed(a.time_s.interval.upper, 1) << " s | " << p.str() << " | " << fixed(a.distance_m.hodges_lehmann, 2)
+       << " m | " << fixed(a.distance_m.interval.lower, 2) << " to " << fixed(a.distance_m.interval.upper, 2) << " m |\n";
+  }
+  md << "\nShift: the Hodges-Lehmann estimate of the paired difference with its distribution-free interval. ";
+  if (r.not_fastest.empty()) {
+    md << r.first << " was the fastest in every such run.\n";
+  } else {
+    md << "Runs where " << r.first << " was not the fastest (replay them in `" << r.first << "/`):";
+    for (std::int64_t i : r.not_fastest) md << " " << i;
+    md << ".\n";
+  }
   return md.str();
 }
 
@@ -219,12 +315,36 @@ json run_comparison(const Scenario& nominal, std::int64_t runs, std::uint64_t se
                      {"paper_time_s", r.paper_time_s}});
   }
   j["rows"] = table;
+  RunByRun by_run;  // once two strategies have flown (a stop request can come after the first)
+  if (all_runs.size() >= 2) {
+    const auto& all = compared_strategies();
+    by_run = compare_run_by_run(std::vector<std::string>(all.begin(), all.begin() + static_cast<std::ptrdiff_t>(all_runs.size())),
+                                all_runs, runs);
+  }
+  const auto shift_json = [](const SignedRankResult& r) {
+    return json{{"hodges_lehmann", r.hodges_lehmann}, {"interval", {r.interval.lower, r.interval.upper}},
+                {"p_two_sided", r.p_two_sided}};
+  };
+  json against = json::array();
+  for (const RunByRun::Against& a : by_run.against) {
+    json one{{"strategy", a.strategy}, {"pairs", a.pairs}, {"shorter", a.shorter}, {"faster", a.faster}};
+    if (a.pairs > 0) {
+      one["time_s"] = shift_json(a.time_s);
+      one["distance_m"] = shift_json(a.distance_m);
+    }
+    against.push_back(one);
+  }
+  j["run_by_run"] = {{"strategy", by_run.first},          {"runs", by_run.runs},
+                     {"shortest", by_run.shortest},        {"fastest", by_run.fastest},
+                     {"shortest_lower_95", by_run.shortest_lower_95}, {"fastest_lower_95", by_run.fastest_lower_95},
+                     {"against", against},                 {"not_fastest", by_run.not_fastest}};
   std::ofstream(out_dir / "compare.json") << j.dump(2) << "\n";
   std::ofstream md(out_dir / "compare.md");
   md << "# Path strategies compared: " << nominal.name << " (paper Table 2)\n\n"
      << runs << " runs per strategy, campaign seed " << seed
      << ": run k of every strategy has the same seed and the same dispersion draws.\n\n"
      << comparison_table_markdown(rows) << "\n"
+     << run_by_run_markdown(by_run) << "\n"
      << "![top view](compare_top_view.png)\n\n![side view](compare_side_view.png)\n\n"
      << "Per-strategy campaign reports: ";
   for (const std::string& s : compared_strategies()) md << "[" << s << "](" << s << "/report.md) ";

@@ -5,7 +5,8 @@
 // run's draws depend on its seed and the scenario's dispersions only, never on cosim.strategy).
 //
 //   OUT/<strategy>/results.sqlite, summary.json, report.md   one campaign each (resumable)
-//   OUT/compare.md, OUT/compare.json                         the table beside the paper's numbers
+//   OUT/compare.md, OUT/compare.json                         the table beside the paper's numbers,
+//                                                            and the strategies run by run
 //   OUT/compare_top_view.png, OUT/compare_side_view.png      the three paths of one run (Fig. 21)
 
 #include <atomic>
@@ -22,6 +23,7 @@
 #include "verification/campaign/campaign_pool.hpp"
 #include "verification/campaign/results_store.hpp"
 #include "verification/scenario/scenario.hpp"
+#include "verification/statistics/statistics.hpp"
 
 namespace shelfcross::verification {
 
@@ -56,6 +58,37 @@ StrategyRow summarize_strategy(const std::string& strategy, const std::vector<Ru
 /// std::invalid_argument for a row of an unknown strategy.
 std::string comparison_table_markdown(const std::vector<StrategyRow>& rows);
 
+/// Table 2 run by run: the method's claim is that through the cells is the shortest and the
+/// fastest path, and a mean can hide the runs where it was not. Over the runs that every
+/// strategy flew successfully (the same seed and draws in each), how often the first strategy
+/// (through the cells) was strictly the shortest and strictly the fastest of all, with
+/// one-sided 95 % Clopper-Pearson lower bounds, and against each other strategy the paired
+/// differences (other - first) of time and distance: how many runs it lost, the Hodges-Lehmann
+/// shift with its 95 % interval and the Wilcoxon signed-rank p-value (statistics.hpp).
+struct RunByRun {
+  struct Against {
+    std::string strategy;
+    std::int64_t pairs = 0;                ///< runs both flew successfully
+    std::int64_t shorter = 0, faster = 0;  ///< of them, runs where the first strategy was strictly
+    SignedRankResult time_s, distance_m;   ///< of other - first; n 0 when there are no pairs
+  };
+  std::string first;                     ///< the strategy judged (compared_strategies()'s first)
+  std::int64_t runs = 0;                 ///< runs every strategy flew successfully
+  std::int64_t shortest = 0, fastest = 0;
+  double shortest_lower_95 = 0.0, fastest_lower_95 = 0.0;
+  std::vector<Against> against;          ///< the other strategies, in order
+  std::vector<std::int64_t> not_fastest; ///< run indices where another strategy was as fast or faster
+};
+
+/// From each strategy's stored runs (runs_per_strategy[k] of strategies[k]; run indices below
+/// runs_requested). Throws std::invalid_argument for fewer than two strategies or a
+/// successful run whose stored metrics do not read.
+RunByRun compare_run_by_run(const std::vector<std::string>& strategies,
+                            const std::vector<std::vector<RunRecord>>& runs_per_strategy, std::int64_t runs_requested);
+
+/// The section of compare.md; empty text when no run succeeded for every strategy.
+std::string run_by_run_markdown(const RunByRun& r);
+
 /// Top (x, y) and side (x, z) views of the mission's shelves with one run's path per strategy:
 /// the lowest run index that succeeded for every strategy, else run 0. Returns that index
 /// (-1 when some strategy has no run 0). Requires out_dir to exist; throws std::runtime_error
@@ -75,9 +108,10 @@ struct CompareOptions {
 
 /// Runs (or resumes) the three campaigns and writes everything listed above. Returns
 /// compare.json's content: {"scenario", "seed", "runs", "plotted_run", "rows": [...],
-/// "complete": every campaign has all its runs}. Creates out_dir. Throws what a campaign
-/// throws (campaign.hpp, results_store.hpp) and std::runtime_error when a file cannot be
-/// written; a stop request returns early with "complete": false.
+/// "run_by_run": {...} (RunByRun), "complete": every campaign has all its runs}. Creates
+/// out_dir. Throws what a campaign throws (campaign.hpp, results_store.hpp) and
+/// std::runtime_error when a file cannot be written; a stop request returns early with
+/// "complete": false.
 nlohmann::json run_comparison(const Scenario& nominal, std::int64_t runs, std::uint64_t seed,
                               const std::filesystem::path& out_dir, const CompareOptions& options);
 
