@@ -48,12 +48,6 @@ std::string fixed(double v, int decimals) {
   return s.str();
 }
 
-std::vector<double> numbers(const json& a) {
-  std::vector<double> v;
-  for (const json& x : a) v.push_back(x.is_number() ? x.get<double>() : NAN);
-  return v;
-}
-
 }  // namespace
 
 const std::vector<std::string>& compared_strategies() {
@@ -250,10 +244,10 @@ std::int64_t write_comparison_plots(const Scenario& nominal, const std::vector<s
   for (size_t k = 0; k < runs_per_strategy.size() && k < compared_strategies().size(); ++k) {
     for (const RunRecord& r : runs_per_strategy[k]) {
       if (r.index != shown) continue;
-      const json t = json::parse(r.trace_json);
+      const StoredTrace t = stored_trace(r);
       const std::string label = compared_strategies()[k] + " (" + r.outcome + ")";
-      top.add_line(numbers(t.at("x")), numbers(t.at("y")), kColours[k], 2, label);
-      side.add_line(numbers(t.at("x")), numbers(t.at("z")), kColours[k], 2, label);
+      top.add_line(t.x_W_m, t.y_W_m, kColours[k], 2, label);
+      side.add_line(t.x_W_m, t.z_W_m, kColours[k], 2, label);
     }
   }
   top.save_png((out_dir / "compare_top_view.png").string());
