@@ -67,6 +67,10 @@ TEST(CompareCommand, WritesTableAndPlotsForThreeStrategiesWithTheSameDraws) {
   std::stringstream md;
   md << std::ifstream(dir / "out" / "compare.md").rdbuf();
   EXPECT_NE(md.str().find("| over the shelf tops | 2 |"), std::string::npos) << md.str();
+  // Run by run needs runs every strategy finished: none here, so no section and no share.
+  EXPECT_EQ(j["run_by_run"]["runs"], 0);
+  EXPECT_EQ(j["run_by_run"]["against"].size(), 2u);
+  EXPECT_EQ(md.str().find("## Run by run"), std::string::npos);
   EXPECT_TRUE(fs::exists(dir / "out" / "compare_top_view.png"));
   EXPECT_TRUE(fs::exists(dir / "out" / "compare_side_view.png"));
   // Run again: nothing missing, nothing re-run, same table.
