@@ -41,7 +41,7 @@ std::optional<double> crossing_push_m(const Scenario& scenario, const StoredMetr
 
 double crossing_room_m(const Scenario& scenario, int column) {
   const ShelfSpec& shelf = scenario.warehouse.shelves.front();
-  const double pitch_m = post_y_S_m(shelf, column - 1) - post_y_S_m(shelf, column);
+  const double pitch_m = shelf.column_pitch_m[static_cast<std::size_t>(column - 1)];  // post centre to post centre
   return 0.5 * pitch_m - 0.5 * shelf.post_thickness_m - 0.5 * scenario.vehicle.size_m.y();
 }
 

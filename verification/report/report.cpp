@@ -243,8 +243,8 @@ std::string crossing_push_section(const Scenario& scenario, const std::vector<Ru
     const std::optional<double> push = crossing_push_m(scenario, stored, stored_trace(r));
     if (!push) continue;
     const int column = stored.run->truth.crossed->column;
-    const ShelfSpec& shelf = scenario.warehouse.shelves.front();
-    Column& c = by_width[std::lround(1000.0 * (post_y_S_m(shelf, column - 1) - post_y_S_m(shelf, column)))];
+    const double pitch_m = scenario.warehouse.shelves.front().column_pitch_m[static_cast<std::size_t>(column - 1)];
+    Column& c = by_width[std::lround(1000.0 * pitch_m)];
     c.room_m = crossing_room_m(scenario, column);
     c.push_m.push_back(*push);
     if (*push > c.largest_m) {
