@@ -83,6 +83,17 @@ ShelfSurvey::ShelfSurvey(const FlightConfig& config)
 
 SurveyStep ShelfSurvey::find_shelf(const Picture& pic, bool back_out, Telemetry& telemetry) {
   analyse(pic.bgr, telemetry);
+  // A re-read from close backs straight out to the viewpoint's range before it looks at
+  // anything. Closer than that, a whole grid in view is not the shelf being re-read, which
+  // does not fit the view there, but the next one, seen through the empty cell in front of
+  // the camera: 0.46 m from a 34 cm cell it spans 40 deg, and the next shelf's grid, 4.7 m
+  // off, 21 deg. Taken for the re-read shelf, its viewpoint lies beyond the cell, and GoToViewpoint
+  // flew there through the cell, ungated, then read the inventory of the shelf before.
+  if (back_out) {
+    VelocityCommand v;
+    v.vx_B_mps = -config_.control.back_off_speed_mps;
+    return fly(v);
+  }
   if (view_.full && !pic.decides) return fly({});  // to be confirmed on a nearly whole picture
   if (view_.full) {
     Step step;
@@ -94,8 +105,6 @@ SurveyStep ShelfSurvey::find_shelf(const Picture& pic, bool back_out, Telemetry&
     // A fragment: back away (only while the shelf is too close to fit the view) and centre it
     // until the whole grid fits the view (guidance.hpp).
     v = fragment_velocity(config_, view_.tags, view_.largest_tag_area_px, -viewpoint_G_m_.x());
-  } else if (back_out) {
-    v.vx_B_mps = -config_.control.back_off_speed_mps;  // a re-read from close: back out first
   } else {
     v.yaw_rate_radps = config_.control.search_yaw_rate_radps;  // nothing in view: turn and look
   }

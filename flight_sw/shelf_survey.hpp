@@ -45,8 +45,8 @@ class ShelfSurvey {
   /// configuration, held by reference).
   explicit ShelfSurvey(const FlightConfig& config);
 
-  /// FindShelf on a picture. `back_out`: a re-read from close, backing straight out while
-  /// nothing is in view. A whole grid in view on a deciding picture ends the phase (the
+  /// FindShelf on a picture. `back_out`: a re-read from close, backing straight out whatever
+  /// is in view (a whole grid that close is the next shelf's, through a cell). A whole grid in view on a deciding picture ends the phase (the
   /// mission enters GoToViewpoint and steps it on the same picture, `view_fresh`).
   SurveyStep find_shelf(const Picture& pic, bool back_out, Telemetry& telemetry);
   /// GoToViewpoint on a picture; `view_fresh`: this picture was analysed already.

@@ -5,6 +5,8 @@
 
 #include "flight_sw/inventory.hpp"
 #include "flight_sw/perception.hpp"
+#include "flight_sw/shelf_survey.hpp"
+#include "flight_sw/telemetry.hpp"
 #include "shelf_drawing.hpp"
 
 namespace shelfcross::flight_sw {
@@ -122,6 +124,34 @@ TEST(Inventory, DamagedFramesViewCellsClearOfTheirDamageWhole) {
   EXPECT_EQ(inv.box_at({1, 1}), 8);
   EXPECT_TRUE(inv.empty_decidable());
   EXPECT_EQ(inv.empty_cells(), (std::vector<CellIndex>{{2, 1}}));
+}
+
+// A re-read from close to the shelf (the target lost 0.4 m in front of cell L2 C2): through
+// that empty cell the camera sees the whole next shelf, which FindShelf would take for the
+// shelf being re-read (its viewpoint lies beyond the cell). Backing out, it is not taken.
+TEST(ShelfSurvey, ReReadFromCloseBacksOutPastTheNextShelfSeenThroughTheCell) {
+  testing::Scene scene;
+  const testing::DrawnShelf front = testing::paper_shelf({3.0, 0.0, 0.0});
+  testing::DrawnShelf behind = testing::paper_shelf({7.2, 0.0, 0.0});
+  behind.boxes = {{1, 3, 28}};
+  scene.shelves = {front, behind};
+  FlightConfig config;
+  const testing::Drawer drawer(config.camera, true);
+  const double y = 0.5 * (testing::post_y(front, 1) + testing::post_y(front, 2));
+  const double z = 0.5 * (testing::beam_z(front, 1) + testing::beam_z(front, 2));
+  const cv::Mat img = drawer.draw(scene, testing::camera_pose_W({2.60, y, z}, 0.0));
+  const Picture pic{img, 0, 0, true, nullptr};
+  Telemetry telemetry;
+  ShelfSurvey looking(config);
+  EXPECT_EQ(looking.find_shelf(pic, false, telemetry).next, SurveyStep::Next::WholeShelfInView)  // the hazard
+      << telemetry.view.tags.size() << " tags, grid " << telemetry.view.grid_rows << " x " << telemetry.view.grid_columns
+      << ": " << telemetry.view.grid_refusal;
+  ShelfSurvey backing(config);
+  const SurveyStep step = backing.find_shelf(pic, true, telemetry);
+  EXPECT_EQ(step.next, SurveyStep::Next::Stay);
+  ASSERT_TRUE(step.velocity);
+  EXPECT_DOUBLE_EQ(step.velocity->vx_B_mps, -config.control.back_off_speed_mps);
+  EXPECT_DOUBLE_EQ(step.velocity->yaw_rate_radps, 0.0);
 }
 
 }  // namespace
