@@ -87,8 +87,9 @@ SurveyStep ShelfSurvey::find_shelf(const Picture& pic, bool back_out, Telemetry&
   // anything. Closer than that, a whole grid in view is not the shelf being re-read, which
   // does not fit the view there, but the next one, seen through the empty cell in front of
   // the camera: 0.46 m from a 34 cm cell it spans 40 deg, and the next shelf's grid, 4.7 m
-  // off, 21 deg. Taken for the re-read shelf, its viewpoint lies beyond the cell, and GoToViewpoint
-  // flew there through the cell, ungated, then read the inventory of the shelf before.
+  // off, 21 deg. Taken for the re-read shelf, its viewpoint lies beyond the cell:
+  // GoToViewpoint flew there through the cell, ungated, and the mission then crossed the
+  // next shelf on the inventory of the one before.
   if (back_out) {
     VelocityCommand v;
     v.vx_B_mps = -config_.control.back_off_speed_mps;

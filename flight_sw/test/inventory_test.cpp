@@ -1,5 +1,6 @@
 // Inventory: boxes of a drawn shelf in known cells, levels and columns numbered from the floor
 // and the left; a box on the shelf behind seen through an empty cell is not counted; votes.
+// The survey's re-read from close: the shelf behind, whole through a cell, is not taken.
 
 #include <gtest/gtest.h>
 
