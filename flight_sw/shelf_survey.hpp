@@ -46,8 +46,9 @@ class ShelfSurvey {
   explicit ShelfSurvey(const FlightConfig& config);
 
   /// FindShelf on a picture. `back_out`: a re-read from close, backing straight out whatever
-  /// is in view (a whole grid that close is the next shelf's, through a cell). A whole grid in view on a deciding picture ends the phase (the
-  /// mission enters GoToViewpoint and steps it on the same picture, `view_fresh`).
+  /// is in view (a whole grid that close is the next shelf's, through a cell). A whole grid
+  /// in view on a deciding picture ends the phase (the mission enters GoToViewpoint and
+  /// steps it on the same picture, `view_fresh`).
   SurveyStep find_shelf(const Picture& pic, bool back_out, Telemetry& telemetry);
   /// GoToViewpoint on a picture; `view_fresh`: this picture was analysed already.
   SurveyStep go_to_viewpoint(const Picture& pic, TimeNs now_ns, bool view_fresh, Telemetry& telemetry);

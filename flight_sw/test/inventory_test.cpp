@@ -144,9 +144,10 @@ TEST(ShelfSurvey, ReReadFromCloseBacksOutPastTheNextShelfSeenThroughTheCell) {
   const Picture pic{img, 0, 0, true, nullptr};
   Telemetry telemetry;
   ShelfSurvey looking(config);
-  EXPECT_EQ(looking.find_shelf(pic, false, telemetry).next, SurveyStep::Next::WholeShelfInView)  // the hazard
-      << telemetry.view.tags.size() << " tags, grid " << telemetry.view.grid_rows << " x " << telemetry.view.grid_columns
-      << ": " << telemetry.view.grid_refusal;
+  // The hazard: the next shelf, whole through the cell, taken for the one being re-read.
+  EXPECT_EQ(looking.find_shelf(pic, false, telemetry).next, SurveyStep::Next::WholeShelfInView)
+      << telemetry.view.tags.size() << " tags, grid " << telemetry.view.grid_rows << " x "
+      << telemetry.view.grid_columns << ": " << telemetry.view.grid_refusal;
   ShelfSurvey backing(config);
   const SurveyStep step = backing.find_shelf(pic, true, telemetry);
   EXPECT_EQ(step.next, SurveyStep::Next::Stay);
