@@ -145,7 +145,10 @@ struct ControlGains {
   double viewpoint_yaw_kp = 1.0;            ///< (rad/s) per rad toward facing the shelf
   double search_yaw_rate_radps = 0.3;       ///< yaw sweep while no tag is in view
   double back_off_speed_mps = 0.2;          ///< backing away to see a grid fragment whole
-  double crossing_speed_mps = 0.3;          ///< open-loop forward speed through the cell
+  /// Open-loop forward speed through the cell: the transfer's speed (TransferParams), so that
+  /// the strategies fly their legs alike; docs/method.md section 7 derives what the gate and
+  /// the in-crossing watch can do at it.
+  double crossing_speed_mps = 0.4;
   /// Approach path perpendicular to the face (docs/method.md section 3): the forward speed xdot_0
   /// is flown only while the line of sight to the cell is within this angle of its normal;
   /// outside it the vehicle holds its range while the lateral law brings it onto the normal.

@@ -81,9 +81,10 @@ struct StickCarry {
 /// As to_rc, but the horizontal sticks carry their rounding from datagram to datagram (error
 /// diffusion): each is the rounded sum of its exact value and `carry`, and `carry` keeps what
 /// that rounding left out. Over successive datagrams the sticks then average the exact command,
-/// where plain rounding sends the same error every time: the crossing's 0.3 m/s line with a
-/// 1.9 cm/m aim asks for 0.57 of a stick sideways, which rounds to 1 (75 % too much), and that
-/// error, held for the blind crossing's 4-5 s, moves the vehicle 1.7 cm off its line.
+/// where plain rounding sends the same error every time: the crossing's 0.4 m/s line with a
+/// 1.9 cm/m aim asks for 0.76 of a stick sideways, which rounds to 1 (32 % too much), and that
+/// error, held for the whole blind crossing, moves the vehicle off its line (docs/method.md
+/// section 7, "The line's sticks").
 RcSticks to_rc_carried(const VelocityCommand& v, const RcConversion& conversion, StickCarry& carry);
 
 }  // namespace shelfcross::flight_sw

@@ -100,11 +100,11 @@ TEST(RcConversion, SignsGainsRoundingAndSaturation) {
   EXPECT_EQ(to_rc({0.005, -0.005, 0.0049, 0.0}, k), (RcSticks{1, 1, 0, 0}));  // half away from 0
 }
 
-// The crossing's line at 0.3 m/s with a 1.9 cm/m aim asks for 0.57 of a stick sideways: plain
-// rounding sends 1 every time (75 % too much); carried, the sticks average the command.
+// The crossing's line at 0.4 m/s with a 1.9 cm/m aim asks for 0.76 of a stick sideways: plain
+// rounding sends 1 every time (32 % too much); carried, the sticks average the command.
 TEST(RcConversion, CarriedRoundingAveragesTheExactCommand) {
   RcConversion k;
-  const VelocityCommand line{0.3 * 1.1, -0.3 * 0.019, 0.02, 0.0};  // forward 33, right 0.57
+  const VelocityCommand line{0.4 * 1.1, -0.4 * 0.019, 0.02, 0.0};  // forward 44, right 0.76
   EXPECT_EQ(to_rc(line, k).a, 1);
   StickCarry carry;
   int sum_a = 0, sum_b = 0;
@@ -117,8 +117,8 @@ TEST(RcConversion, CarriedRoundingAveragesTheExactCommand) {
     sum_b += r.b;
     EXPECT_LE(std::abs(carry.a), 0.5 + 1e-12);
   }
-  EXPECT_NEAR(sum_a / 100.0, 0.57, 0.01);
-  EXPECT_NEAR(sum_b / 100.0, 33.0, 0.01);
+  EXPECT_NEAR(sum_a / 100.0, 0.76, 0.01);
+  EXPECT_NEAR(sum_b / 100.0, 44.0, 0.01);
   // Saturated: nothing owed later (the carry stays within a stick).
   StickCarry sat;
   for (int i = 0; i < 10; ++i) EXPECT_EQ(to_rc_carried({2.0, 0.0, 0.0, 0.0}, k, sat).b, 100);

@@ -833,7 +833,7 @@ TEST(FlightSoftware, AClimbTheStateHeightMissedIsCaughtByTheIdentityCheck) {
 }
 
 // The crossing ends where the state odometry has flown the line, not when a timer runs out.
-// A headwind of 0.1 m/s in the crossing slows the 0.3 m/s crossing by a third: timed on the
+// A headwind of 0.1 m/s in the crossing slows the 0.4 m/s crossing by a quarter: timed on the
 // approach's speed (commit 51de687) it sent `land` at x = 3.39 m, 0.05 m past the back face
 // with the vehicle's rear still over the back beam (the default campaign's run 852 of seed 1,
 // ideal link, landed onto that beam the same way: a speed gain over-estimated by a fifth and

@@ -259,7 +259,7 @@ TEST(CrossingGate, RefusesACalmShorterThanTheBlindCrossingAfterRoughAir) {
   const PoseEstimate pose = centred_pose();
   CrossingGateInput gate = calm_still_gate(CellIdentity::Confirmed, 0.0);
   const double blind_s = blind_crossing_s(config, 0.6);
-  ASSERT_GT(blind_s, 3.0);  // 0.6 m + the shelf's depth + the vehicle, at 0.3 m/s
+  ASSERT_GT(blind_s, 2.5);  // 0.6 m + the shelf's depth + the vehicle, at 0.4 m/s
   EXPECT_FALSE(crossing_refusal(config, {2, 2}, pose, gate).has_value());
   gate.calm_for_s = 2.0;
   const std::string refusal = crossing_refusal(config, {2, 2}, pose, gate).value_or("");
