@@ -53,9 +53,6 @@ class CommandPacer {
     return outstanding_ && now_ns - outstanding_->sent_ns >= outstanding_->timeout_ns;
   }
 
-  /// Seconds since the outstanding command was last sent (0 when none is outstanding).
-  double outstanding_s(TimeNs now_ns) const { return outstanding_ ? ns_to_seconds(now_ns - outstanding_->sent_ns) : 0.0; }
-
   /// The outstanding command, or null.
   Command* outstanding() { return outstanding_ ? &outstanding_->command : nullptr; }
   const Command* outstanding() const { return outstanding_ ? &outstanding_->command : nullptr; }

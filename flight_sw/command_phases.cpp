@@ -8,12 +8,6 @@ namespace {
 // After a refused `land`: how long to watch the state height before asking again (the
 // tello_pilot's own landing asks every 0.5 s too).
 constexpr double kLandRefusedWait_s = 0.5;
-// After `land` goes out: a drone still hovering this long after it (above airborne_height_m,
-// vertically still) did not get it. The Tello starts down within a few tenths of a second and
-// descends at about 0.5 m/s (`land` takes about 2 s from 1 m); 2 s leaves the command's
-// latency and a state record's age (10 Hz) several times over. Waiting out the reply's timeout
-// instead (land_reply_s, 10 s) hovered a five-shelf mission 10 s at its end.
-constexpr double kLandStartWait_s = 2.0;
 }  // namespace
 
 void CommandPhases::on_reply(const SdkReply& reply, MissionFacts& facts, Mission& mission) {
@@ -21,22 +15,7 @@ void CommandPhases::on_reply(const SdkReply& reply, MissionFacts& facts, Mission
 }
 
 void CommandPhases::check_timeout(MissionFacts& facts, Mission& mission) {
-  if (auto c = commands_.check_timeout(facts.now_ns)) return on_completion(*c, facts, mission);
-  // A `land` the drone never got (a lost datagram) is asked again as if its reply had timed
-  // out. Were it only the reply that was lost, the drone is landing (not still) or down (the
-  // state height ends the landing: supervise); asked again while landing, it answers
-  // `error`, and that refusal is waited out by the state height (on_completion).
-  const std::string* outstanding = commands_.outstanding_command();
-  const bool hovering = facts.state_fresh() && facts.state->height_m > config_.mission.airborne_height_m &&
-                        std::abs(facts.state->vz_H_mps) <= kVerticallyStill_mps;
-  if (facts.phase.current() == Phase::Land && outstanding && *outstanding == "land" && hovering &&
-      commands_.outstanding_s(facts.now_ns) > kLandStartWait_s) {
-    on_completion(*commands_.take_as_lost(), facts, mission);
-    if (facts.phase.current() == Phase::Land) {
-      facts.telemetry.event = "'land' lost (still hovering " + std::to_string(static_cast<int>(kLandStartWait_s)) +
-                              " s after it), retry " + std::to_string(commands_.attempts());
-    }
-  }
+  if (auto c = commands_.check_timeout(facts.now_ns)) on_completion(*c, facts, mission);
 }
 
 void CommandPhases::on_completion(const MissionCommands::Completion& c, MissionFacts& facts, Mission& mission) {

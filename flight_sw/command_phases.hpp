@@ -32,8 +32,7 @@ class CommandPhases {
   /// A reply before the start or after the end: it completes the outstanding command unjudged,
   /// or is counted stale.
   void drain(const SdkReply& reply) { commands_.on_reply(reply); }
-  /// The outstanding command, its reply overdue, judged as lost; so is a `land` the drone is
-  /// still hovering after (kLandStartWait_s); nothing otherwise.
+  /// The outstanding command, its reply overdue, judged as lost; nothing otherwise.
   void check_timeout(MissionFacts& facts, Mission& mission);
   /// Sends what may go now (MissionCommands::poll), appended to `out`.
   void poll(TimeNs now_ns, std::vector<SdkCommand>& out) { commands_.poll(now_ns, out); }

@@ -52,8 +52,7 @@
 // viewpoint. Every re-read (these and the identity check's) counts toward
 // mission.identity_rereads; the next doubt lands in front of the shelf. Takeoff refused or
 // unanswered: retried command_retries times, then the mission ends on the ground. Land
-// unanswered: done once a fresh state record says down, else retried command_retries times
-// (at once when the drone still hovers 2 s after it: the `land` was lost);
+// unanswered: done once a fresh state record says down, else retried command_retries times;
 // refused in the air (already landing, `Not joystick`): asked again every 0.5 s until the
 // state height says down, for up to land_reply_s.
 // A re-read that starts closer than the viewpoint and sees no tag backs straight out first.

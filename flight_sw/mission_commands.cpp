@@ -42,12 +42,6 @@ std::optional<MissionCommands::Completion> MissionCommands::check_timeout(TimeNs
   return Completion{std::move(*pacer_.complete()), "", false, true};
 }
 
-std::optional<MissionCommands::Completion> MissionCommands::take_as_lost() {
-  std::optional<std::string> command = pacer_.complete();
-  if (!command) return std::nullopt;
-  return Completion{std::move(*command), "", false, true};
-}
-
 void MissionCommands::poll(TimeNs now_ns, std::vector<SdkCommand>& out) {
   if (again_ && now_ns >= again_->at_ns) {
     queue(std::move(again_->command), again_->reply_timeout_s);

@@ -58,18 +58,12 @@ class MissionCommands {
   /// The outstanding command, completed as timed out, if its reply is overdue at now_ns;
   /// otherwise (none outstanding, or not yet due) nothing.
   std::optional<Completion> check_timeout(TimeNs now_ns);
-  /// The outstanding command completed now as timed out (the mission sees that it was lost
-  /// before its timeout tells); nothing when none is outstanding.
-  std::optional<Completion> take_as_lost();
   /// Sends what may go at now_ns, appending it to `out`: a re-ask that is due is asked for
   /// first; the waiting command goes once none is outstanding and the gap since the last
   /// send has passed.
   void poll(TimeNs now_ns, std::vector<SdkCommand>& out);
 
   bool outstanding() const { return pacer_.outstanding() != nullptr; }
-  /// The outstanding command's text (null when none), and seconds since it was sent.
-  const std::string* outstanding_command() const { return pacer_.outstanding(); }
-  double outstanding_s(TimeNs now_ns) const { return pacer_.outstanding_s(now_ns); }
   int stale_replies() const { return stale_replies_; }
 
  private:

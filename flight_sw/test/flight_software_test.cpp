@@ -37,7 +37,6 @@ struct Options {
   /// first, refuses the duplicate at once with "error", and that is the reply the flight
   /// software hears; the first's "ok", once down, comes after it and is drained as stale.
   bool land_duplicated = false;
-  int lost_land_commands = 0;  ///< the first this many `land` datagrams never reach the drone
   Eigen::Vector3d start_W_m = Eigen::Vector3d(0.3, 0.0, 0.0);
   double start_yaw_rad = 0.0;
   bool blank_frames = false;  ///< frames show only the wall
@@ -218,8 +217,6 @@ class Harness {
   const Eigen::Vector3d& position() const { return p_WB_; }
   TimeNs now() const { return t_; }
   const std::vector<FrameStep>& frame_steps() const { return frame_steps_; }
-  /// The flight software's events on pictures, in order (a repeat of the last one dropped).
-  const std::vector<std::string>& events() const { return events_; }
 
  private:
   void step_frame(const CameraFrame& f) {
@@ -233,8 +230,6 @@ class Harness {
       if (c.text.rfind("rc ", 0) == 0) st.rc.push_back(c.text);
     }
     handle(cmds);
-    const std::string& event = fsw_.telemetry().event;
-    if (!event.empty() && (events_.empty() || events_.back() != event)) events_.push_back(event);
     st.after = fsw_.phase();
     phases_.push_back(st.after);
     frame_steps_.push_back(std::move(st));
@@ -281,10 +276,6 @@ class Harness {
       } else if (c.text == "land") {
         // A Tello refuses `land` at once while landing or landed; it answers one that starts
         // a landing once down.
-        if (lost_lands_ < o_.lost_land_commands) {
-          ++lost_lands_;
-          continue;
-        }
         if (landing_ || o_.land_duplicated) {
           replies_.push_back({t_ + 30 * kMs, "error"});
         } else if (!o_.land_reply.empty()) {
@@ -363,8 +354,6 @@ class Harness {
   std::vector<SdkCommand> log_;
   std::vector<Phase> phases_;
   std::vector<FrameStep> frame_steps_;
-  std::vector<std::string> events_;
-  int lost_lands_ = 0;
   std::vector<Eigen::Vector4d> track_;
   std::vector<double> yaw_track_;
 };
@@ -483,23 +472,6 @@ TEST(FlightSoftware, LostLandReplyCountsWhenTheHeightSaysLanded) {
   ASSERT_EQ(lands.size(), 1u);
   EXPECT_LT(ns_to_seconds(h.now() - lands[0]), 2.0);
   EXPECT_EQ(h.fsw().telemetry().event, "landed (no `ok` yet: the state height says on the ground)");
-}
-
-// The `land` itself lost (run 30 of the five-shelf warehouse, seed 1, hovered the reply's
-// 10 s timeout before asking again): still hovering 2 s after it, the drone did not get it,
-// and `land` is asked again then; the drone lands on the second.
-TEST(FlightSoftware, LostLandCommandIsAskedAgainWhileTheDroneStillHovers) {
-  Options o;
-  o.lost_land_commands = 1;
-  Harness h(o);
-  expect_crossed_and_landed(h);
-  const std::vector<TimeNs> lands = h.sent("land");
-  ASSERT_EQ(lands.size(), 2u);
-  EXPECT_GT(ns_to_seconds(lands[1] - lands[0]), 2.0);
-  EXPECT_LT(ns_to_seconds(lands[1] - lands[0]), 2.5);
-  EXPECT_LT(ns_to_seconds(h.now() - lands[1]), 3.0);
-  const std::vector<std::string>& events = h.events();
-  EXPECT_NE(std::find(events.begin(), events.end(), "'land' lost (still hovering 2 s after it), retry 1"), events.end());
 }
 
 // A duplicated `land` (run 89 of the default sdk campaign, commit bfd468c): the drone lands,
