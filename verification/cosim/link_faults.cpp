@@ -15,6 +15,7 @@ EmulatorFaults link_faults(const LinkSettings& l) {
   f.not_joystick = l.not_joystick_probability;
   f.no_valid_imu = l.no_valid_imu_probability;
   f.lost_command_prefix = l.lost_command;
+  f.lost_command_count = l.lost_command_count;
   if (l.video_stall_start_s >= 0.0 && l.video_stall_duration_s > 0.0) {
     f.video_stall_start_s = l.video_stall_start_s;
     f.video_stall_duration_s = l.video_stall_duration_s;

@@ -61,6 +61,7 @@ struct LinkSettings {
   /// Fault injection: every command beginning with this text is lost ("land": a lost land, as
   /// in the lossy flights); empty: none.
   std::string lost_command = "";
+  int lost_command_count = 0;  ///< how many of those are lost, the first ones; 0: every one
   bool operator==(const LinkSettings&) const = default;
 };
 

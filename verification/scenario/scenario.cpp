@@ -349,6 +349,7 @@ void visit_link(V& v, LinkSettings& l) {
   v.field("video_slices", l.video_slices, between(1, 45));
   v.field("key_interval_frames", l.key_interval_frames, between(0, 600));
   v.field("lost_command", l.lost_command);
+  v.field("lost_command_count", l.lost_command_count, between(0, 1000));
 }
 
 template <class V>

@@ -38,7 +38,10 @@ DatagramFaults::Fate DatagramFaults::command(std::string_view text) {
   f.lost = command_.bernoulli(faults_.commands.loss);
   f.twice = command_.bernoulli(faults_.commands.duplicate);
   const std::string& prefix = faults_.lost_command_prefix;
-  if (!prefix.empty() && text.starts_with(prefix)) f.lost = true;
+  if (!prefix.empty() && text.starts_with(prefix)) {
+    ++prefixed_commands_seen_;
+    if (faults_.lost_command_count == 0 || prefixed_commands_seen_ <= faults_.lost_command_count) f.lost = true;
+  }
   return f;
 }
 

@@ -39,6 +39,8 @@ struct EmulatorFaults {
   /// Fault injection: every command datagram whose text begins with this is lost (e.g.
   /// "land"); empty: none. Applied after the random draws, so it shifts none of them.
   std::string lost_command_prefix;
+  /// How many of those are lost, the first ones in the order they arrive; 0: every one.
+  int lost_command_count = 0;
   std::optional<double> video_stall_start_s;  ///< no frames in [start, start + duration)
   double video_stall_duration_s = 0.0;
   bool operator==(const EmulatorFaults&) const = default;
@@ -63,7 +65,8 @@ class DatagramFaults {
   DatagramFaults(const EmulatorFaults& faults, std::uint64_t seed);
 
   /// A command datagram with this text: lost, twice (two draws, always); lost also when the
-  /// text begins with lost_command_prefix (applied after the draws, so it shifts none).
+  /// text begins with lost_command_prefix, the first lost_command_count of them (applied
+  /// after the draws, so it shifts none).
   Fate command(std::string_view text);
   /// A reply: lost, late, twice (three draws, always).
   Fate reply();
@@ -87,6 +90,7 @@ class DatagramFaults {
 
  private:
   EmulatorFaults faults_;
+  int prefixed_commands_seen_ = 0;
   RandomStream command_, reply_, state_, video_, error_, frame_;
   RandomStream command_jitter_, reply_jitter_, state_jitter_, video_jitter_;
   TimeNs last_due_[4] = {0, 0, 0, 0};  ///< per channel

@@ -153,6 +153,19 @@ TEST(DatagramFaults, TheInjectedCommandLossComesAfterTheDraws) {
   EXPECT_FALSE(c.command("rc 0 0 0 0 land").lost) << "a prefix, not a substring";
 }
 
+TEST(DatagramFaults, TheInjectedLossCanTakeOnlyTheFirstCommands) {
+  EmulatorFaults f;
+  f.lost_command_prefix = "land";
+  f.lost_command_count = 2;
+  DatagramFaults faults(f, 21);
+  EXPECT_FALSE(faults.command("rc 0 0 0 0").lost);
+  EXPECT_TRUE(faults.command("land").lost);
+  EXPECT_FALSE(faults.command("rc 0 0 0 0").lost) << "only prefixed commands count";
+  EXPECT_TRUE(faults.command("land").lost);
+  EXPECT_FALSE(faults.command("land").lost);
+  EXPECT_FALSE(faults.command("land").lost);
+}
+
 TEST(DatagramFaults, ALateReplyIsHeldBackWithoutHoldingBackTheNext) {
   EmulatorFaults f;
   f.replies = {0.0, 20.0, 0.0, 0.0};
