@@ -17,6 +17,28 @@ namespace {
 // before it sends it again (fsw_command_options): longer than a landing from cruise height.
 constexpr double kLandAttempt_s = 4.0;
 
+// How the driver carries one of the flight software's commands. The flight software retries
+// on its own (MissionCommands), so the driver sends each once and times it out at the
+// flight software's reply timeout. Except `land`: the flight software's ask lasts
+// land_reply_s (10 s, the longest a landing may take), and while the driver holds it a
+// lost `land` datagram would leave the drone hovering all that time. So the driver re-sends
+// it every kLandAttempt_s within that bound. A landing from the highest cruise height
+// (about 1.7 m) at the Tello's 0.5 m/s lasts about 3.4 s, so a re-sent `land` reaches a
+// drone that got the first one on the ground or still landing: it answers `error`, and the
+// flight software ends the landing on the state height (CommandPhases).
+CommandOptions fsw_command_options(const std::string& text, const flight_sw::Timeouts& t) {
+  CommandOptions opt;
+  opt.tag = kTagFlightSoftware;
+  opt.retries = 0;
+  opt.timeout_ns = seconds_to_ns(text == "takeoff" ? t.takeoff_reply_s : t.command_reply_s);
+  if (text == "land") {
+    const int attempts = std::max(1, static_cast<int>(t.land_reply_s / kLandAttempt_s));
+    opt.retries = attempts - 1;
+    opt.timeout_ns = seconds_to_ns(t.land_reply_s / attempts);
+  }
+  return opt;
+}
+
 DriverConfig driver_config(const PilotLoopConfig& c) {
   DriverConfig dc = c.driver;
   // Keep a stick setpoint alive at least as long as the flight software may go without
@@ -183,31 +205,8 @@ class PilotLoop::Impl {
         continue;
       }
       log_.write(clock_.now_ns(), "fsw_command", {{"text", c.text}, {"fsw_t_ns", c.t_ns}});
-      driver_->submit(c.text, fsw_command_options(c.text));
+      driver_->submit(c.text, fsw_command_options(c.text, o_.flight.timeouts));
     }
-  }
-
-  // How the driver carries one of the flight software's commands. The flight software retries
-  // on its own (MissionCommands), so the driver sends each once and times it out at the
-  // flight software's reply timeout. Except `land`: the flight software's ask lasts
-  // land_reply_s (10 s, the longest a landing may take), and while the driver holds it a
-  // lost `land` datagram would leave the drone hovering all that time. So the driver re-sends
-  // it every kLandAttempt_s within that bound. A landing from the highest cruise height
-  // (about 1.7 m) at the Tello's 0.5 m/s lasts about 3.4 s, so a re-sent `land` reaches a
-  // drone that got the first one on the ground or still landing: it answers `error`, and the
-  // flight software ends the landing on the state height (CommandPhases).
-  CommandOptions fsw_command_options(const std::string& text) const {
-    const auto& t = o_.flight.timeouts;
-    CommandOptions opt;
-    opt.tag = kTagFlightSoftware;
-    opt.retries = 0;
-    opt.timeout_ns = seconds_to_ns(text == "takeoff" ? t.takeoff_reply_s : t.command_reply_s);
-    if (text == "land") {
-      const int attempts = std::max(1, static_cast<int>(t.land_reply_s / kLandAttempt_s));
-      opt.retries = attempts - 1;
-      opt.timeout_ns = seconds_to_ns(t.land_reply_s / attempts);
-    }
-    return opt;
   }
 
   // Starts the program's landing; the program then exits with `code` (once landed).
