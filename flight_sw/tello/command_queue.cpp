@@ -117,6 +117,13 @@ void CommandQueue::check_timeout(TimeNs now) {
   guard_until_ns_ = now + config_.stale_guard_ns;
 }
 
+bool CommandQueue::resend_unheard(TimeNs now, const std::string& text) {
+  const Pending* current = pacer_.outstanding();
+  if (!current || current->text != text || current->resend_ns || current->attempt > current->retries) return false;
+  resend(now);
+  return true;
+}
+
 const std::string* CommandQueue::next_due(TimeNs now) const {
   if (queue_.empty() || !pacer_.may_send(now) || now < guard_until_ns_) return nullptr;
   return &queue_.front().text;

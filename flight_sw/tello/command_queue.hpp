@@ -31,6 +31,10 @@ class CommandQueue {
   /// Re-sends a refused command when due; a command without reply within its timeout is
   /// re-sent (Retry) while retries remain, else it fails (Failed) and the stale guard starts.
   void check_timeout(TimeNs now);
+  /// Re-sends the outstanding command at now, before its timeout, when it is `text`, retries
+  /// remain and it is not waiting out a refusal (Retry): its caller saw that the drone did
+  /// not act on it. True when re-sent.
+  bool resend_unheard(TimeNs now, const std::string& text);
   /// The text of the next queued command when it may go at now, else null.
   const std::string* next_due(TimeNs now) const;
   /// Drains the replies waiting (stale by now) and sends the next queued command; it is

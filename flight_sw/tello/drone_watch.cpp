@@ -15,7 +15,12 @@ void DroneWatch::on_event(const DriverEvent& e) {
   } else if (e.kind == K::Sent && e.command == "takeoff") {
     if (!airborne_) airborne_since_ns_ = e.t_ns;
     airborne_ = true;
+  } else if (e.kind == K::Sent && e.command == "land") {
+    land_sent_ = LandSent{e.t_ns, last_height_m_};
+  } else if (e.kind == K::Abandoned && e.command == "land") {
+    land_sent_.reset();
   } else if (e.kind == K::Reply || e.kind == K::Failed) {
+    if (e.command == "land") land_sent_.reset();
     const bool ok = accepted(e);
     // A `land` whose `ok` was lost: repeated, it finds the drone on the ground and gets
     // `error`, or times out; the state height says whether it is down.
@@ -27,6 +32,12 @@ void DroneWatch::on_event(const DriverEvent& e) {
       airborne_ = false;
     }
   }
+}
+
+bool DroneWatch::land_unheard() const {
+  if (!land_sent_ || !land_sent_->height_m || !last_state_ns_ || !last_height_m_ || grounded()) return false;
+  return *last_state_ns_ - land_sent_->t_ns >= seconds_to_ns(kLandHeard_s) &&
+         *last_height_m_ > *land_sent_->height_m - kLandHeardDrop_m;
 }
 
 }  // namespace shelfcross::tello

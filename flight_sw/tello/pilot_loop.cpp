@@ -135,6 +135,11 @@ class PilotLoop::Impl {
     driver_->service();
     step_flight_software();
     if (auto exit_code = supervise(signals)) return exit_code;
+    // A `land` the drone did not act on (its datagram lost) goes again at once, not at the end
+    // of its reply timeout: the drone hovers meanwhile (DroneWatch::land_unheard).
+    if (drone_.land_unheard() && driver_->resend_unheard("land")) {
+      log_.write(clock_.now_ns(), "land_unheard", {{"event", "no descent since the land was sent: sent again"}});
+    }
     driver_->service();
     return std::nullopt;
   }

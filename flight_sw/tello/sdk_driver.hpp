@@ -80,6 +80,10 @@ class SdkDriver {
   /// Reads every pending datagram, fires timeouts and retries, sends what is due.
   void service();
 
+  /// Re-sends the outstanding command now if it is `text` and retries remain (the caller
+  /// saw the drone not act on it); true when sent. CommandQueue::resend_unheard.
+  bool resend_unheard(const std::string& text) { return commands_.resend_unheard(clock_.now_ns(), text); }
+
   /// Events since the last call, in the order they happened.
   std::vector<DriverEvent> take_events() { return recorder_.take(); }
 

@@ -56,7 +56,8 @@ struct DriverEvent {
     KeepAlive,   ///< the keep-alive rc went out
     Reply,       ///< the outstanding command's reply (text in `reply`)
     Refused,     ///< retry_unless_ok: refused (text in `reply`), re-sent after refusal_retry_ns
-    Retry,       ///< no reply within the timeout: re-sent (attempt = the new attempt)
+    Retry,       ///< no reply within the timeout, or not acted on (resend_unheard): re-sent
+                 ///< (attempt = the new attempt)
     Failed,      ///< no reply after the last attempt
     Abandoned,   ///< an urgent command displaced this one
     StaleReply,  ///< a reply with nothing outstanding: dropped

@@ -389,6 +389,29 @@ TEST(SdkDriver, UrgentLandDisplacesTheOutstandingCommand) {
   EXPECT_TRUE(rig.drone.nothing_sent());  // the rc setpoint was cleared too
 }
 
+TEST(SdkDriver, ResendsAnUnheardCommandAtOnceWhileRetriesRemain) {
+  DriverConfig config;
+  config.keepalive_ns = 0;
+  Rig rig(config);
+  ASSERT_TRUE(rig.driver->submit("land", {.timeout_ns = 5 * kS, .retries = 1}));
+  rig.service();
+  EXPECT_EQ(rig.drone.expect_command(), "land");
+  rig.elapse(1500 * kMs);
+  EXPECT_FALSE(rig.driver->resend_unheard("takeoff")) << "not the outstanding command";
+  EXPECT_TRUE(rig.driver->resend_unheard("land"));
+  rig.service();
+  EXPECT_EQ(rig.drone.expect_command(), "land");  // attempt 2, long before the 5 s timeout
+  EXPECT_EQ(rig.last(Kind::Retry)->attempt, 2);
+  EXPECT_FALSE(rig.driver->resend_unheard("land")) << "its one retry is spent";
+  // The re-send restarts the timeout: nothing more until 5 s after it, then it fails.
+  rig.elapse(5 * kS - 1);
+  EXPECT_TRUE(rig.drone.nothing_sent());
+  EXPECT_EQ(rig.count(Kind::Failed), 0);
+  rig.elapse(1);
+  EXPECT_EQ(rig.count(Kind::Failed), 1);
+  EXPECT_FALSE(rig.driver->resend_unheard("land")) << "nothing outstanding";
+}
+
 TEST(SdkDriver, SurvivesRandomDatagramsOnBothSockets) {
   Rig rig;
   RandomStream rng(42, StreamId::link_faults);

@@ -107,10 +107,10 @@ TEST(SdkLink, LostLandWithoutTheStopSticksRuleFliesIntoTheWall) {
   ASSERT_NE(stop, std::string::npos) << "the sticks centred on the wire before the land";
 }
 
-// The first `land` datagram lost after the crossing. tello_pilot's driver sends the flight
-// software's `land` again after its attempt timeout (land_reply_s / 2, 5 s) instead of holding
-// it for the whole land_reply_s (10 s): the mission ends about 5 s later than the same run
-// with nothing lost, and lands as it does.
+// The first `land` datagram lost after the crossing. tello_pilot sends the flight software's
+// `land` again as soon as the state records show no descent 1.5 s after it, instead of holding
+// it for an attempt's timeout (5 s) or the whole land_reply_s (10 s): the mission ends about
+// 1.5 s later than the same run with nothing lost, and lands as it does.
 TEST(SdkLink, LostFirstLandIsSentAgainBeforeTheFlightSoftwaresTimeout) {
   Scenario s = load_scenario(kDefault);
   s.dispersions.clear();
@@ -130,8 +130,10 @@ TEST(SdkLink, LostFirstLandIsSentAgainBeforeTheFlightSoftwaresTimeout) {
   EXPECT_NE(log.find("send land", first + 1), std::string::npos) << "sent again" << log;
   EXPECT_EQ(lost.metrics.link.commands_lost, clean.metrics.link.commands_lost + 1);
   const double late_s = lost.metrics.mission_time_s - clean.metrics.mission_time_s;
-  EXPECT_GT(late_s, 4.0) << "the re-send waits out one attempt (5 s)";
-  EXPECT_LT(late_s, 7.0) << "not the whole land_reply_s (10 s)";
+  // Re-sent once the state records show no descent 1.5 s after it (DroneWatch::land_unheard),
+  // not at the end of an attempt (5 s) nor of the flight software's land_reply_s (10 s).
+  EXPECT_GT(late_s, 1.4) << "the descent check waits kLandHeard_s";
+  EXPECT_LT(late_s, 2.5) << "not an attempt's 5 s";
 }
 
 }  // namespace
