@@ -1,0 +1,83 @@
+#!/usr/bin/env python3
+"""Tests of scripts/certify.sh: what it flies, in which order, with which program.
+
+The program it copies is a small stand-in written here that records its arguments (a real
+campaign of 300 runs does not fit a test); what the stand-in checks is the script's own work:
+the commands, the copy into OUT and its commit, a failing campaign not stopping the others,
+a later call flying OUT's copy.
+
+  python3 scripts/test/certify_test.py
+"""
+import os
+import subprocess
+import tempfile
+import unittest
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+SCRIPT = os.path.join(HERE, "..", "certify.sh")
+
+
+def stand_in(path, mark):
+    """A program that appends `mark` and its arguments to calls.txt, and fails a search."""
+    with open(path, "w") as f:
+        f.write("#!/bin/sh\n"
+                f'echo "{mark} $*" >> calls.txt\n'
+                'case "$1" in search) exit 1 ;; esac\n')
+    os.chmod(path, 0o755)
+
+
+def certify(out, *steps, program=None):
+    env = dict(os.environ, JOBS="3")
+    if program:
+        env["SHELFCROSS"] = program
+    return subprocess.run(["bash", SCRIPT, out, *steps], env=env, capture_output=True, text=True)
+
+
+class Certify(unittest.TestCase):
+    def test_refuses_an_unknown_step_or_a_missing_program(self):
+        with tempfile.TemporaryDirectory() as d:
+            out = os.path.join(d, "out")
+            r = certify(out, "table2", "everything", program=os.path.join(d, "none"))
+            self.assertEqual(r.returncode, 2)
+            self.assertIn("unknown step 'everything'", r.stderr)
+            self.assertFalse(os.path.exists(out))
+            r = certify(out, "table2", program=os.path.join(d, "none"))
+            self.assertEqual(r.returncode, 2)
+            self.assertIn("build first", r.stderr)
+
+    def test_flies_the_steps_in_order_with_one_copy_of_the_program(self):
+        with tempfile.TemporaryDirectory() as d:
+            program = os.path.join(d, "shelfcross")
+            stand_in(program, "first")
+            out = os.path.join(d, "out")
+            r = certify(out, "table2", "search", "default", program=program)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            with open(os.path.join(out, "calls.txt")) as f:
+                calls = f.read().splitlines()
+            self.assertEqual(calls, [
+                "first compare --scenario scenarios/warehouse_5_shelves.yaml --runs 100 --seed 1 --jobs 3 --out table2",
+                "first search --scenario scenarios/stress/beyond_gusts.yaml --class contact --budget 400 --seed 1"
+                " --jobs 3 --out search_beyond_gusts",
+                "first campaign --scenario scenarios/paper_test_shelf.yaml --runs 2995 --seed 1 --jobs 3 --out default",
+            ])
+            self.assertTrue(os.path.isfile(os.path.join(out, "scenarios", "paper_test_shelf.yaml")))
+            with open(os.path.join(out, "COMMIT")) as f:
+                self.assertRegex(f.read().strip(), r"^[0-9a-f]{7,}(-dirty)?$")
+            with open(os.path.join(out, "certify.log")) as f:
+                log = f.read()
+            self.assertEqual(log.count("start: "), 3)
+            self.assertIn("exit 1: search", log)  # the failed search did not stop the default
+            self.assertIn("exit 0: campaign --scenario scenarios/paper_test_shelf.yaml", log)
+
+            # The checkout's program changes; the certification goes on with its own copy.
+            stand_in(program, "second")
+            r = certify(out, "lossy_video", program=program)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            with open(os.path.join(out, "calls.txt")) as f:
+                last = f.read().splitlines()[-1]
+            self.assertEqual(last, "first campaign --scenario scenarios/stress/lossy_video.yaml --runs 300 --seed 7"
+                                   " --jobs 3 --out lossy_video")
+
+
+if __name__ == "__main__":
+    unittest.main()
