@@ -22,7 +22,8 @@ constexpr double kLandAttempt_s = 4.0;
 // flight software's reply timeout. Except `land`: the flight software's ask lasts
 // land_reply_s (10 s, the longest a landing may take), and while the driver holds it a
 // lost `land` datagram would leave the drone hovering all that time. So the driver re-sends
-// it every kLandAttempt_s within that bound. A landing from the highest cruise height
+// it every kLandAttempt_s within that bound, and sooner when the state records show no
+// descent (DroneWatch::land_unheard, in step()). A landing from the highest cruise height
 // (about 1.7 m) at the Tello's 0.5 m/s lasts about 3.4 s, so a re-sent `land` reaches a
 // drone that got the first one on the ground or still landing: it answers `error`, and the
 // flight software ends the landing on the state height (CommandPhases).
