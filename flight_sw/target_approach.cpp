@@ -380,7 +380,10 @@ ApproachStep TargetApproach::without_target(const Picture& pic, ApproachTools to
     if (!timers_.back_off_since_ns) {
       if (++crossing_refusals_ >= config_.mission.crossing.crossing_attempts) {
         // The air, not the view, keeps the line from being held: a re-read would not help.
-        if (why.rfind(kLineHoldNotMeasured, 0) == 0 || why.rfind(kLineCannotBeHeld, 0) == 0) {
+        // A line hold not measured (too few quiet poses from deciding pictures before the tags
+        // left the view, as after a back-off) says nothing of the air: re-read, as for the
+        // other refusals; the gate still refuses any crossing it cannot measure.
+        if (why.rfind(kLineCannotBeHeld, 0) == 0) {
           return give_up(kCrossingDeclined + why, 0.0, f);
         }
         return reread(kCouldNotCentre, std::string(kCouldNotCentre), f, tools.survey);

@@ -136,5 +136,21 @@ TEST(SdkLink, LostFirstLandIsSentAgainBeforeTheFlightSoftwaresTimeout) {
   EXPECT_LT(late_s, 2.5) << "not an attempt's 5 s";
 }
 
+// Run 98 of the grid_5x3_yellow stress campaign (seed 1; the run's own seed below): backed off
+// for a sideways drift, it came back to the view's edge before the line-hold monitor had
+// measured enough quiet poses, and its last refusal was "line hold not measured". That used to
+// decline the crossing and land, as if the air kept the line from being held; a measurement
+// missing says nothing of the air, so the mission re-reads the shelf and crosses (the gate
+// still refuses any crossing it cannot measure).
+TEST(SdkLink, ALineHoldNotMeasuredAtTheLastAttemptReReadsRatherThanDeclines) {
+  const Scenario s = load_scenario(std::string(SHELFCROSS_SOURCE_DIR) + "/scenarios/stress/grid_5x3_yellow.yaml");
+  const RunResult r = run_once(s, 2184737090400922738ULL);
+  const std::string log = events_text(r);
+  EXPECT_NE(log.find("could not centre on the target cell: re-reading the shelf"), std::string::npos) << log;
+  EXPECT_EQ(log.find("crossing declined"), std::string::npos) << log;
+  EXPECT_EQ(r.outcome, RunOutcome::success) << r.detail << "\n" << log;
+  EXPECT_TRUE(r.metrics.crossed_target);
+}
+
 }  // namespace
 }  // namespace shelfcross::verification
