@@ -61,7 +61,13 @@ bool AirbornePhases::supervise(AirborneTools t) {
   switch (facts.phase.current()) {
     case Phase::FindShelf: return timed_out(to.find_shelf_s, "shelf not found");
     case Phase::GoToViewpoint: return timed_out(to.go_to_viewpoint_s, "viewpoint not reached");
-    case Phase::TakeInventory: return timed_out(to.take_inventory_s, "inventory not completed");
+    case Phase::TakeInventory:
+      // Out of time in a hover that has lost the whole grid: search for the shelf once more.
+      if (in_phase_s > to.take_inventory_s && !out_of_time && survey_.search_again(facts.now_ns)) {
+        t.mission.enter(Phase::FindShelf, "inventory not completed, shelf out of view: searching again");
+        return false;
+      }
+      return timed_out(to.take_inventory_s, "inventory not completed");
     case Phase::Approach:
       // A declined crossing backing out (goes on), or landing; the time limits; the target lost
       // or an off-centre back-off too long (TargetApproach::supervise).

@@ -52,7 +52,8 @@ constexpr std::array<Targets, kPhases> kNext = [] {
   at(Phase::GoToViewpoint) =                                         // at the viewpoint, settled /
       bits({Phase::TakeInventory, Phase::FindShelf, Phase::Land});   // shelf out of view
   at(Phase::TakeInventory) =                                         // target chosen / conventional
-      bits({Phase::Approach, Phase::Transfer, Phase::Land});         // strategy / no empty cell
+      bits({Phase::Approach, Phase::Transfer, Phase::FindShelf,      // strategy / shelf out of
+            Phase::Land});                                           // view / no empty cell
   at(Phase::Approach) =                                              // gate clear / target in
       bits({Phase::Cross, Phase::FindShelf, Phase::Land});           // doubt: re-read / given up
   at(Phase::Cross) =                                                 // next shelf / drift seen

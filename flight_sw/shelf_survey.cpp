@@ -22,6 +22,11 @@ Step hover(Step::Next next = Step::Next::Stay) {
   return step;
 }
 
+// The whole grid, last seen at `last_ns`, has been out of view longer than `limit_s` at `now_ns`.
+bool lost_since(const std::optional<TimeNs>& last_ns, TimeNs now_ns, double limit_s) {
+  return last_ns && ns_to_seconds(now_ns - *last_ns) > limit_s;
+}
+
 // The markers of the boxes in the picture `bgr` of the full view `view`, into `markers`.
 void read_markers(const cv::Mat& bgr, const ShelfView& view, MarkerDetector& marker_detector, const FlightConfig& config,
                   std::vector<MarkerSighting>& markers) {
@@ -116,10 +121,10 @@ SurveyStep ShelfSurvey::go_to_viewpoint(const Picture& pic, TimeNs now_ns, bool 
   if (!view_fresh) analyse(pic.bgr, telemetry);
   const MissionParams& m = config_.mission;
   if (!view_.full) {
-    const bool lost = last_full_view_ns_ && ns_to_seconds(now_ns - *last_full_view_ns_) > m.viewpoint.viewpoint_lost_s;
+    const bool lost = lost_since(at_viewpoint_.last_full_view_ns, now_ns, m.viewpoint.viewpoint_lost_s);
     return hover(lost ? Step::Next::ShelfOutOfView : Step::Next::Stay);
   }
-  last_full_view_ns_ = now_ns;
+  at_viewpoint_.last_full_view_ns = now_ns;
   std::vector<cv::Point3d> obj;
   std::vector<cv::Point2d> img;
   for (int r = 0; r < view_.grid.rows; ++r) {
@@ -137,11 +142,11 @@ SurveyStep ShelfSurvey::go_to_viewpoint(const Picture& pic, TimeNs now_ns, bool 
   const Eigen::Vector3d e1 = viewpoint_G_m_ - pose->p_FB_m();
   telemetry.view.e1_G_m = e1;
   const bool there = e1.norm() < m.viewpoint.viewpoint_position_tolerance_m && std::abs(pose->yaw_rad) < m.viewpoint.viewpoint_yaw_tolerance_rad;
-  if (!there) settled_frames_ = 0;
-  else if (pic.decides) ++settled_frames_;  // a damaged picture neither counts nor resets
+  if (!there) at_viewpoint_.settled_frames = 0;
+  else if (pic.decides) ++at_viewpoint_.settled_frames;  // a damaged picture neither counts nor resets
   const VelocityCommand v = viewpoint_velocity(config_.control, e1, pose->yaw_rad);
   Step step = fly(v);
-  if (settled_frames_ >= m.viewpoint.viewpoint_settle_frames) {  // flown, then a hover: set now, at rest
+  if (at_viewpoint_.settled_frames >= m.viewpoint.viewpoint_settle_frames) {  // flown, then a hover: set now, at rest
     step.next = Step::Next::AtViewpoint;
     step.hover = true;
   }
@@ -152,6 +157,7 @@ SurveyStep ShelfSurvey::take_inventory(const Picture& pic, Telemetry& telemetry)
   if (!pic.decides) return hover();  // a guessed band may hold a marker, or shift the grid labels
   analyse(pic.bgr, telemetry);
   if (!view_.full) return hover();
+  at_viewpoint_.last_full_view_ns = pic.t_ns;
   read_markers(pic.bgr, view_, marker_detector_, config_, markers_);
   telemetry.view.markers_seen = static_cast<int>(markers_.size());
   const std::vector<std::pair<CellIndex, int>> sightings = assign_markers(view_, markers_, config_);
@@ -166,6 +172,20 @@ SurveyStep ShelfSurvey::take_inventory(const Picture& pic, Telemetry& telemetry)
   return hover(Step::Next::InventoryTaken);
 }
 
+// The hover holds where the vehicle stopped, not the viewpoint: one reached while still moving
+// (the settling counts deciding frames, five in 0.17 s at 30 Hz) coasts on by its speed times
+// the velocity time constant, and 0.3 m/s of sink after a transfer's descent carries the grid's
+// top row out of the view. The hover never flies back; the search does (FindShelf frames the
+// grid, GoToViewpoint flies to the viewpoint), as for a viewpoint lost on the way. Asked only
+// when the phase's time has run out, where the mission landed before: a run that reads its
+// inventory in time flies as it did.
+bool ShelfSurvey::search_again(TimeNs now_ns) {
+  const bool lost = lost_since(at_viewpoint_.last_full_view_ns, now_ns, config_.mission.viewpoint.viewpoint_lost_s);
+  if (!lost || at_viewpoint_.searched_again) return false;
+  at_viewpoint_.searched_again = true;
+  return true;
+}
+
 void ShelfSurvey::analyse(const cv::Mat& bgr, Telemetry& telemetry) {
   analyse_shelf(bgr, tag_detector_, config_, view_);
   update_view_telemetry(view_, telemetry);
@@ -175,7 +195,8 @@ void ShelfSurvey::next_shelf(int shelf) {
   finished_.push_back(inventory_);
   inventory_ = Inventory(shelf, config_.shelf.levels(), config_.shelf.columns(), config_.perception.marker_min_agreeing_frames);
   pose_G_.reset();
-  last_full_view_ns_.reset();
+  at_viewpoint_.last_full_view_ns.reset();
+  at_viewpoint_.searched_again = false;
 }
 
 }  // namespace shelfcross::flight_sw

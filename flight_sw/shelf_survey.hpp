@@ -55,8 +55,12 @@ class ShelfSurvey {
   /// TakeInventory on a picture: hovers; InventoryTaken once inventory_frames full views are
   /// read and every cell without a box has been seen whole often enough (inventory.hpp).
   SurveyStep take_inventory(const Picture& pic, Telemetry& telemetry);
+  /// TakeInventory's time has run out: true, once per shelf, when no deciding picture has
+  /// shown the whole grid for viewpoint_lost_s up to `now_ns` (the mission then searches for
+  /// the shelf again; the readings so far are kept).
+  bool search_again(TimeNs now_ns);
   /// The phase's settling restarts (every phase change).
-  void restart_settling() { settled_frames_ = 0; }
+  void restart_settling() { at_viewpoint_.settled_frames = 0; }
 
   /// The shelf's view analysed anew on `bgr` (the approach's re-acquisition).
   void analyse(const cv::Mat& bgr, Telemetry& telemetry);
@@ -84,8 +88,12 @@ class ShelfSurvey {
   Inventory inventory_;
   std::vector<Inventory> finished_;
   Eigen::Vector3d viewpoint_G_m_;
-  int settled_frames_ = 0;
-  std::optional<TimeNs> last_full_view_ns_;
+  /// The viewpoint's memory of this shelf.
+  struct AtViewpoint {
+    int settled_frames = 0;                  ///< deciding frames in a row at the viewpoint
+    std::optional<TimeNs> last_full_view_ns;  ///< GoToViewpoint's and TakeInventory's last whole grid
+    bool searched_again = false;             ///< search_again() spent
+  } at_viewpoint_;
   std::optional<PoseEstimate> pose_G_;
 };
 
