@@ -370,14 +370,19 @@ ApproachStep TargetApproach::without_target(const Picture& pic, ApproachTools to
     return s;
   }
   // The corner tags are gone. Close and at the border: they left the view; cross if centred,
-  // judged on the last pose from a nearly whole picture.
+  // judged on the last pose from a nearly whole picture. Not once a back-off is under way: it
+  // was started by a refusal (or a stopped crossing), and a later verdict on that same pose,
+  // older now and with the vehicle backing since, may pass only because what it lacked (a
+  // quiet state record, a still heading) arrived meanwhile; it committed a crossing 0.11 s
+  // into a back-off, 9 cm low, into 0.9 m/s gusts, and the crossing touched a post. The
+  // back-off runs until the tags are measured again (found), and the gate judges anew there.
   const std::optional<PoseEstimate>& decision_pose_K = tracker_.poses().decision_pose_K();
   if (decision_pose_K && tracker_.corners().near_edge() &&
       -decision_pose_K->p_FB_m().x() <= config_.mission.approach.cross_range_max_m) {
     GateVerdict verdict = gate_.judge(f, tracker_, tools.sticks.velocity(), "corner tags left the view");
-    if (!verdict.refusal) return crossing_step(std::move(verdict));
-    const std::string& why = *verdict.refusal;
+    if (!verdict.refusal && !timers_.back_off_since_ns) return crossing_step(std::move(verdict));
     if (!timers_.back_off_since_ns) {
+      const std::string& why = *verdict.refusal;
       if (++crossing_refusals_ >= config_.mission.crossing.crossing_attempts) {
         // The air, not the view, keeps the line from being held: a re-read would not help.
         // A line hold not measured (too few quiet poses from deciding pictures before the tags
