@@ -380,8 +380,8 @@ ApproachStep TargetApproach::without_target(const Picture& pic, ApproachTools to
   if (decision_pose_K && tracker_.corners().near_edge() &&
       -decision_pose_K->p_FB_m().x() <= config_.mission.approach.cross_range_max_m) {
     GateVerdict verdict = gate_.judge(f, tracker_, tools.sticks.velocity(), "corner tags left the view");
-    if (!verdict.refusal && !timers_.back_off_since_ns) return crossing_step(std::move(verdict));
     if (!timers_.back_off_since_ns) {
+      if (!verdict.refusal) return crossing_step(std::move(verdict));
       const std::string& why = *verdict.refusal;
       if (++crossing_refusals_ >= config_.mission.crossing.crossing_attempts) {
         // The air, not the view, keeps the line from being held: a re-read would not help.
