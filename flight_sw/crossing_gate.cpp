@@ -189,14 +189,15 @@ GateVerdict CrossingGate::judge(MissionFacts& facts, const TargetTracker& tracke
   // heading the vehicle settles on once the yaw stick is released; ended by the distance the
   // state odometry has flown (guidance.hpp, plan_crossing).
   const double yaw_O = facts.state ? facts.state->yaw_rad : 0.0;
-  const CrossingPlan plan = plan_crossing(config_, pose, sticks.yaw_rate_radps, beyond_m, forward_gain_.gain(),
+  const double speed_gain = forward_gain_.speed_gain();
+  const CrossingPlan plan = plan_crossing(config_, pose, sticks.yaw_rate_radps, beyond_m, speed_gain,
                                           facts.odometry.p_O_m().head<2>(), yaw_O);
   CrossingStart start;
   start.end = plan.end;
   start.watch = plan_crossing_watch(config_, line_room(config_, *tracker.target(), pose), pose.p_FB_m(),
                                     crossing_direction_K(config_.shelf, pose));
   start.event = why_now + ": crossing " + cell_text(*tracker.target()) + " (" + format_m(beyond_m) +
-                " m past the back face; speed gain " + format_m(forward_gain_.gain()) + "; " +
+                " m past the back face; speed gain " + format_m(speed_gain) + "; " +
                 format_m(*gate.height_above_cell_m) + " m above the cell centre by the state height; " +
                 "line-hold forecast " + format_m(gate.line_hold.y_m) + " m across, " + format_m(gate.line_hold.z_m) +
                 " m up" + air_text(gate.line_hold) + (behind_m ? "; tags " + format_m(*behind_m) + " m behind)" : ")");

@@ -74,8 +74,13 @@ class CrossingGate {
   /// Each state record: the heading's stillness and the cell height's; in the approach
   /// (`approaching`), the line hold's across-line speed.
   void on_state(const StateRecord& s, bool approaching);
-  /// Each approach picture: the forward command held since the last (forward gain).
-  void on_command_held(TimeNs now_ns, double vx_B_mps) { forward_gain_.on_command_held(now_ns, vx_B_mps); }
+  /// Each approach picture: the forward command held since the last, and the horizontal
+  /// sticks' scale it was sent at (StickResponse): the forward gain is measured against the
+  /// sticks a nominal Tello would have answered, and the crossing is timed at that gain times
+  /// the scale it flies at.
+  void on_command_held(TimeNs now_ns, double vx_B_mps, double stick_scale) {
+    forward_gain_.on_command_held(now_ns, vx_B_mps, stick_scale);
+  }
   /// The monitor's sample of this approach picture (LineHoldMonitor::on_picture); `found`: the
   /// target was measured on it; `odometry`: the fix now (none: the state is stale).
   void on_picture(const MissionFacts& facts, const TargetTracker& tracker, bool found,
@@ -103,7 +108,7 @@ class CrossingGate {
   LineHoldMonitor line_hold_;             ///< line_hold.hpp
   std::optional<TimeNs> rough_since_ns_;  ///< held short since then: the forecast left no room
   std::optional<TimeNs> rough_seen_ns_;  ///< the last whole window of this target that left the line no room
-  ForwardGainEstimator forward_gain_;     ///< forward speed per commanded speed, for timing the crossing
+  ForwardGainEstimator forward_gain_;     ///< forward speed per nominal stick speed, for timing the crossing
   CellHeightEstimator cell_height_;       ///< the target cell centre's height in the frame of the state height h
 };
 

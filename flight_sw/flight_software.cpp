@@ -49,6 +49,15 @@ std::vector<SdkCommand> FlightSoftware::step(const Input& input) {
           commands_.on_reply(m, facts_, *this);
         } else if constexpr (std::is_same_v<T, StateRecord>) {
           facts_.on_state(m);
+          sticks_.on_state(m);
+          const StickResponse& response = sticks_.response();
+          for (int a = 0; a < 3; ++a) {
+            facts_.telemetry.control.stick_response[a] = response.estimate(static_cast<StickAxis>(a));
+            facts_.telemetry.control.stick_scale[a] = response.scale(static_cast<StickAxis>(a));
+          }
+          if (const std::optional<StickAxis> axis = response.engaged()) {
+            facts_.telemetry.event = stick_scaling_event(*axis, response);
+          }
           shelves_.on_state(m, {facts_, sticks_, *this});
         } else if constexpr (std::is_same_v<T, CameraFrame>) {
           on_frame(m);

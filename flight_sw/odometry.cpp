@@ -46,13 +46,15 @@ void ForwardGainEstimator::restart() {
   last_ns_.reset();
 }
 
-void ForwardGainEstimator::on_command_held(TimeNs t_ns, double vx_B_mps) {
-  // The forward displacement commanded so far: the last command held since the last frame.
+void ForwardGainEstimator::on_command_held(TimeNs t_ns, double vx_B_mps, double stick_scale) {
+  // The forward displacement commanded so far, in nominal sticks: the last command held since
+  // the last frame, at the scale it was sent at.
   if (last_ns_) {
     const double d = commanded_m_.empty() ? 0.0 : commanded_m_.back().second;
-    commanded_m_.emplace_back(t_ns, d + vx_B_mps * ns_to_seconds(t_ns - *last_ns_));
+    commanded_m_.emplace_back(t_ns, d + vx_B_mps * stick_scale * ns_to_seconds(t_ns - *last_ns_));
   }
   last_ns_ = t_ns;
+  stick_scale_ = stick_scale;
 }
 
 // D at t_ns, held before the first sample.

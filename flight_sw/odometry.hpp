@@ -61,9 +61,10 @@ struct CrossingEnd {
 /// `elapsed_ns`: time since the crossing began.
 bool crossing_flown(const CrossingEnd& end, TimeNs elapsed_ns, bool state_fresh, const Eigen::Vector3d& p_O_m);
 
-/// The vehicle's forward speed per commanded speed, from the visual poses of the approach: the
-/// distance flown along x_K since the first pose of the approach over the forward displacement
-/// commanded in the same time, D(t) = integral of the commanded vx_B, taken lag_s earlier (the
+/// The vehicle's forward speed per nominal stick speed, from the visual poses of the approach:
+/// the distance flown along x_K since the first pose of the approach over the forward
+/// displacement commanded in the same time, D(t) = integral of the commanded vx_B times the
+/// horizontal sticks' scale (what a nominal Tello would have flown), taken lag_s earlier (the
 /// pose shows the vehicle a video latency ago, and the vehicle follows the command after the
 /// autopilot's velocity lag: 0.2 + 0.5 s assumed). Once D has grown by 0.8 m, a lag wrong by
 /// 0.35 s moves the estimate by at most 0.25 m/s x 0.35 s / 0.8 m = 11 %; it is refined as D
@@ -73,12 +74,17 @@ class ForwardGainEstimator {
   /// Forgets the approach (a new target).
   void restart();
   /// On each approach frame, before the new command: the forward displacement commanded so
-  /// far grows by the last command (`vx_B_mps`) held since the last frame.
-  void on_command_held(TimeNs t_ns, double vx_B_mps);
+  /// far grows by the last command held since the last frame (`vx_B_mps`) times the
+  /// horizontal sticks' scale it was sent at (`stick_scale`, StickResponse).
+  void on_command_held(TimeNs t_ns, double vx_B_mps, double stick_scale);
   /// On a nearly whole picture's pose: the gain, once enough was commanded. `x_K_m`: the
   /// body's x in the cell frame.
   void on_pose(TimeNs t_ns, double x_K_m);
+  /// Forward speed per nominal stick speed.
   double gain() const { return gain_; }
+  /// Forward speed flown per commanded speed now: the gain times the sticks' last scale
+  /// (what times the crossing).
+  double speed_gain() const { return gain_ * stick_scale_; }
 
  private:
   double commanded_at(TimeNs t_ns) const;
@@ -86,6 +92,7 @@ class ForwardGainEstimator {
   std::vector<std::pair<TimeNs, double>> commanded_m_;  ///< (t, forward displacement commanded)
   std::optional<TimeNs> last_ns_;  ///< the approach's last frame
   double gain_ = 1.0;
+  double stick_scale_ = 1.0;  ///< the horizontal sticks' scale at the last frame
 };
 
 /// The target cell centre's height in the frame of the state height h (the Tello's height

@@ -7,6 +7,7 @@ namespace shelfcross::flight_sw {
 Sticks::Sticks(const FlightConfig& config)
     : gains_(config.control),
       rc_(config.rc),
+      response_(config.rc),
       pi_z_({config.control.kp_z, config.control.ki_z, config.control.z_integral_limit_m_s,
              config.control.z_speed_max_mps}),
       pi_psi_({config.control.kp_psi, config.control.ki_psi, config.control.psi_integral_limit_rad_s,
@@ -62,7 +63,10 @@ double Sticks::control_dt_s(TimeNs now_ns) const {
 std::optional<RcSticks> Sticks::due(TimeNs now_ns, bool force) {
   if (!force && last_rc_ns_ && ns_to_seconds(now_ns - *last_rc_ns_) < rc_.rc_period_s) return std::nullopt;
   last_rc_ns_ = now_ns;
-  return carry_ ? to_rc_carried(velocity_, rc_, *carry_) : to_rc(velocity_, rc_);
+  const RcConversion k = response_.conversion();
+  const RcSticks rc = carry_ ? to_rc_carried(velocity_, k, *carry_) : to_rc(velocity_, k);
+  response_.on_sent(rc, now_ns);
+  return rc;
 }
 
 bool Sticks::keepalive_due(TimeNs now_ns) const {

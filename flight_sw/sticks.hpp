@@ -1,13 +1,15 @@
 #pragma once
 // What the mission flies: the velocity command (body frame, control.hpp), the vertical and
 // heading PI loops that produce part of it (eq. 12, eq. 15), and the rc datagrams that carry
-// it at rc_period_s (and at once when forced). Time is the mission's (the stamp of the input
+// it at rc_period_s (and at once when forced), at the scale the Tello's measured answer sets
+// (stick_response.hpp). Time is the mission's (the stamp of the input
 // being handled); nothing here reads a clock.
 
 #include <optional>
 
 #include "flight_sw/config.hpp"
 #include "flight_sw/control.hpp"
+#include "flight_sw/stick_response.hpp"
 #include "shelfcross/sdk_messages.hpp"
 
 namespace shelfcross::flight_sw {
@@ -50,10 +52,15 @@ class Sticks {
   std::optional<RcSticks> due(TimeNs now_ns, bool force);
   /// The keep-alive: no rc datagram for rc.keepalive_s.
   bool keepalive_due(TimeNs now_ns) const;
+  /// A state record: what the sticks sent have done (StickResponse).
+  void on_state(const StateRecord& s) { response_.on_state(s); }
+  /// How strongly the Tello answers the sticks, and the scale they are sent at.
+  const StickResponse& response() const { return response_; }
 
  private:
   ControlGains gains_;
   RcConversion rc_;
+  StickResponse response_;  ///< the sticks scaled by the measured answer (due)
   PiController pi_z_, pi_psi_;
   VelocityCommand velocity_;
   std::optional<TimeNs> set_ns_;  ///< when set() last set velocity_ (hold_or_hover)

@@ -253,7 +253,7 @@ void TargetApproach::next_shelf(Telemetry& telemetry) {
 ApproachStep TargetApproach::step(const Picture& pic, ApproachTools tools) {
   MissionFacts& f = tools.facts;
   if (retreat_.until_ns) return flying(back_off_velocity(config_.control));  // declined: backing out (supervise)
-  gate_.on_command_held(f.now_ns, tools.sticks.velocity().vx_B_mps);
+  gate_.on_command_held(f.now_ns, tools.sticks.velocity().vx_B_mps, tools.sticks.response().scale(StickAxis::Horizontal));
   std::optional<OdometryFix> odometry;
   if (f.state_fresh()) odometry = OdometryFix{f.odometry.p_O_m(), f.state->yaw_rad};
   const TargetTracker::Prediction predicted = tracker_.predict(pic, odometry);

@@ -14,6 +14,7 @@
 #include "flight_sw/line_hold.hpp"
 #include "flight_sw/mission_phases.hpp"
 #include "flight_sw/navigation.hpp"
+#include "flight_sw/stick_response.hpp"
 #include "shelfcross/sdk_messages.hpp"
 
 namespace shelfcross::flight_sw {
@@ -65,9 +66,13 @@ struct ControlTelemetry {
   double yaw_cell_rad = 0.0;   ///< the vehicle's own heading relative to the cell normal
   bool settled = false;        ///< still and centred long enough to commit to the crossing
   bool holding_short = false;  ///< forward speed held at 0 (off the normal, or settling)
-  double forward_gain = 1.0;   ///< measured forward speed per commanded (crossing timing)
+  double forward_gain = 1.0;   ///< measured forward speed per nominal stick speed (crossing timing)
   LineHoldForecast line_hold;  ///< what the blind crossing may add to the line's offsets (line_hold.hpp)
   int crossings_backed_out = 0;  ///< crossings stopped by the in-crossing watch before the cell
+  /// The Tello's measured answer to its sticks per StickAxis (stick_response.hpp), once
+  /// measured, and the scale each axis's sticks are sent at.
+  std::array<std::optional<AxisResponse>, 3> stick_response;
+  std::array<double, 3> stick_scale{1.0, 1.0, 1.0};
   VelocityCommand velocity;    ///< last commanded
   RcSticks rc;                 ///< last sent
 };

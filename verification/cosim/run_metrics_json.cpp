@@ -12,6 +12,9 @@ namespace {
 
 using nlohmann::json;
 
+/// The keys of RunMetrics::sticks, in flight_sw::StickAxis order.
+constexpr const char* kStickAxes[] = {"horizontal", "vertical", "yaw"};
+
 json response_json(const std::optional<StepResponse>& r) {
   if (!r) return nullptr;
   return {{"initial_error", r->initial_error},       {"band", r->band},
@@ -78,6 +81,22 @@ RunMetrics read_metrics(StrictObject& o) {
   m.inventory.truth = static_cast<int>(inv.integer("truth"));
   inv.finish();
   m.flight_software_result = o.text("flight_software_result");
+  // Absent from stores written before the sticks' answer was measured.
+  if (auto sticks = o.has("sticks") ? o.optional_object("sticks") : std::nullopt) {
+    for (size_t a = 0; a < m.sticks.size(); ++a) {
+      if (auto axis = sticks->optional_object(kStickAxes[a])) {
+        StickAxisMetrics s;
+        s.gain = axis->number("gain");
+        s.gain_se = axis->number("gain_se");
+        s.tau_s = axis->number("tau_s");
+        s.windows = static_cast<int>(axis->integer("windows"));
+        s.scale = axis->number("scale");
+        axis->finish();
+        m.sticks[a] = s;
+      }
+    }
+    sticks->finish();
+  }
   m.link = read_link(o.object("link"));
   return m;
 }
@@ -102,6 +121,16 @@ void to_json(json& j, const RunMetrics& m) {
            {"flight_software_result", m.flight_software_result},
            {"floor_touches", m.truth.floor_touches}};
   write_world_truth(j, m.truth);
+  json sticks = json::object();
+  for (size_t a = 0; a < m.sticks.size(); ++a) {
+    if (const auto& s = m.sticks[a]) {
+      sticks[kStickAxes[a]] = {{"gain", s->gain}, {"gain_se", s->gain_se}, {"tau_s", s->tau_s},
+                               {"windows", s->windows}, {"scale", s->scale}};
+    } else {
+      sticks[kStickAxes[a]] = nullptr;
+    }
+  }
+  j["sticks"] = sticks;
   const LinkMetrics& l = m.link;
   j["link"] = {{"model", l.model},
                {"video_datagrams", l.video_datagrams},

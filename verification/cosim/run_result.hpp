@@ -3,6 +3,7 @@
 // world, what the link did), its hash, trajectory and event lines. Written by the run
 // (cosim_run.hpp), stored as JSON (run_metrics_json.hpp), read by campaigns and reports.
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <optional>
@@ -59,6 +60,16 @@ struct LinkMetrics {
   }
 };
 
+/// What the flight software measured of the Tello's answer to one axis's sticks
+/// (flight_sw/stick_response.hpp) by the end of the run, and the scale it sent them at.
+struct StickAxisMetrics {
+  double gain = 1.0;
+  double gain_se = 0.0;
+  double tau_s = 0.0;
+  int windows = 0;
+  double scale = 1.0;
+};
+
 /// Everything a run measured (JSON form, both ways: run_metrics_json.hpp).
 struct RunMetrics {
   double mission_time_s = 0.0;     ///< start to the end of the run
@@ -80,6 +91,9 @@ struct RunMetrics {
   // Inventory
   InventoryScore inventory;
   std::string flight_software_result;    ///< outcome and reason of the flight software
+  /// The sticks' measured answer, per flight_sw::StickAxis (horizontal, vertical, yaw); empty
+  /// where the run gave too little to measure.
+  std::array<std::optional<StickAxisMetrics>, 3> sticks;
   LinkMetrics link;
 };
 

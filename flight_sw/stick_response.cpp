@@ -1,0 +1,164 @@
+#include "flight_sw/stick_response.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "shelfcross/rotation.hpp"
+
+namespace shelfcross::flight_sw {
+
+namespace {
+/// The trial lags, 0.1 to 1.6 s: the Tello's velocity hold lies about 0.3-0.7 s; the trials
+/// reach past it both ways so that an autopilot outside that range is still fitted (a lag
+/// 0.1 s off moves the gain by about 5 %).
+constexpr std::array<double, StickResponse::kTau> kTrialTau_s{0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8,
+                                                             0.9, 1.0, 1.1, 1.2, 1.3, 1.4, 1.5, 1.6};
+constexpr double kWindow_s = 1.0;
+/// rc datagrams farther apart than this: the response is not being driven; the windows
+/// restart.
+constexpr double kDrivenGap_s = 0.3;
+/// The certified envelope's strongest answer (scenarios: rc_gain_scale up to 1.25), and
+/// what an axis's estimate must exceed by two standard errors before its sticks are scaled:
+/// the vertical and yaw axes measure to 1 cm and 1 degree, without bias; the horizontal
+/// velocities come in 0.1 m/s steps, and at the approach's steady 0.25 m/s their rounding
+/// alone can read up to 20 % high (0.27 m/s reads 0.3), so that axis engages only past
+/// 1.25 x 1.2 = 1.5.
+constexpr double kCertifiedGainMax = 1.25;
+constexpr std::array<double, 3> kEngageAbove{1.2 * kCertifiedGainMax, kCertifiedGainMax, kCertifiedGainMax};
+/// ... and the most the sticks are scaled down for.
+constexpr double kGainMax = 3.0;
+/// An axis's estimate needs this many windows (state records, 10 Hz: 3 s of driving) whose
+/// commanded travel C is at least kMinTravel of the axis (m, m, rad).
+constexpr int kMinWindows = 30;
+constexpr std::array<double, 3> kMinTravel{0.05, 0.03, 0.05};
+
+/// Windows of the same axis overlap: one ends at each 10 Hz state record and spans kWindow_s,
+/// so about this many neighbours share each one's errors (the standard error's inflation).
+constexpr double kOverlap = 10.0;
+constexpr int kMiddleTau = 4;  ///< the trial (0.5 s) that says whether a window was driven enough
+}  // namespace
+
+void StickResponse::advance(TimeNs t_ns) {
+  if (now_.t_ns == 0 || t_ns <= now_.t_ns) {
+    now_.t_ns = std::max(now_.t_ns, t_ns);
+    return;
+  }
+  const double dt = ns_to_seconds(t_ns - now_.t_ns);
+  for (int k = 0; k < kTau; ++k) {
+    // y' = (u - y) / tau with u held: y(dt) = u + (y0 - u) a, a = exp(-dt / tau), and its
+    // integral over dt is u dt + (y0 - u) tau (1 - a).
+    const double tau = kTrialTau_s[k];
+    const double a = std::exp(-dt / tau);
+    for (int c = 0; c < kComp; ++c) {
+      const double y0 = u_lag_[k][c];
+      now_.cmd[k][c] += u_[c] * dt + (y0 - u_[c]) * tau * (1.0 - a);
+      u_lag_[k][c] = u_[c] + (y0 - u_[c]) * a;
+    }
+  }
+  now_.t_ns = t_ns;
+}
+
+void StickResponse::on_sent(const RcSticks& rc, TimeNs t_ns) {
+  advance(t_ns);
+  // The rates the sticks ask of a nominal Tello (control.cpp's to_rc inverted): a is right,
+  // the body's y left; d is clockwise, the yaw rate counter-clockwise.
+  u_ = {rc.b / nominal_.rc_per_mps_horizontal, -rc.a / nominal_.rc_per_mps_horizontal,
+        rc.c / nominal_.rc_per_mps_vertical, -rc.d / nominal_.rc_per_radps_yaw};
+  last_sent_ns_ = t_ns;
+}
+
+void StickResponse::on_state(const StateRecord& s) {
+  engaged_.reset();
+  advance(s.t_ns);
+  const bool driven = last_sent_ns_ && ns_to_seconds(s.t_ns - *last_sent_ns_) <= kDrivenGap_s;
+  if (driven && last_state_ && !samples_.empty()) {
+    // Moved since the last record: the heading-frame velocities by the trapezoid (the body's
+    // x and y, to within the small turn of 0.1 s), the height and the yaw by their change.
+    const double dt = ns_to_seconds(s.t_ns - last_state_->t_ns);
+    now_.moved[0] += 0.5 * (s.vx_H_mps + last_state_->vx_H_mps) * dt;
+    now_.moved[1] += 0.5 * (s.vy_H_mps + last_state_->vy_H_mps) * dt;
+    now_.moved[2] += s.height_m - last_state_->height_m;
+    now_.moved[3] += wrap_pi(s.yaw_rad - last_state_->yaw_rad);
+  } else if (!driven) {
+    samples_.clear();
+  }
+  last_state_ = s;
+  if (!driven) return;
+  samples_.push_back(now_);
+  // The window: from the newest record at least kWindow_s old.
+  const TimeNs from_ns = s.t_ns - seconds_to_ns(kWindow_s);
+  while (samples_.size() >= 2 && samples_[1].t_ns <= from_ns) samples_.pop_front();
+  const Sample& old = samples_.front();
+  if (old.t_ns > from_ns) return;
+  std::array<double, kComp> d{};
+  for (int c = 0; c < kComp; ++c) d[c] = now_.moved[c] - old.moved[c];
+  std::array<double, kAxes> travel{};
+  for (int c = 0; c < kComp; ++c) {
+    const double cm = now_.cmd[kMiddleTau][c] - old.cmd[kMiddleTau][c];
+    travel[axis_of(c)] += cm * cm;
+  }
+  for (int ax = 0; ax < kAxes; ++ax) {
+    if (std::sqrt(travel[ax]) < kMinTravel[ax]) continue;
+    ++windows_[ax];
+    for (int k = 0; k < kTau; ++k) {
+      for (int c = 0; c < kComp; ++c) {
+        if (axis_of(c) != ax) continue;
+        const double cmd = now_.cmd[k][c] - old.cmd[k][c];
+        sums_[ax][k].dc += d[c] * cmd;
+        sums_[ax][k].cc += cmd * cmd;
+        sums_[ax][k].dd += d[c] * d[c];
+      }
+    }
+  }
+  for (int ax = 0; ax < kAxes; ++ax) {
+    const std::optional<AxisResponse> e = estimate(static_cast<StickAxis>(ax));
+    if (!e) continue;
+    const bool was = scale_[ax] < 1.0;
+    if (was || e->gain - 2.0 * e->gain_se > kEngageAbove[ax]) {
+      scale_[ax] = 1.0 / std::clamp(e->gain, 1.0, kGainMax);
+      if (!was && scale_[ax] < 1.0) engaged_ = static_cast<StickAxis>(ax);
+    }
+  }
+}
+
+std::optional<AxisResponse> StickResponse::estimate(StickAxis axis) const {
+  const int ax = static_cast<int>(axis);
+  if (windows_[ax] < kMinWindows) return std::nullopt;
+  std::optional<AxisResponse> best;
+  double best_resid = 0.0;
+  for (int k = 0; k < kTau; ++k) {
+    const Sums& s = sums_[ax][k];
+    if (s.cc <= 0.0) continue;
+    const double gain = s.dc / s.cc;
+    const double resid = std::max(0.0, s.dd - gain * s.dc);  // sum of (d - gain c)^2
+    if (best && resid >= best_resid) continue;
+    best_resid = resid;
+    const double var = resid / windows_[ax];
+    best = AxisResponse{gain, std::sqrt(kOverlap * var / s.cc), kTrialTau_s[k], windows_[ax]};
+  }
+  return best;
+}
+
+RcConversion StickResponse::conversion() const {
+  RcConversion c = nominal_;
+  c.rc_per_mps_horizontal *= scale_[0];
+  c.rc_per_mps_vertical *= scale_[1];
+  c.rc_per_radps_yaw *= scale_[2];
+  return c;
+}
+
+std::string stick_scaling_event(StickAxis axis, const StickResponse& response) {
+  static constexpr const char* kNames[] = {"horizontal", "vertical", "yaw"};
+  const std::optional<AxisResponse> e = response.estimate(axis);
+  if (!e) return {};
+  char text[200];
+  std::snprintf(text, sizeof text,
+                "the Tello answers its %s sticks %.2f (+-%.2f) times as strongly as nominal (lag %.2f s): "
+                "%s sticks scaled by %.2f",
+                kNames[static_cast<int>(axis)], e->gain, e->gain_se, e->tau_s, kNames[static_cast<int>(axis)],
+                response.scale(axis));
+  return text;
+}
+
+}  // namespace shelfcross::flight_sw

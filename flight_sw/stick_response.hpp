@@ -1,0 +1,98 @@
+#pragma once
+// How strongly the Tello answers its sticks, measured in flight (docs/method.md section 8).
+//
+// The loops of the approach (eq. 12, eq. 15, the lateral law) and the open-loop crossing are
+// tuned for an autopilot that turns a stick of rc_per_mps into 1 m/s; one that answers twice
+// as strongly doubles every loop's gain, and with a slow velocity hold the vertical and heading
+// loops overshoot until the target's tags leave the picture. So the flight software compares
+// what it asked with what the state record shows and, once the answer is shown to be stronger
+// than the loops were certified for, scales its sticks down by it.
+//
+// Model, per axis (horizontal: the body's x and y pooled; vertical; yaw): the autopilot holds
+// a first-order response to the stick's rate u (the stick over the nominal rc_per_* of
+// RcConversion), v' = (k u - v) / tau, k the gain sought. Over a window of length W the
+// vehicle moves D = k C + e, C the integral of u passed through that lag, e what the lag's
+// error and the air add. For each of a few trial tau the least squares k = S_dc / S_cc over
+// every window (one ending at each state record) and its residual are kept; the tau with the
+// least residual gives the estimate. D: the state's heading-frame velocities summed over the
+// records (0.1 m/s steps), the height's change (1 cm steps), the yaw's change (1 degree steps);
+// W = 1 s, long against those steps (0.05 m, 0.01 m, 0.017 rad of the few tenths a window
+// moves). Only windows during which rc datagrams went out throughout count: during take-off
+// and landing the Tello moves on its own.
+#include <array>
+#include <deque>
+#include <optional>
+#include <string>
+
+#include "flight_sw/config.hpp"
+#include "flight_sw/control.hpp"
+#include "shelfcross/sdk_messages.hpp"
+
+namespace shelfcross::flight_sw {
+
+enum class StickAxis { Horizontal = 0, Vertical = 1, Yaw = 2 };
+
+/// One axis's estimate: the gain k (the answer over the nominal one), its standard error and
+/// the lag tau of the best fit.
+struct AxisResponse {
+  double gain = 1.0;
+  double gain_se = 0.0;
+  double tau_s = 0.0;
+  int windows = 0;
+};
+
+class StickResponse {
+ public:
+  /// The trial lags (stick_response.cpp, kTrialTau_s).
+  static constexpr int kTau = 16;
+
+  explicit StickResponse(const RcConversion& nominal) : nominal_(nominal) {}
+
+  /// The sticks sent at t_ns (held by the Tello until the next).
+  void on_sent(const RcSticks& rc, TimeNs t_ns);
+  /// A state record: a window ends here.
+  void on_state(const StateRecord& s);
+
+  /// The axis's estimate, once enough windows were driven (stick_response.cpp, kMinWindows).
+  std::optional<AxisResponse> estimate(StickAxis axis) const;
+  /// The factor the axis's sticks are scaled by: 1 / k once k - 2 se exceeds what the
+  /// certified envelope holds on the axis (k capped; stick_response.cpp), else 1. Once engaged it stays engaged (the
+  /// factor follows the estimate, at most 1).
+  double scale(StickAxis axis) const { return scale_[static_cast<int>(axis)]; }
+  /// The conversion the sticks are sent with: the nominal one times each axis's scale.
+  RcConversion conversion() const;
+  /// Set when an axis's scaling engaged on the last on_state (cleared by the next).
+  std::optional<StickAxis> engaged() const { return engaged_; }
+
+ private:
+  static constexpr int kAxes = 3;
+  /// Components: x, y (horizontal pooled), z, yaw.
+  static constexpr int kComp = 4;
+  struct Sums {
+    double dc = 0.0, cc = 0.0, dd = 0.0;
+  };
+  struct Sample {
+    TimeNs t_ns = 0;
+    std::array<double, kComp> moved{};                 ///< measured displacement since start
+    std::array<std::array<double, kComp>, kTau> cmd{};  ///< lagged command's integral per trial tau
+  };
+  void advance(TimeNs t_ns);
+  static int axis_of(int comp) { return comp < 2 ? 0 : comp - 1; }
+
+  RcConversion nominal_;
+  std::array<double, kComp> u_{};                        ///< the held sticks' rates
+  std::array<std::array<double, kComp>, kTau> u_lag_{};  ///< each trial lag's output
+  Sample now_;                                           ///< integrals up to now_.t_ns
+  std::optional<TimeNs> last_sent_ns_;
+  std::optional<StateRecord> last_state_;
+  std::deque<Sample> samples_;  ///< at the state records of the last window
+  std::array<std::array<Sums, kTau>, kAxes> sums_{};
+  std::array<int, kAxes> windows_{};
+  std::array<double, kAxes> scale_{1.0, 1.0, 1.0};
+  std::optional<StickAxis> engaged_;
+};
+
+/// The event that says an axis's scaling engaged: the gain, its lag and the scale.
+std::string stick_scaling_event(StickAxis axis, const StickResponse& response);
+
+}  // namespace shelfcross::flight_sw
