@@ -12,7 +12,7 @@
 // a first-order response to the stick's rate u (the stick over the nominal rc_per_* of
 // RcConversion), v' = (k u - v) / tau, k the gain sought. Over a window of length W the
 // vehicle moves D = k C + e, C the integral of u passed through that lag, e what the lag's
-// error and the air add. For each of a few trial tau the least squares k = S_dc / S_cc over
+// error and the air add. For each of sixteen trial tau the least squares k = S_dc / S_cc over
 // every window (one ending at each state record) and its residual are kept; the tau with the
 // least residual gives the estimate. D: the state's heading-frame velocities summed over the
 // records (0.1 m/s steps), the height's change (1 cm steps), the yaw's change (1 degree steps);
@@ -56,8 +56,8 @@ class StickResponse {
   /// The axis's estimate, once enough windows were driven (stick_response.cpp, kMinWindows).
   std::optional<AxisResponse> estimate(StickAxis axis) const;
   /// The factor the axis's sticks are scaled by: 1 / k once k - 2 se exceeds what the
-  /// certified envelope holds on the axis (k capped; stick_response.cpp), else 1. Once engaged it stays engaged (the
-  /// factor follows the estimate, at most 1).
+  /// certified envelope holds on the axis (k capped; stick_response.cpp), else 1. Once
+  /// engaged it stays engaged (the factor follows the estimate, at most 1).
   double scale(StickAxis axis) const { return scale_[static_cast<int>(axis)]; }
   /// The conversion the sticks are sent with: the nominal one times each axis's scale.
   RcConversion conversion() const;
