@@ -112,18 +112,19 @@ void StickResponse::on_state(const StateRecord& s) {
     }
   }
   for (int ax = 0; ax < kAxes; ++ax) {
-    const std::optional<AxisResponse> e = estimate(static_cast<StickAxis>(ax));
+    std::optional<AxisResponse> e = fit(ax);
     if (!e) continue;
     const bool was = scale_[ax] < 1.0;
     if (was || e->gain - 2.0 * e->gain_se > kEngageAbove[ax]) {
       scale_[ax] = 1.0 / std::clamp(e->gain, 1.0, kGainMax);
       if (!was && scale_[ax] < 1.0) engaged_ = static_cast<StickAxis>(ax);
     }
+    e->scale = scale_[ax];
+    estimates_[ax] = e;
   }
 }
 
-std::optional<AxisResponse> StickResponse::estimate(StickAxis axis) const {
-  const int ax = static_cast<int>(axis);
+std::optional<AxisResponse> StickResponse::fit(int ax) const {
   if (windows_[ax] < kMinWindows) return std::nullopt;
   std::optional<AxisResponse> best;
   double best_resid = 0.0;
@@ -135,7 +136,7 @@ std::optional<AxisResponse> StickResponse::estimate(StickAxis axis) const {
     if (best && resid >= best_resid) continue;
     best_resid = resid;
     const double var = resid / windows_[ax];
-    best = AxisResponse{gain, std::sqrt(kOverlap * var / s.cc), kTrialTau_s[k], windows_[ax]};
+    best = AxisResponse{gain, std::sqrt(kOverlap * var / s.cc), kTrialTau_s[k], windows_[ax], 1.0};
   }
   return best;
 }
@@ -148,16 +149,19 @@ RcConversion StickResponse::conversion() const {
   return c;
 }
 
-std::string stick_scaling_event(StickAxis axis, const StickResponse& response) {
+const char* stick_axis_name(StickAxis axis) {
   static constexpr const char* kNames[] = {"horizontal", "vertical", "yaw"};
-  const std::optional<AxisResponse> e = response.estimate(axis);
+  return kNames[static_cast<int>(axis)];
+}
+
+std::string stick_scaling_event(StickAxis axis, const StickResponse& response) {
+  const std::optional<AxisResponse>& e = response.estimate(axis);
   if (!e) return {};
   char text[200];
   std::snprintf(text, sizeof text,
                 "the Tello answers its %s sticks %.2f (+-%.2f) times as strongly as nominal (lag %.2f s): "
                 "%s sticks scaled by %.2f",
-                kNames[static_cast<int>(axis)], e->gain, e->gain_se, e->tau_s, kNames[static_cast<int>(axis)],
-                response.scale(axis));
+                stick_axis_name(axis), e->gain, e->gain_se, e->tau_s, stick_axis_name(axis), e->scale);
   return text;
 }
 

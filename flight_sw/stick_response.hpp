@@ -32,13 +32,18 @@ namespace shelfcross::flight_sw {
 
 enum class StickAxis { Horizontal = 0, Vertical = 1, Yaw = 2 };
 
-/// One axis's estimate: the gain k (the answer over the nominal one), its standard error and
-/// the lag tau of the best fit.
+/// "horizontal", "vertical", "yaw": the axis's name in events and stored metrics.
+const char* stick_axis_name(StickAxis axis);
+
+/// One axis's estimate: the gain k (the answer over the nominal one), its standard error, the
+/// lag tau of the best fit and the windows it rests on; and the scale the axis's sticks are
+/// sent at since it.
 struct AxisResponse {
   double gain = 1.0;
   double gain_se = 0.0;
   double tau_s = 0.0;
   int windows = 0;
+  double scale = 1.0;
 };
 
 class StickResponse {
@@ -53,8 +58,9 @@ class StickResponse {
   /// A state record: a window ends here.
   void on_state(const StateRecord& s);
 
-  /// The axis's estimate, once enough windows were driven (stick_response.cpp, kMinWindows).
-  std::optional<AxisResponse> estimate(StickAxis axis) const;
+  /// The axis's estimate as of the last state record, once enough windows were driven
+  /// (stick_response.cpp, kMinWindows).
+  const std::optional<AxisResponse>& estimate(StickAxis axis) const { return estimates_[static_cast<int>(axis)]; }
   /// The factor the axis's sticks are scaled by: 1 / k once k - 2 se exceeds what the
   /// certified envelope holds on the axis (k capped; stick_response.cpp), else 1. Once
   /// engaged it stays engaged (the factor follows the estimate, at most 1).
@@ -77,6 +83,8 @@ class StickResponse {
     std::array<std::array<double, kComp>, kTau> cmd{};  ///< lagged command's integral per trial tau
   };
   void advance(TimeNs t_ns);
+  /// The least-squares fit of axis `ax` over the windows so far (its scale left at 1).
+  std::optional<AxisResponse> fit(int ax) const;
   static int axis_of(int comp) { return comp < 2 ? 0 : comp - 1; }
 
   RcConversion nominal_;
@@ -89,6 +97,7 @@ class StickResponse {
   std::array<std::array<Sums, kTau>, kAxes> sums_{};
   std::array<int, kAxes> windows_{};
   std::array<double, kAxes> scale_{1.0, 1.0, 1.0};
+  std::array<std::optional<AxisResponse>, kAxes> estimates_;  ///< fit() with the scale, each record
   std::optional<StickAxis> engaged_;
 };
 

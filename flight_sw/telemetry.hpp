@@ -69,10 +69,9 @@ struct ControlTelemetry {
   double forward_gain = 1.0;   ///< measured forward speed per nominal stick speed (crossing timing)
   LineHoldForecast line_hold;  ///< what the blind crossing may add to the line's offsets (line_hold.hpp)
   int crossings_backed_out = 0;  ///< crossings stopped by the in-crossing watch before the cell
-  /// The Tello's measured answer to its sticks per StickAxis (stick_response.hpp), once
-  /// measured, and the scale each axis's sticks are sent at.
-  std::array<std::optional<AxisResponse>, 3> stick_response;
-  std::array<double, 3> stick_scale{1.0, 1.0, 1.0};
+  /// The Tello's measured answer to its sticks per StickAxis, once measured, with the scale
+  /// each axis's sticks are sent at (stick_response.hpp).
+  std::array<std::optional<AxisResponse>, 3> sticks;
   VelocityCommand velocity;    ///< last commanded
   RcSticks rc;                 ///< last sent
 };

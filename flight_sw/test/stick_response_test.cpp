@@ -39,16 +39,16 @@ struct FirstOrderTello {
   }
 };
 
-/// The sticks of a short approach-like pattern at time t: forward at 0.25 m/s, a lateral step,
-/// a climb and a descent, turns both ways (rc a right, b forward, c up, d clockwise).
-RcSticks pattern(double t) {
+/// The command of a short approach-like pattern at time t: forward at 0.25 m/s, a lateral
+/// step, a climb and a descent, turns both ways.
+VelocityCommand pattern(double t) {
   const double p = std::fmod(t, 8.0);
-  RcSticks rc;
-  rc.b = p < 4.0 ? 25 : 0;
-  rc.a = p >= 2.0 && p < 3.0 ? 8 : (p >= 5.0 && p < 6.0 ? -8 : 0);
-  rc.c = p < 1.5 ? 20 : (p >= 4.0 && p < 5.5 ? -20 : 0);
-  rc.d = p >= 1.0 && p < 2.5 ? 15 : (p >= 6.0 && p < 7.5 ? -15 : 0);
-  return rc;
+  VelocityCommand v;
+  v.vx_B_mps = p < 4.0 ? 0.25 : 0.0;
+  v.vy_B_mps = p >= 2.0 && p < 3.0 ? -0.08 : (p >= 5.0 && p < 6.0 ? 0.08 : 0.0);
+  v.vz_mps = p < 1.5 ? 0.2 : (p >= 4.0 && p < 5.5 ? -0.2 : 0.0);
+  v.yaw_rate_radps = p >= 1.0 && p < 2.5 ? -0.225 : (p >= 6.0 && p < 7.5 ? 0.225 : 0.0);
+  return v;
 }
 
 /// Flies `seconds` of the pattern (sticks sent when `driven`), the response fed as the flight
@@ -61,15 +61,10 @@ void fly(StickResponse& response, FirstOrderTello& tello, double seconds, bool d
     const double t = i * dt;
     const TimeNs t_ns = seconds_to_ns(t);
     if (driven && i % 5 == 0) {
-      // The sticks as the flight software sends them: the command at the scaled conversion.
-      const RcSticks want = pattern(t);
-      const RcConversion k = response.conversion();
-      held.a = static_cast<int>(std::lround(want.a * k.rc_per_mps_horizontal / nominal.rc_per_mps_horizontal));
-      held.b = static_cast<int>(std::lround(want.b * k.rc_per_mps_horizontal / nominal.rc_per_mps_horizontal));
-      held.c = static_cast<int>(std::lround(want.c * k.rc_per_mps_vertical / nominal.rc_per_mps_vertical));
-      held.d = static_cast<int>(std::lround(want.d * k.rc_per_radps_yaw / nominal.rc_per_radps_yaw));
+      held = to_rc(pattern(t), response.conversion());  // as Sticks::due sends them
       response.on_sent(held, t_ns);
     }
+    // What the Tello makes of the sticks: their nominal rates (a right, d clockwise).
     const std::vector<double> u = driven ? std::vector<double>{held.b / nominal.rc_per_mps_horizontal,
                                                               -held.a / nominal.rc_per_mps_horizontal,
                                                               held.c / nominal.rc_per_mps_vertical,

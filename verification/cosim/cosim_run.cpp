@@ -182,12 +182,7 @@ RunResult RunContext::finish(const TelloWorld& world, const flight_sw::FlightSof
   const flight_sw::MissionResult fsw_result = fsw.result();
   m.flight_software_result = std::string(flight_sw::outcome_name(fsw_result.outcome)) +
                              (fsw_result.reason.empty() ? "" : ": " + fsw_result.reason);
-  const flight_sw::ControlTelemetry& control = fsw.telemetry().control;
-  for (size_t a = 0; a < m.sticks.size(); ++a) {
-    if (const auto& r = control.stick_response[a]) {
-      m.sticks[a] = StickAxisMetrics{r->gain, r->gain_se, r->tau_s, r->windows, control.stick_scale[a]};
-    }
-  }
+  m.sticks = fsw.telemetry().control.sticks;
   std::set<InventoryEntry> reported;
   for (const flight_sw::BoxEntry& b : fsw.all_boxes()) reported.insert({b.id, b.shelf, b.level, b.column});
   m.inventory = score_inventory(reported, true_inventory(sc));

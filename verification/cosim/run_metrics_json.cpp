@@ -12,8 +12,8 @@ namespace {
 
 using nlohmann::json;
 
-/// The keys of RunMetrics::sticks, in flight_sw::StickAxis order.
-constexpr const char* kStickAxes[] = {"horizontal", "vertical", "yaw"};
+/// The key of RunMetrics::sticks[a].
+const char* stick_key(size_t a) { return flight_sw::stick_axis_name(static_cast<flight_sw::StickAxis>(a)); }
 
 json response_json(const std::optional<StepResponse>& r) {
   if (!r) return nullptr;
@@ -84,8 +84,8 @@ RunMetrics read_metrics(StrictObject& o) {
   // Absent from stores written before the sticks' answer was measured.
   if (auto sticks = o.has("sticks") ? o.optional_object("sticks") : std::nullopt) {
     for (size_t a = 0; a < m.sticks.size(); ++a) {
-      if (auto axis = sticks->optional_object(kStickAxes[a])) {
-        StickAxisMetrics s;
+      if (auto axis = sticks->optional_object(stick_key(a))) {
+        flight_sw::AxisResponse s;
         s.gain = axis->number("gain");
         s.gain_se = axis->number("gain_se");
         s.tau_s = axis->number("tau_s");
@@ -124,10 +124,10 @@ void to_json(json& j, const RunMetrics& m) {
   json sticks = json::object();
   for (size_t a = 0; a < m.sticks.size(); ++a) {
     if (const auto& s = m.sticks[a]) {
-      sticks[kStickAxes[a]] = {{"gain", s->gain}, {"gain_se", s->gain_se}, {"tau_s", s->tau_s},
+      sticks[stick_key(a)] = {{"gain", s->gain}, {"gain_se", s->gain_se}, {"tau_s", s->tau_s},
                                {"windows", s->windows}, {"scale", s->scale}};
     } else {
-      sticks[kStickAxes[a]] = nullptr;
+      sticks[stick_key(a)] = nullptr;
     }
   }
   j["sticks"] = sticks;

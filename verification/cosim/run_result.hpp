@@ -60,16 +60,6 @@ struct LinkMetrics {
   }
 };
 
-/// What the flight software measured of the Tello's answer to one axis's sticks
-/// (flight_sw/stick_response.hpp) by the end of the run, and the scale it sent them at.
-struct StickAxisMetrics {
-  double gain = 1.0;
-  double gain_se = 0.0;
-  double tau_s = 0.0;
-  int windows = 0;
-  double scale = 1.0;
-};
-
 /// Everything a run measured (JSON form, both ways: run_metrics_json.hpp).
 struct RunMetrics {
   double mission_time_s = 0.0;     ///< start to the end of the run
@@ -91,9 +81,10 @@ struct RunMetrics {
   // Inventory
   InventoryScore inventory;
   std::string flight_software_result;    ///< outcome and reason of the flight software
-  /// The sticks' measured answer, per flight_sw::StickAxis (horizontal, vertical, yaw); empty
-  /// where the run gave too little to measure.
-  std::array<std::optional<StickAxisMetrics>, 3> sticks;
+  /// The sticks' measured answer by the end of the run and the scale they were sent at, per
+  /// flight_sw::StickAxis (flight_sw/stick_response.hpp); empty where the run gave too little
+  /// to measure.
+  std::array<std::optional<flight_sw::AxisResponse>, 3> sticks;
   LinkMetrics link;
 };
 

@@ -54,8 +54,8 @@ RunMetrics full_metrics() {
   m.lateral = r;
   m.inventory = {0.75, 0.5, 3, 4, 6};
   m.flight_software_result = "completed";
-  m.sticks[0] = StickAxisMetrics{1.875, 0.0625, 0.5, 120, 0.5};  // the vertical axis left unmeasured
-  m.sticks[2] = StickAxisMetrics{2.125, 0.125, 0.75, 40, 0.625};
+  m.sticks[0] = flight_sw::AxisResponse{1.875, 0.0625, 0.5, 120, 0.5};  // the vertical axis left unmeasured
+  m.sticks[2] = flight_sw::AxisResponse{2.125, 0.125, 0.75, 40, 0.625};
   LinkMetrics& l = m.link;
   l.model = "sdk";
   l.video_datagrams = 9000;
