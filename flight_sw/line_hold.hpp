@@ -78,6 +78,9 @@ constexpr int kLineHoldMinMeasured = 3;
 /// The crossing gate's refusals for the line's hold (their reasons begin so).
 constexpr const char* kLineHoldNotMeasured = "line hold not measured";
 constexpr const char* kLineCannotBeHeld = "line cannot be held";
+/// The line's offset, not the air, leaves it no room: an arrival centred as the approach
+/// settles would be held (crossing_refusal). The approach's to mend, as any off-centre arrival.
+constexpr const char* kOffCentreForTheWander = "off-centre for the wander";
 /// A crossing given up for the line's hold: the mission's reason begins so.
 constexpr const char* kCrossingDeclined = "crossing declined: ";
 

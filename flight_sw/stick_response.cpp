@@ -14,6 +14,9 @@ namespace {
 /// 0.1 s off moves the gain by about 5 %).
 constexpr std::array<double, StickResponse::kTau> kTrialTau_s{0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8,
                                                              0.9, 1.0, 1.1, 1.2, 1.3, 1.4, 1.5, 1.6};
+/// The trial dead times, 0 to 0.2 s: the command's way to the Tello (the link's latency, a few
+/// hundredths) and the autopilot's inner loops (its rate loop's lag, most of a tenth on yaw).
+constexpr std::array<double, StickResponse::kDelay> kTrialDelay_s{0.0, 0.05, 0.10, 0.15, 0.20};
 constexpr double kWindow_s = 1.0;
 /// rc datagrams farther apart than this: the response is not being driven; the windows
 /// restart.
@@ -31,40 +34,72 @@ constexpr double kGainMax = 3.0;
 /// An axis's estimate needs this many windows (state records, 10 Hz: 3 s of driving) whose
 /// commanded travel C is at least kMinTravel of the axis (m, m, rad).
 constexpr int kMinWindows = 30;
+/// ... and its scaling engages once the bar has held over this many more: the first windows
+/// come from one or two manoeuvres, more alike than the overlap's inflation allows for (a
+/// horizontal estimate read past 1.5 on its first windows of a Tello drawn at 1.24, then fell
+/// back to it), so the bar must hold while another second of driving comes in.
+constexpr int kConfirmWindows = 10;
 constexpr std::array<double, 3> kMinTravel{0.05, 0.03, 0.05};
 
 /// Windows of the same axis overlap: one ends at each 10 Hz state record and spans kWindow_s,
 /// so about this many neighbours share each one's errors (the standard error's inflation).
 constexpr double kOverlap = 10.0;
-constexpr int kMiddleTau = 4;  ///< the trial (0.5 s) that says whether a window was driven enough
+/// The trial (no dead time, 0.5 s lag) that says whether a window was driven enough.
+constexpr int kMiddleTrial = 4;
+constexpr int trial(int delay, int tau) { return delay * StickResponse::kTau + tau; }
 }  // namespace
 
-void StickResponse::advance(TimeNs t_ns) {
-  if (now_.t_ns == 0 || t_ns <= now_.t_ns) {
-    now_.t_ns = std::max(now_.t_ns, t_ns);
-    return;
-  }
-  const double dt = ns_to_seconds(t_ns - now_.t_ns);
+void StickResponse::integrate(int delay, const Rates& u, TimeNs from_ns, TimeNs to_ns) {
+  if (to_ns <= from_ns) return;
+  const double dt = ns_to_seconds(to_ns - from_ns);
   for (int k = 0; k < kTau; ++k) {
     // y' = (u - y) / tau with u held: y(dt) = u + (y0 - u) a, a = exp(-dt / tau), and its
     // integral over dt is u dt + (y0 - u) tau (1 - a).
     const double tau = kTrialTau_s[k];
     const double a = std::exp(-dt / tau);
+    Rates& y = u_lag_[trial(delay, k)];
+    Rates& integral = now_.cmd[trial(delay, k)];
     for (int c = 0; c < kComp; ++c) {
-      const double y0 = u_lag_[k][c];
-      now_.cmd[k][c] += u_[c] * dt + (y0 - u_[c]) * tau * (1.0 - a);
-      u_lag_[k][c] = u_[c] + (y0 - u_[c]) * a;
+      integral[c] += u[c] * dt + (y[c] - u[c]) * tau * (1.0 - a);
+      y[c] = u[c] + (y[c] - u[c]) * a;
     }
   }
+}
+
+// Each dead time T sees the sticks sent at s from s + T on: over (now, t] its input steps at
+// every sent time plus T that falls inside, holding what was sent last before.
+void StickResponse::advance(TimeNs t_ns) {
+  if (now_.t_ns == 0 || t_ns <= now_.t_ns) {
+    now_.t_ns = std::max(now_.t_ns, t_ns);
+    return;
+  }
+  for (int j = 0; j < kDelay; ++j) {
+    const TimeNs delay_ns = seconds_to_ns(kTrialDelay_s[j]);
+    Rates u{};
+    TimeNs from_ns = now_.t_ns;
+    for (const auto& [sent_ns, rates] : sent_) {
+      const TimeNs acts_ns = sent_ns + delay_ns;
+      if (acts_ns >= t_ns) break;
+      if (acts_ns > from_ns) {
+        integrate(j, u, from_ns, acts_ns);
+        from_ns = acts_ns;
+      }
+      u = rates;
+    }
+    integrate(j, u, from_ns, t_ns);
+  }
   now_.t_ns = t_ns;
+  // A sent entry whose successor acts, under the longest dead time, by now is held by no trial.
+  const TimeNs longest_ns = seconds_to_ns(kTrialDelay_s.back());
+  while (sent_.size() >= 2 && sent_[1].first + longest_ns <= now_.t_ns) sent_.pop_front();
 }
 
 void StickResponse::on_sent(const RcSticks& rc, TimeNs t_ns) {
   advance(t_ns);
   // The rates the sticks ask of a nominal Tello (control.cpp's to_rc inverted): a is right,
   // the body's y left; d is clockwise, the yaw rate counter-clockwise.
-  u_ = {rc.b / nominal_.rc_per_mps_horizontal, -rc.a / nominal_.rc_per_mps_horizontal,
-        rc.c / nominal_.rc_per_mps_vertical, -rc.d / nominal_.rc_per_radps_yaw};
+  sent_.emplace_back(t_ns, Rates{rc.b / nominal_.rc_per_mps_horizontal, -rc.a / nominal_.rc_per_mps_horizontal,
+                                 rc.c / nominal_.rc_per_mps_vertical, -rc.d / nominal_.rc_per_radps_yaw});
   last_sent_ns_ = t_ns;
 }
 
@@ -95,13 +130,13 @@ void StickResponse::on_state(const StateRecord& s) {
   for (int c = 0; c < kComp; ++c) d[c] = now_.moved[c] - old.moved[c];
   std::array<double, kAxes> travel{};
   for (int c = 0; c < kComp; ++c) {
-    const double cm = now_.cmd[kMiddleTau][c] - old.cmd[kMiddleTau][c];
+    const double cm = now_.cmd[kMiddleTrial][c] - old.cmd[kMiddleTrial][c];
     travel[axis_of(c)] += cm * cm;
   }
   for (int ax = 0; ax < kAxes; ++ax) {
     if (std::sqrt(travel[ax]) < kMinTravel[ax]) continue;
     ++windows_[ax];
-    for (int k = 0; k < kTau; ++k) {
+    for (int k = 0; k < kTrials; ++k) {
       for (int c = 0; c < kComp; ++c) {
         if (axis_of(c) != ax) continue;
         const double cmd = now_.cmd[k][c] - old.cmd[k][c];
@@ -115,7 +150,12 @@ void StickResponse::on_state(const StateRecord& s) {
     std::optional<AxisResponse> e = fit(ax);
     if (!e) continue;
     const bool was = scale_[ax] < 1.0;
-    if (was || e->gain - 2.0 * e->gain_se > kEngageAbove[ax]) {
+    if (e->gain - 2.0 * e->gain_se > kEngageAbove[ax]) {
+      if (!above_since_[ax]) above_since_[ax] = windows_[ax];
+    } else {
+      above_since_[ax].reset();
+    }
+    if (was || (above_since_[ax] && windows_[ax] - *above_since_[ax] >= kConfirmWindows)) {
       scale_[ax] = 1.0 / std::clamp(e->gain, 1.0, kGainMax);
       if (!was && scale_[ax] < 1.0) engaged_ = static_cast<StickAxis>(ax);
     }
@@ -128,15 +168,17 @@ std::optional<AxisResponse> StickResponse::fit(int ax) const {
   if (windows_[ax] < kMinWindows) return std::nullopt;
   std::optional<AxisResponse> best;
   double best_resid = 0.0;
-  for (int k = 0; k < kTau; ++k) {
-    const Sums& s = sums_[ax][k];
-    if (s.cc <= 0.0) continue;
-    const double gain = s.dc / s.cc;
-    const double resid = std::max(0.0, s.dd - gain * s.dc);  // sum of (d - gain c)^2
-    if (best && resid >= best_resid) continue;
-    best_resid = resid;
-    const double var = resid / windows_[ax];
-    best = AxisResponse{gain, std::sqrt(kOverlap * var / s.cc), kTrialTau_s[k], windows_[ax], 1.0};
+  for (int j = 0; j < kDelay; ++j) {
+    for (int k = 0; k < kTau; ++k) {
+      const Sums& s = sums_[ax][trial(j, k)];
+      if (s.cc <= 0.0) continue;
+      const double gain = s.dc / s.cc;
+      const double resid = std::max(0.0, s.dd - gain * s.dc);  // sum of (d - gain c)^2
+      if (best && resid >= best_resid) continue;
+      best_resid = resid;
+      const double var = resid / windows_[ax];
+      best = AxisResponse{gain, std::sqrt(kOverlap * var / s.cc), kTrialTau_s[k], kTrialDelay_s[j], windows_[ax], 1.0};
+    }
   }
   return best;
 }
@@ -159,9 +201,9 @@ std::string stick_scaling_event(StickAxis axis, const StickResponse& response) {
   if (!e) return {};
   char text[200];
   std::snprintf(text, sizeof text,
-                "the Tello answers its %s sticks %.2f (+-%.2f) times as strongly as nominal (lag %.2f s): "
-                "%s sticks scaled by %.2f",
-                stick_axis_name(axis), e->gain, e->gain_se, e->tau_s, stick_axis_name(axis), e->scale);
+                "the Tello answers its %s sticks %.2f (+-%.2f) times as strongly as nominal (lag %.2f s after "
+                "%.2f s): %s sticks scaled by %.2f",
+                stick_axis_name(axis), e->gain, e->gain_se, e->tau_s, e->delay_s, stick_axis_name(axis), e->scale);
   return text;
 }
 

@@ -10,11 +10,15 @@
 //
 // Model, per axis (horizontal: the body's x and y pooled; vertical; yaw): the autopilot holds
 // a first-order response to the stick's rate u (the stick over the nominal rc_per_* of
-// RcConversion), v' = (k u - v) / tau, k the gain sought. Over a window of length W the
-// vehicle moves D = k C + e, C the integral of u passed through that lag, e what the lag's
-// error and the air add. For each of sixteen trial tau the least squares k = S_dc / S_cc over
-// every window (one ending at each state record) and its residual are kept; the tau with the
-// least residual gives the estimate. D: the state's heading-frame velocities summed over the
+// RcConversion) after a dead time T, v'(t) = (k u(t - T) - v(t)) / tau, k the gain sought. Over
+// a window of length W the vehicle moves D = k C + e, C the integral of u delayed by T and
+// passed through the lag, e what the model's error and the air add. For each trial (T, tau),
+// five dead times by sixteen lags, the least squares k = S_dc / S_cc over every window (one
+// ending at each state record) and its residual are kept; the trial with the least residual
+// gives the estimate. The dead time matters because the loops close through the vehicle: the
+// heading law's stick shrinks as the heading closes in, so a response to an older (larger)
+// stick, fitted without its dead time, reads as a stronger gain (a 0.1 s dead time on a
+// 0.3 s yaw lag read 6 to 9 % high). D: the state's heading-frame velocities summed over the
 // records (0.1 m/s steps), the height's change (1 cm steps), the yaw's change (1 degree steps);
 // W = 1 s, long against those steps (0.05 m, 0.01 m, 0.017 rad of the few tenths a window
 // moves). Only windows during which rc datagrams went out throughout count: during take-off
@@ -36,20 +40,23 @@ enum class StickAxis { Horizontal = 0, Vertical = 1, Yaw = 2 };
 const char* stick_axis_name(StickAxis axis);
 
 /// One axis's estimate: the gain k (the answer over the nominal one), its standard error, the
-/// lag tau of the best fit and the windows it rests on; and the scale the axis's sticks are
-/// sent at since it.
+/// lag tau and dead time of the best fit and the windows it rests on; and the scale the
+/// axis's sticks are sent at since it.
 struct AxisResponse {
   double gain = 1.0;
   double gain_se = 0.0;
   double tau_s = 0.0;
+  double delay_s = 0.0;
   int windows = 0;
   double scale = 1.0;
 };
 
 class StickResponse {
  public:
-  /// The trial lags (stick_response.cpp, kTrialTau_s).
+  /// The trial lags and dead times (stick_response.cpp, kTrialTau_s and kTrialDelay_s).
   static constexpr int kTau = 16;
+  static constexpr int kDelay = 5;
+  static constexpr int kTrials = kTau * kDelay;
 
   explicit StickResponse(const RcConversion& nominal) : nominal_(nominal) {}
 
@@ -61,9 +68,10 @@ class StickResponse {
   /// The axis's estimate as of the last state record, once enough windows were driven
   /// (stick_response.cpp, kMinWindows).
   const std::optional<AxisResponse>& estimate(StickAxis axis) const { return estimates_[static_cast<int>(axis)]; }
-  /// The factor the axis's sticks are scaled by: 1 / k once k - 2 se exceeds what the
-  /// certified envelope holds on the axis (k capped; stick_response.cpp), else 1. Once
-  /// engaged it stays engaged (the factor follows the estimate, at most 1).
+  /// The factor the axis's sticks are scaled by: 1 / k once k - 2 se has exceeded what the
+  /// certified envelope holds on the axis over kConfirmWindows windows (k capped;
+  /// stick_response.cpp), else 1. Once engaged it stays engaged (the factor follows the
+  /// estimate, at most 1).
   double scale(StickAxis axis) const { return scale_[static_cast<int>(axis)]; }
   /// The conversion the sticks are sent with: the nominal one times each axis's scale.
   RcConversion conversion() const;
@@ -77,25 +85,32 @@ class StickResponse {
   struct Sums {
     double dc = 0.0, cc = 0.0, dd = 0.0;
   };
+  using Rates = std::array<double, kComp>;
   struct Sample {
     TimeNs t_ns = 0;
-    std::array<double, kComp> moved{};                 ///< measured displacement since start
-    std::array<std::array<double, kComp>, kTau> cmd{};  ///< lagged command's integral per trial tau
+    Rates moved{};                       ///< measured displacement since start
+    std::array<Rates, kTrials> cmd{};  ///< the delayed, lagged command's integral per trial
   };
+  /// Integrates every trial's delayed, lagged command up to t_ns.
   void advance(TimeNs t_ns);
+  /// Integrates the trials of dead time `delay` over [from_ns, to_ns) with the rates u held.
+  void integrate(int delay, const Rates& u, TimeNs from_ns, TimeNs to_ns);
   /// The least-squares fit of axis `ax` over the windows so far (its scale left at 1).
   std::optional<AxisResponse> fit(int ax) const;
   static int axis_of(int comp) { return comp < 2 ? 0 : comp - 1; }
 
   RcConversion nominal_;
-  std::array<double, kComp> u_{};                        ///< the held sticks' rates
-  std::array<std::array<double, kComp>, kTau> u_lag_{};  ///< each trial lag's output
-  Sample now_;                                           ///< integrals up to now_.t_ns
+  /// The sticks' rates as sent, from the last one every dead time still holds.
+  std::deque<std::pair<TimeNs, Rates>> sent_;
+  std::array<Rates, kTrials> u_lag_{};  ///< each trial lag's output
+  Sample now_;                          ///< integrals up to now_.t_ns
   std::optional<TimeNs> last_sent_ns_;
   std::optional<StateRecord> last_state_;
   std::deque<Sample> samples_;  ///< at the state records of the last window
-  std::array<std::array<Sums, kTau>, kAxes> sums_{};
+  std::array<std::array<Sums, kTrials>, kAxes> sums_{};
   std::array<int, kAxes> windows_{};
+  /// The windows at which k - 2 se last rose past the axis's bar (and has stayed past it).
+  std::array<std::optional<int>, kAxes> above_since_{};
   std::array<double, kAxes> scale_{1.0, 1.0, 1.0};
   std::array<std::optional<AxisResponse>, kAxes> estimates_;  ///< fit() with the scale, each record
   std::optional<StickAxis> engaged_;

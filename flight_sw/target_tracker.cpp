@@ -52,14 +52,20 @@ std::optional<std::string> crossing_refusal(const FlightConfig& config, CellInde
     return std::string(kLineCannotBeHeld) + " (calm for " + format_m(*input.calm_for_s) +
            " s since the air left no room, less than the blind crossing's " + format_m(blind_s) + " s)";
   }
+  // Offset plus wander past the room: the air's doing if even an arrival centred as the
+  // approach settles (within lateral_threshold_m across, settle_z_m up) would leave the wander
+  // no room, and then the crossing is given up at the last attempt; else the offset's, and the
+  // approach may mend it (a re-read at the last attempt, as for any off-centre arrival).
+  const auto verdict = [&](double offset_m, double wander_m, double tol_m, double settled_offset_m, const char* axis) {
+    const char* why = settled_offset_m + wander_m > tol_m ? kLineCannotBeHeld : kOffCentreForTheWander;
+    return std::string(why) + " " + axis + " (offset " + centimetres_text(offset_m) + " + wander " +
+           centimetres_text(wander_m) + " > " + centimetres_text(tol_m) + ")";
+  };
   if (room.offset_y_m() + f.y_m > tol_y) {
-    return std::string(kLineCannotBeHeld) + " across (offset " + centimetres_text(room.offset_y_m()) + " + wander " + centimetres_text(f.y_m) +
-           " > " + centimetres_text(tol_y) + ")" + air_text(f);
+    return verdict(room.offset_y_m(), f.y_m, tol_y, config.control.lateral_threshold_m, "across") + air_text(f);
   }
-  if (std::max(room.offset_z_m(), std::abs(z_now)) + f.z_m > tol_z) {
-    return std::string(kLineCannotBeHeld) + " vertically (offset " + centimetres_text(std::max(room.offset_z_m(), std::abs(z_now))) +
-           " + wander " + centimetres_text(f.z_m) + " > " + centimetres_text(tol_z) + ")";
-  }
+  const double offset_z = std::max(room.offset_z_m(), std::abs(z_now));
+  if (offset_z + f.z_m > tol_z) return verdict(offset_z, f.z_m, tol_z, m.approach.settle_z_m, "vertically");
   return std::nullopt;
 }
 

@@ -3,7 +3,10 @@
 // resolution (0.1 m/s, 1 cm, 1 degree), is identified, and its sticks are scaled only when it
 // answers more strongly than the certified envelope.
 
+#include <algorithm>
 #include <cmath>
+#include <deque>
+#include <functional>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -13,14 +16,24 @@
 namespace shelfcross::flight_sw {
 namespace {
 
-/// A Tello whose velocity (body x, y, z) and yaw rate follow k u with lag tau; u the sticks'
-/// nominal rates. The state record quantizes as the SDK does.
+/// A Tello whose velocity (body x, y, z) and yaw rate follow k u with lag tau after a dead time
+/// of `delay_steps` steps; u the sticks' nominal rates. The state record quantizes as the SDK
+/// does.
 struct FirstOrderTello {
   double gain = 1.0, tau_s = 0.5;
+  int delay_steps = 0;
   std::vector<double> v = std::vector<double>(4, 0.0);  ///< vx, vy, vz, yaw rate
   double height_m = 1.0, yaw_rad = 0.0;
+  std::deque<std::vector<double>> pending;  ///< sticks not yet acting
 
-  void step(const std::vector<double>& u, double dt) {
+  void step(const std::vector<double>& u_sent, double dt) {
+    pending.push_back(u_sent);
+    if (static_cast<int>(pending.size()) <= delay_steps) return step_with({0.0, 0.0, 0.0, 0.0}, dt);
+    const std::vector<double> u = pending.front();
+    pending.pop_front();
+    step_with(u, dt);
+  }
+  void step_with(const std::vector<double>& u, double dt) {
     const double a = std::exp(-dt / tau_s);
     for (int i = 0; i < 4; ++i) v[i] = gain * u[i] + (v[i] - gain * u[i]) * a;
     height_m += v[2] * dt;
@@ -51,17 +64,22 @@ VelocityCommand pattern(double t) {
   return v;
 }
 
-/// Flies `seconds` of the pattern (sticks sent when `driven`), the response fed as the flight
-/// software feeds it.
-void fly(StickResponse& response, FirstOrderTello& tello, double seconds, bool driven = true) {
+/// The sticks at time t given the last state record.
+using Law = std::function<VelocityCommand(double t, const StateRecord& last)>;
+
+/// Flies `seconds` of the law (by default the open-loop pattern; sticks sent when `driven`),
+/// the response fed as the flight software feeds it.
+void fly(StickResponse& response, FirstOrderTello& tello, double seconds, bool driven = true,
+         const Law& law = [](double t, const StateRecord&) { return pattern(t); }) {
   const RcConversion nominal;
   const double dt = 0.01;
   RcSticks held;
+  StateRecord last = tello.record(0);
   for (int i = 1; i <= static_cast<int>(std::lround(seconds / dt)); ++i) {
     const double t = i * dt;
     const TimeNs t_ns = seconds_to_ns(t);
     if (driven && i % 5 == 0) {
-      held = to_rc(pattern(t), response.conversion());  // as Sticks::due sends them
+      held = to_rc(law(t, last), response.conversion());  // as Sticks::due sends them
       response.on_sent(held, t_ns);
     }
     // What the Tello makes of the sticks: their nominal rates (a right, d clockwise).
@@ -71,7 +89,10 @@ void fly(StickResponse& response, FirstOrderTello& tello, double seconds, bool d
                                                               -held.d / nominal.rc_per_radps_yaw}
                                          : std::vector<double>{0.0, 0.0, 0.3, 0.0};  // a take-off climb
     tello.step(u, dt);
-    if (i % 10 == 0) response.on_state(tello.record(t_ns));
+    if (i % 10 == 0) {
+      last = tello.record(t_ns);
+      response.on_state(last);
+    }
   }
 }
 
@@ -110,6 +131,32 @@ TEST(StickResponse, AnAutopilotInsideTheCertifiedRangeKeepsItsSticks) {
       EXPECT_NEAR(e->gain, gain, tolerance * gain) << gain << " " << static_cast<int>(axis);
       EXPECT_EQ(response.scale(axis), 1.0) << gain << " " << static_cast<int>(axis);
     }
+  }
+}
+
+TEST(StickResponse, ADeadTimeInAClosedLoopDoesNotReadAsAStrongerGain) {
+  // The approach's loops close through the vehicle: the heading and height laws' sticks shrink
+  // as the error closes, so a response to older, larger sticks would read as a stronger gain
+  // if the command's dead time (the link, the autopilot's inner loops) were not fitted. A Tello
+  // at 1.2, inside the certified range, with 0.1 s of dead time and a 0.3 s lag, flown by
+  // proportional laws to targets that step every 4 s (the heading's kp 1.5/s, the height's
+  // 1/s): each axis reads within 3 % and keeps its sticks.
+  StickResponse response{RcConversion{}};
+  FirstOrderTello tello{1.2, 0.3, 10};
+  const Law closed = [](double t, const StateRecord& last) {
+    const bool first_half = std::fmod(t, 8.0) < 4.0;
+    VelocityCommand v = pattern(t);
+    v.yaw_rate_radps = 1.5 * ((first_half ? 0.3 : -0.3) - last.yaw_rad);
+    v.vz_mps = std::clamp(1.0 * ((first_half ? 1.3 : 1.0) - last.height_m), -0.4, 0.4);
+    return v;
+  };
+  fly(response, tello, 40.0, true, closed);
+  for (StickAxis axis : {StickAxis::Vertical, StickAxis::Yaw}) {
+    const std::optional<AxisResponse> e = response.estimate(axis);
+    ASSERT_TRUE(e.has_value());
+    EXPECT_NEAR(e->gain, 1.2, 0.03 * 1.2) << stick_axis_name(axis);
+    EXPECT_NEAR(e->delay_s, 0.1, 0.051) << stick_axis_name(axis);
+    EXPECT_EQ(response.scale(axis), 1.0) << stick_axis_name(axis);
   }
 }
 

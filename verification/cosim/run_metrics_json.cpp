@@ -89,6 +89,7 @@ RunMetrics read_metrics(StrictObject& o) {
         s.gain = axis->number("gain");
         s.gain_se = axis->number("gain_se");
         s.tau_s = axis->number("tau_s");
+        if (axis->has("delay_s")) s.delay_s = axis->number("delay_s");  // absent before the dead time was fitted
         s.windows = static_cast<int>(axis->integer("windows"));
         s.scale = axis->number("scale");
         axis->finish();
@@ -125,7 +126,7 @@ void to_json(json& j, const RunMetrics& m) {
   for (size_t a = 0; a < m.sticks.size(); ++a) {
     if (const auto& s = m.sticks[a]) {
       sticks[stick_key(a)] = {{"gain", s->gain}, {"gain_se", s->gain_se}, {"tau_s", s->tau_s},
-                               {"windows", s->windows}, {"scale", s->scale}};
+                               {"delay_s", s->delay_s}, {"windows", s->windows}, {"scale", s->scale}};
     } else {
       sticks[stick_key(a)] = nullptr;
     }

@@ -54,8 +54,8 @@ RunMetrics full_metrics() {
   m.lateral = r;
   m.inventory = {0.75, 0.5, 3, 4, 6};
   m.flight_software_result = "completed";
-  m.sticks[0] = flight_sw::AxisResponse{1.875, 0.0625, 0.5, 120, 0.5};  // the vertical axis left unmeasured
-  m.sticks[2] = flight_sw::AxisResponse{2.125, 0.125, 0.75, 40, 0.625};
+  m.sticks[0] = flight_sw::AxisResponse{1.875, 0.0625, 0.5, 0.05, 120, 0.5};  // the vertical axis left unmeasured
+  m.sticks[2] = flight_sw::AxisResponse{2.125, 0.125, 0.75, 0.1, 40, 0.625};
   LinkMetrics& l = m.link;
   l.model = "sdk";
   l.video_datagrams = 9000;
@@ -97,11 +97,16 @@ TEST(RunMetricsJson, EveryFieldReadsBackToTheSameText) {
   EXPECT_EQ(back.link.injected_errors, 7);
   ASSERT_TRUE(back.sticks[2].has_value());
   EXPECT_EQ(back.sticks[2]->windows, 40);
+  EXPECT_EQ(back.sticks[2]->delay_s, 0.1);
   EXPECT_FALSE(back.sticks[1].has_value());
   // A store written before the sticks' answer was measured reads back without it.
   json before = json::parse(text);
   before.erase("sticks");
   EXPECT_FALSE(before.get<RunMetrics>().sticks[0].has_value());
+  // ... and one written before the dead time was fitted, with the lag alone.
+  json no_delay = json::parse(text);
+  no_delay["sticks"]["yaw"].erase("delay_s");
+  EXPECT_EQ(no_delay.get<RunMetrics>().sticks[2]->delay_s, 0.0);
   // The defaults too: empty optionals are null, not missing.
   const RunMetrics empty;
   EXPECT_EQ(run_metrics_json(json::parse(run_metrics_json(empty)).get<RunMetrics>()), run_metrics_json(empty));
