@@ -24,11 +24,12 @@ constexpr double kDrivenGap_s = 0.3;
 /// The certified envelope's strongest answer (scenarios: rc_gain_scale up to 1.25), and
 /// what an axis's estimate must exceed by two standard errors before its sticks are scaled:
 /// the vertical and yaw axes measure to 1 cm and 1 degree, without bias; the horizontal
-/// velocities come in 0.1 m/s steps, and at the approach's steady 0.25 m/s their rounding
-/// alone can read up to 20 % high (0.27 m/s reads 0.3), so that axis engages only past
-/// 1.25 x 1.2 = 1.5.
+/// velocities come in 0.1 m/s steps, which a steady speed does not dither (0.27 m/s reads 0.3
+/// every time, 11 % high), so that axis engages only past 1.25 x 1.1 = 1.375: over the 2,100
+/// runs of the stress campaigns and Table 2 the lag-only fit's estimate read at most 9.3 %
+/// above the drawn gain (docs/method.md section 8).
 constexpr double kCertifiedGainMax = 1.25;
-constexpr std::array<double, 3> kEngageAbove{1.2 * kCertifiedGainMax, kCertifiedGainMax, kCertifiedGainMax};
+constexpr std::array<double, 3> kEngageAbove{1.1 * kCertifiedGainMax, kCertifiedGainMax, kCertifiedGainMax};
 /// ... and the most the sticks are scaled down for.
 constexpr double kGainMax = 3.0;
 /// An axis's estimate needs this many windows (state records, 10 Hz: 3 s of driving) whose
