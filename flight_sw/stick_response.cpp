@@ -12,11 +12,11 @@ namespace {
 /// The trial lags, 0.1 to 1.6 s: the Tello's velocity hold lies about 0.3-0.7 s; the trials
 /// reach past it both ways so that an autopilot outside that range is still fitted (a lag
 /// 0.1 s off moves the gain by about 5 %).
-constexpr std::array<double, StickResponse::kTau> kTrialTau_s{0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8,
+constexpr std::array<double, kStickTrialLags> kTrialTau_s{0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8,
                                                              0.9, 1.0, 1.1, 1.2, 1.3, 1.4, 1.5, 1.6};
 /// The trial dead times, 0 to 0.2 s: the command's way to the Tello (the link's latency, a few
 /// hundredths) and the autopilot's inner loops (its rate loop's lag, most of a tenth on yaw).
-constexpr std::array<double, StickResponse::kDelay> kTrialDelay_s{0.0, 0.05, 0.10, 0.15, 0.20};
+constexpr std::array<double, kStickTrialDelays> kTrialDelay_s{0.0, 0.05, 0.10, 0.15, 0.20};
 constexpr double kWindow_s = 1.0;
 /// rc datagrams farther apart than this: the response is not being driven; the windows
 /// restart.
@@ -47,13 +47,13 @@ constexpr std::array<double, 3> kMinTravel{0.05, 0.03, 0.05};
 constexpr double kOverlap = 10.0;
 /// The trial (no dead time, 0.5 s lag) that says whether a window was driven enough.
 constexpr int kMiddleTrial = 4;
-constexpr int trial(int delay, int tau) { return delay * StickResponse::kTau + tau; }
+constexpr int trial(int delay, int tau) { return delay * kStickTrialLags + tau; }
 }  // namespace
 
 void StickResponse::integrate(int delay, const Rates& u, TimeNs from_ns, TimeNs to_ns) {
   if (to_ns <= from_ns) return;
   const double dt = ns_to_seconds(to_ns - from_ns);
-  for (int k = 0; k < kTau; ++k) {
+  for (int k = 0; k < kStickTrialLags; ++k) {
     // y' = (u - y) / tau with u held: y(dt) = u + (y0 - u) a, a = exp(-dt / tau), and its
     // integral over dt is u dt + (y0 - u) tau (1 - a).
     const double tau = kTrialTau_s[k];
@@ -74,7 +74,7 @@ void StickResponse::advance(TimeNs t_ns) {
     now_.t_ns = std::max(now_.t_ns, t_ns);
     return;
   }
-  for (int j = 0; j < kDelay; ++j) {
+  for (int j = 0; j < kStickTrialDelays; ++j) {
     const TimeNs delay_ns = seconds_to_ns(kTrialDelay_s[j]);
     Rates u{};
     TimeNs from_ns = now_.t_ns;
@@ -136,49 +136,52 @@ void StickResponse::on_state(const StateRecord& s) {
   }
   for (int ax = 0; ax < kAxes; ++ax) {
     if (std::sqrt(travel[ax]) < kMinTravel[ax]) continue;
-    ++windows_[ax];
+    Axis& a = axes_[ax];
+    ++a.windows;
     for (int k = 0; k < kTrials; ++k) {
       for (int c = 0; c < kComp; ++c) {
         if (axis_of(c) != ax) continue;
         const double cmd = now_.cmd[k][c] - old.cmd[k][c];
-        sums_[ax][k].dc += d[c] * cmd;
-        sums_[ax][k].cc += cmd * cmd;
-        sums_[ax][k].dd += d[c] * d[c];
+        a.sums[k].dc += d[c] * cmd;
+        a.sums[k].cc += cmd * cmd;
+        a.sums[k].dd += d[c] * d[c];
       }
     }
   }
   for (int ax = 0; ax < kAxes; ++ax) {
     std::optional<AxisResponse> e = fit(ax);
     if (!e) continue;
-    const bool was = scale_[ax] < 1.0;
+    Axis& a = axes_[ax];
+    const bool was = a.scale < 1.0;
     if (e->gain - 2.0 * e->gain_se > kEngageAbove[ax]) {
-      if (!above_since_[ax]) above_since_[ax] = windows_[ax];
+      if (!a.above_since) a.above_since = a.windows;
     } else {
-      above_since_[ax].reset();
+      a.above_since.reset();
     }
-    if (was || (above_since_[ax] && windows_[ax] - *above_since_[ax] >= kConfirmWindows)) {
-      scale_[ax] = 1.0 / std::clamp(e->gain, 1.0, kGainMax);
-      if (!was && scale_[ax] < 1.0) engaged_ = static_cast<StickAxis>(ax);
+    if (was || (a.above_since && a.windows - *a.above_since >= kConfirmWindows)) {
+      a.scale = 1.0 / std::clamp(e->gain, 1.0, kGainMax);
+      if (!was && a.scale < 1.0) engaged_ = static_cast<StickAxis>(ax);
     }
-    e->scale = scale_[ax];
-    estimates_[ax] = e;
+    e->scale = a.scale;
+    a.estimate = e;
   }
 }
 
 std::optional<AxisResponse> StickResponse::fit(int ax) const {
-  if (windows_[ax] < kMinWindows) return std::nullopt;
+  const Axis& a = axes_[ax];
+  if (a.windows < kMinWindows) return std::nullopt;
   std::optional<AxisResponse> best;
   double best_resid = 0.0;
-  for (int j = 0; j < kDelay; ++j) {
-    for (int k = 0; k < kTau; ++k) {
-      const Sums& s = sums_[ax][trial(j, k)];
+  for (int j = 0; j < kStickTrialDelays; ++j) {
+    for (int k = 0; k < kStickTrialLags; ++k) {
+      const Sums& s = a.sums[trial(j, k)];
       if (s.cc <= 0.0) continue;
       const double gain = s.dc / s.cc;
       const double resid = std::max(0.0, s.dd - gain * s.dc);  // sum of (d - gain c)^2
       if (best && resid >= best_resid) continue;
       best_resid = resid;
-      const double var = resid / windows_[ax];
-      best = AxisResponse{gain, std::sqrt(kOverlap * var / s.cc), kTrialTau_s[k], kTrialDelay_s[j], windows_[ax], 1.0};
+      const double var = resid / a.windows;
+      best = AxisResponse{gain, std::sqrt(kOverlap * var / s.cc), kTrialTau_s[k], kTrialDelay_s[j], a.windows, 1.0};
     }
   }
   return best;
@@ -186,9 +189,9 @@ std::optional<AxisResponse> StickResponse::fit(int ax) const {
 
 RcConversion StickResponse::conversion() const {
   RcConversion c = nominal_;
-  c.rc_per_mps_horizontal *= scale_[0];
-  c.rc_per_mps_vertical *= scale_[1];
-  c.rc_per_radps_yaw *= scale_[2];
+  c.rc_per_mps_horizontal *= axes_[0].scale;
+  c.rc_per_mps_vertical *= axes_[1].scale;
+  c.rc_per_radps_yaw *= axes_[2].scale;
   return c;
 }
 

@@ -51,13 +51,13 @@ struct AxisResponse {
   double scale = 1.0;
 };
 
+/// The fit's trials: sixteen lags by five dead times (stick_response.cpp, kTrialTau_s and
+/// kTrialDelay_s).
+inline constexpr int kStickTrialLags = 16;
+inline constexpr int kStickTrialDelays = 5;
+
 class StickResponse {
  public:
-  /// The trial lags and dead times (stick_response.cpp, kTrialTau_s and kTrialDelay_s).
-  static constexpr int kTau = 16;
-  static constexpr int kDelay = 5;
-  static constexpr int kTrials = kTau * kDelay;
-
   explicit StickResponse(const RcConversion& nominal) : nominal_(nominal) {}
 
   /// The sticks sent at t_ns (held by the Tello until the next).
@@ -67,12 +67,12 @@ class StickResponse {
 
   /// The axis's estimate as of the last state record, once enough windows were driven
   /// (stick_response.cpp, kMinWindows).
-  const std::optional<AxisResponse>& estimate(StickAxis axis) const { return estimates_[static_cast<int>(axis)]; }
+  const std::optional<AxisResponse>& estimate(StickAxis axis) const { return axes_[static_cast<int>(axis)].estimate; }
   /// The factor the axis's sticks are scaled by: 1 / k once k - 2 se has exceeded what the
   /// certified envelope holds on the axis over kConfirmWindows windows (k capped;
   /// stick_response.cpp), else 1. Once engaged it stays engaged (the factor follows the
   /// estimate, at most 1).
-  double scale(StickAxis axis) const { return scale_[static_cast<int>(axis)]; }
+  double scale(StickAxis axis) const { return axes_[static_cast<int>(axis)].scale; }
   /// The conversion the sticks are sent with: the nominal one times each axis's scale.
   RcConversion conversion() const;
   /// Set when an axis's scaling engaged on the last on_state (cleared by the next).
@@ -82,8 +82,18 @@ class StickResponse {
   static constexpr int kAxes = 3;
   /// Components: x, y (horizontal pooled), z, yaw.
   static constexpr int kComp = 4;
+  static constexpr int kTrials = kStickTrialLags * kStickTrialDelays;
   struct Sums {
     double dc = 0.0, cc = 0.0, dd = 0.0;
+  };
+  /// One axis's sums over its windows, and what they gave.
+  struct Axis {
+    std::array<Sums, kTrials> sums{};
+    int windows = 0;
+    /// The windows at which k - 2 se last rose past the axis's bar (and has stayed past it).
+    std::optional<int> above_since;
+    double scale = 1.0;
+    std::optional<AxisResponse> estimate;  ///< fit() with the scale, each record
   };
   using Rates = std::array<double, kComp>;
   struct Sample {
@@ -107,12 +117,7 @@ class StickResponse {
   std::optional<TimeNs> last_sent_ns_;
   std::optional<StateRecord> last_state_;
   std::deque<Sample> samples_;  ///< at the state records of the last window
-  std::array<std::array<Sums, kTrials>, kAxes> sums_{};
-  std::array<int, kAxes> windows_{};
-  /// The windows at which k - 2 se last rose past the axis's bar (and has stayed past it).
-  std::array<std::optional<int>, kAxes> above_since_{};
-  std::array<double, kAxes> scale_{1.0, 1.0, 1.0};
-  std::array<std::optional<AxisResponse>, kAxes> estimates_;  ///< fit() with the scale, each record
+  std::array<Axis, kAxes> axes_{};
   std::optional<StickAxis> engaged_;
 };
 
