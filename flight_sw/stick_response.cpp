@@ -211,4 +211,22 @@ std::string stick_scaling_event(StickAxis axis, const StickResponse& response) {
   return text;
 }
 
+std::string stick_response_text(const std::array<std::optional<AxisResponse>, 3>& sticks) {
+  std::string text;
+  for (int a = 0; a < 3; ++a) {
+    if (a > 0) text += "; ";
+    text += stick_axis_name(static_cast<StickAxis>(a));
+    const std::optional<AxisResponse>& e = sticks[a];
+    if (!e) {
+      text += " not measured";
+      continue;
+    }
+    char part[160];
+    std::snprintf(part, sizeof part, " %.2f (+-%.2f, lag %.2f s after %.2f s, %d windows) sent at %.2f", e->gain,
+                  e->gain_se, e->tau_s, e->delay_s, e->windows, e->scale);
+    text += part;
+  }
+  return text;
+}
+
 }  // namespace shelfcross::flight_sw

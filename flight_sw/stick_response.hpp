@@ -124,4 +124,9 @@ class StickResponse {
 /// The event that says an axis's scaling engaged: the gain, its lag and the scale.
 std::string stick_scaling_event(StickAxis axis, const StickResponse& response);
 
+/// What was measured of each axis (Telemetry's control.sticks), for a flight's summary:
+/// "horizontal 1.03 (+-0.02, lag 0.40 s after 0.05 s, 312 windows) sent at 1.00; vertical
+/// ...; yaw not measured".
+std::string stick_response_text(const std::array<std::optional<AxisResponse>, 3>& sticks);
+
 }  // namespace shelfcross::flight_sw

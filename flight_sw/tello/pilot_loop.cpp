@@ -6,6 +6,7 @@
 #include <sstream>
 #include <variant>
 
+#include "flight_sw/stick_response.hpp"
 #include "flight_sw/tello/drone_watch.hpp"
 #include "flight_sw/tello/pilot_log.hpp"
 #include "flight_sw/tello/stick_program.hpp"
@@ -357,7 +358,8 @@ class PilotLoop::Impl {
                             {"fsw_wrong_level_poses", tm.tracking.wrong_level_poses},
                             {"fsw_level_unsure_poses", tm.tracking.level_unsure_poses},
                             {"fsw_stale_replies", tm.link.stale_replies},
-                            {"fsw_bad_frames", tm.link.bad_frames}});
+                            {"fsw_bad_frames", tm.link.bad_frames},
+                            {"fsw_sticks", flight_sw::stick_response_text(tm.control.sticks)}});
     std::ostringstream summary;
     summary << flight_sw::outcome_name(r.outcome) << (r.reason.empty() ? "" : ": ") << r.reason
             << "\n  driver: " << driver_counters << "\n  video: " << video_counters
@@ -365,7 +367,9 @@ class PilotLoop::Impl {
             << " band_decided_frames=" << tm.link.band_decided_frames << " unflown_frames=" << tm.link.unflown_frames
             << " hidden_target_pictures=" << tm.tracking.hidden_target_pictures
             << " rejected_poses=" << tm.tracking.rejected_poses << " wrong_level_poses=" << tm.tracking.wrong_level_poses
-            << " level_unsure_poses=" << tm.tracking.level_unsure_poses;
+            << " level_unsure_poses=" << tm.tracking.level_unsure_poses
+            << "\n  the Tello's answer to its sticks, times nominal: "
+            << flight_sw::stick_response_text(tm.control.sticks);
     return summary.str();
   }
 
