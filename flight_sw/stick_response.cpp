@@ -37,8 +37,8 @@ constexpr double kGainMax = 3.0;
 constexpr int kMinWindows = 30;
 /// ... and its scaling engages once the bar has held over this many more: the first windows
 /// come from one or two manoeuvres, more alike than the overlap's inflation allows for (a
-/// horizontal estimate read past 1.5 on its first windows of a Tello drawn at 1.24, then fell
-/// back to it), so the bar must hold while another second of driving comes in.
+/// horizontal estimate read past 1.5 on its first windows of a Tello drawn at 1.17, then fell
+/// back to 1.24), so the bar must hold while another second of driving comes in.
 constexpr int kConfirmWindows = 10;
 constexpr std::array<double, 3> kMinTravel{0.05, 0.03, 0.05};
 
