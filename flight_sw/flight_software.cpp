@@ -51,7 +51,7 @@ std::vector<SdkCommand> FlightSoftware::step(const Input& input) {
           facts_.on_state(m);
           sticks_.on_state(m);
           const StickResponse& response = sticks_.response();
-          for (int a = 0; a < 3; ++a) facts_.telemetry.control.sticks[a] = response.estimate(static_cast<StickAxis>(a));
+          facts_.telemetry.control.sticks = response.estimates();
           if (const std::optional<StickAxis> axis = response.engaged()) {
             facts_.telemetry.event = stick_scaling_event(*axis, response);
           }

@@ -45,9 +45,9 @@ constexpr std::array<double, 3> kMinTravel{0.05, 0.03, 0.05};
 /// Windows of the same axis overlap: one ends at each 10 Hz state record and spans kWindow_s,
 /// so about this many neighbours share each one's errors (the standard error's inflation).
 constexpr double kOverlap = 10.0;
-/// The trial (no dead time, 0.5 s lag) that says whether a window was driven enough.
-constexpr int kMiddleTrial = 4;
 constexpr int trial(int delay, int tau) { return delay * kStickTrialLags + tau; }
+/// The trial (no dead time, 0.5 s lag) that says whether a window was driven enough.
+constexpr int kMiddleTrial = trial(0, 4);
 }  // namespace
 
 void StickResponse::integrate(int delay, const Rates& u, TimeNs from_ns, TimeNs to_ns) {
@@ -129,12 +129,12 @@ void StickResponse::on_state(const StateRecord& s) {
   if (old.t_ns > from_ns) return;
   std::array<double, kComp> d{};
   for (int c = 0; c < kComp; ++c) d[c] = now_.moved[c] - old.moved[c];
-  std::array<double, kAxes> travel{};
+  std::array<double, kStickAxes> travel{};
   for (int c = 0; c < kComp; ++c) {
     const double cm = now_.cmd[kMiddleTrial][c] - old.cmd[kMiddleTrial][c];
     travel[axis_of(c)] += cm * cm;
   }
-  for (int ax = 0; ax < kAxes; ++ax) {
+  for (int ax = 0; ax < kStickAxes; ++ax) {
     if (std::sqrt(travel[ax]) < kMinTravel[ax]) continue;
     Axis& a = axes_[ax];
     ++a.windows;
@@ -148,7 +148,7 @@ void StickResponse::on_state(const StateRecord& s) {
       }
     }
   }
-  for (int ax = 0; ax < kAxes; ++ax) {
+  for (int ax = 0; ax < kStickAxes; ++ax) {
     std::optional<AxisResponse> e = fit(ax);
     if (!e) continue;
     Axis& a = axes_[ax];
@@ -187,6 +187,12 @@ std::optional<AxisResponse> StickResponse::fit(int ax) const {
   return best;
 }
 
+StickEstimates StickResponse::estimates() const {
+  StickEstimates all;
+  for (int a = 0; a < kStickAxes; ++a) all[a] = axes_[a].estimate;
+  return all;
+}
+
 RcConversion StickResponse::conversion() const {
   RcConversion c = nominal_;
   c.rc_per_mps_horizontal *= axes_[0].scale;
@@ -211,9 +217,9 @@ std::string stick_scaling_event(StickAxis axis, const StickResponse& response) {
   return text;
 }
 
-std::string stick_response_text(const std::array<std::optional<AxisResponse>, 3>& sticks) {
+std::string stick_response_text(const StickEstimates& sticks) {
   std::string text;
-  for (int a = 0; a < 3; ++a) {
+  for (int a = 0; a < kStickAxes; ++a) {
     if (a > 0) text += "; ";
     text += stick_axis_name(static_cast<StickAxis>(a));
     const std::optional<AxisResponse>& e = sticks[a];

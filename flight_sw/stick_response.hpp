@@ -17,8 +17,8 @@
 // ending at each state record) and its residual are kept; the trial with the least residual
 // gives the estimate. The dead time matters because the loops close through the vehicle: the
 // heading law's stick shrinks as the heading closes in, so a response to an older (larger)
-// stick, fitted without its dead time, reads as a stronger gain (a 0.1 s dead time on a
-// 0.3 s yaw lag read 6 to 9 % high). D: the state's heading-frame velocities summed over the
+// stick, fitted without its dead time, reads as a stronger gain (a Tello at 1.2 with 0.1 s of
+// dead time and a 0.3 s yaw lag, flown by the heading law, read 1.27). D: the state's heading-frame velocities summed over the
 // records (0.1 m/s steps), the height's change (1 cm steps), the yaw's change (1 degree steps);
 // W = 1 s, long against those steps (0.05 m, 0.01 m, 0.017 rad of the few tenths a window
 // moves). Only windows during which rc datagrams went out throughout count: during take-off
@@ -27,6 +27,7 @@
 #include <deque>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "flight_sw/config.hpp"
 #include "flight_sw/control.hpp"
@@ -35,6 +36,7 @@
 namespace shelfcross::flight_sw {
 
 enum class StickAxis { Horizontal = 0, Vertical = 1, Yaw = 2 };
+inline constexpr int kStickAxes = 3;
 
 /// "horizontal", "vertical", "yaw": the axis's name in events and stored metrics.
 const char* stick_axis_name(StickAxis axis);
@@ -50,6 +52,9 @@ struct AxisResponse {
   int windows = 0;
   double scale = 1.0;
 };
+
+/// Each axis's estimate, per StickAxis; empty until measured.
+using StickEstimates = std::array<std::optional<AxisResponse>, kStickAxes>;
 
 /// The fit's trials: sixteen lags by five dead times (stick_response.cpp, kTrialTau_s and
 /// kTrialDelay_s).
@@ -68,6 +73,8 @@ class StickResponse {
   /// The axis's estimate as of the last state record, once enough windows were driven
   /// (stick_response.cpp, kMinWindows).
   const std::optional<AxisResponse>& estimate(StickAxis axis) const { return axes_[static_cast<int>(axis)].estimate; }
+  /// Every axis's estimate.
+  StickEstimates estimates() const;
   /// The factor the axis's sticks are scaled by: 1 / k once k - 2 se has exceeded what the
   /// certified envelope holds on the axis over kConfirmWindows windows (k capped;
   /// stick_response.cpp), else 1. Once engaged it stays engaged (the factor follows the
@@ -79,7 +86,6 @@ class StickResponse {
   std::optional<StickAxis> engaged() const { return engaged_; }
 
  private:
-  static constexpr int kAxes = 3;
   /// Components: x, y (horizontal pooled), z, yaw.
   static constexpr int kComp = 4;
   static constexpr int kTrials = kStickTrialLags * kStickTrialDelays;
@@ -117,7 +123,7 @@ class StickResponse {
   std::optional<TimeNs> last_sent_ns_;
   std::optional<StateRecord> last_state_;
   std::deque<Sample> samples_;  ///< at the state records of the last window
-  std::array<Axis, kAxes> axes_{};
+  std::array<Axis, kStickAxes> axes_{};
   std::optional<StickAxis> engaged_;
 };
 
@@ -127,6 +133,6 @@ std::string stick_scaling_event(StickAxis axis, const StickResponse& response);
 /// What was measured of each axis (Telemetry's control.sticks), for a flight's summary:
 /// "horizontal 1.03 (+-0.02, lag 0.40 s after 0.05 s, 312 windows) sent at 1.00; vertical
 /// ...; yaw not measured".
-std::string stick_response_text(const std::array<std::optional<AxisResponse>, 3>& sticks);
+std::string stick_response_text(const StickEstimates& sticks);
 
 }  // namespace shelfcross::flight_sw

@@ -71,7 +71,7 @@ struct ControlTelemetry {
   int crossings_backed_out = 0;  ///< crossings stopped by the in-crossing watch before the cell
   /// The Tello's measured answer to its sticks per StickAxis, once measured, with the scale
   /// each axis's sticks are sent at (stick_response.hpp).
-  std::array<std::optional<AxisResponse>, 3> sticks;
+  StickEstimates sticks;
   VelocityCommand velocity;    ///< last commanded
   RcSticks rc;                 ///< last sent
 };

@@ -161,7 +161,7 @@ TEST(StickResponse, ADeadTimeInAClosedLoopDoesNotReadAsAStrongerGain) {
 }
 
 TEST(StickResponse, TheSummaryNamesWhatWasMeasuredAndWhatWasNot) {
-  std::array<std::optional<AxisResponse>, 3> sticks;
+  StickEstimates sticks;
   sticks[1] = AxisResponse{2.125, 0.03125, 1.2, 0.05, 215, 0.5};
   EXPECT_EQ(stick_response_text(sticks),
             "horizontal not measured; vertical 2.12 (+-0.03, lag 1.20 s after 0.05 s, 215 windows) sent at 0.50; "

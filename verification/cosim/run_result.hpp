@@ -84,7 +84,7 @@ struct RunMetrics {
   /// The sticks' measured answer by the end of the run and the scale they were sent at, per
   /// flight_sw::StickAxis (flight_sw/stick_response.hpp); empty where the run gave too little
   /// to measure.
-  std::array<std::optional<flight_sw::AxisResponse>, 3> sticks;
+  flight_sw::StickEstimates sticks;
   LinkMetrics link;
 };
 
