@@ -8,6 +8,11 @@ namespace {
 // After a refused `land`: how long to watch the state height before asking again (the
 // tello_pilot's own landing asks every 0.5 s too).
 constexpr double kLandRefusedWait_s = 0.5;
+// After every `takeoff` was refused: how long to watch the state height for a takeoff that is
+// under way before saying the drone stayed on the ground. A Tello idles its motors about 1 s
+// and climbs at about 0.45 m/s, so it passes airborne_height_m (0.3 m) about 1.7 s after the
+// `takeoff` it took; the refusals come within 0.5 s of that first send.
+constexpr double kTakeoffShowsWithin_s = 3.0;
 }  // namespace
 
 void CommandPhases::on_reply(const SdkReply& reply, MissionFacts& facts, Mission& mission) {
@@ -42,7 +47,13 @@ void CommandPhases::on_completion(const MissionCommands::Completion& c, MissionF
     if (c.ok || airborne_anyway) {
       mission.enter(Phase::FindShelf, c.ok ? "airborne" : "airborne (takeoff reply lost)");
     } else if (!retried(config_.timeouts.takeoff_reply_s)) {
-      abort_on_ground("takeoff failed: " + (c.timed_out ? std::string("no reply") : c.reply), mission);
+      if (c.timed_out) return abort_on_ground("takeoff failed: no reply", mission);
+      // Every attempt refused. A Tello refuses `takeoff` while it is taking off, so a
+      // duplicated datagram that started the takeoff has its `error` taken for this one's
+      // reply and every retry refused too, while the drone climbs. Watch the state height
+      // before saying the drone stayed on the ground (supervise).
+      takeoff_refused_ = TakeoffRefused{c.reply, facts.now_ns};
+      facts.telemetry.event = "'takeoff' refused (" + c.reply + "): watching the state height for a takeoff under way";
     }
   } else if (c.command == "land") {
     // The `ok` comes once the drone is down; if it was lost, a repeated `land` finds the drone
@@ -83,6 +94,19 @@ void CommandPhases::supervise(const MissionFacts& facts, Mission& mission) {
         abort_on_ground("no video after streamon", mission);
       }
       return;
+    case Phase::TakeOff: {
+      // After every `takeoff` was refused (on_completion): up and vertically still on a fresh
+      // state record, the takeoff that was under way has ended; still low after
+      // kTakeoffShowsWithin_s, none was. Up but still climbing, wait on (a climb ends).
+      if (!takeoff_refused_) return;
+      const bool up = facts.state && facts.state->height_m > config_.mission.airborne_height_m;
+      if (up && facts.state_fresh() && std::abs(facts.state->vz_H_mps) <= kVerticallyStill_mps) {
+        mission.enter(Phase::FindShelf, "airborne (every `takeoff` refused, but the state height says up: a takeoff was under way)");
+      } else if (!up && ns_to_seconds(facts.now_ns - takeoff_refused_->since_ns) > kTakeoffShowsWithin_s) {
+        abort_on_ground("takeoff failed: " + takeoff_refused_->reply, mission);
+      }
+      return;
+    }
     case Phase::Land:
       // Once `land` went out: down by a fresh state record (low and vertically still: a
       // landing drone passes airborne_height_m still descending). After a refused `land`

@@ -4,9 +4,11 @@
 // Land ("land"), and the mission's result. Each command's reply, or its loss, is judged here
 // (MissionCommands keeps the SDK's rules, the retries and the re-asks): a lost `takeoff` reply
 // with the state height airborne is a success, a lost `land` `ok` with it down too, a `land`
-// refused in the air is asked again after a wait; the transition it calls for is taken through
+// refused in the air is asked again after a wait, a `takeoff` refused on every attempt ends on
+// the ground only once the state height shows no takeoff under way; the transition it calls for is taken through
 // the mission (mission.hpp).
 
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -43,8 +45,10 @@ class CommandPhases {
   /// battery is below mission.takeoff_min_battery_pct (then the mission ends on the ground).
   void take_off_if_ready(const MissionFacts& facts, Mission& mission);
   /// The timers of the phases on the ground and of Land (call in every phase not airborne):
-  /// no video timeouts.video_start_s after streamon ends the mission on the ground; in Land,
-  /// after a refused `land`, a fresh state record low and vertically still says down.
+  /// no video timeouts.video_start_s after streamon ends the mission on the ground; in
+  /// TakeOff, after every `takeoff` was refused, a fresh state record up and vertically still
+  /// says airborne, and the height still low after a wait says on the ground; in Land, after
+  /// a refused `land`, a fresh state record low and vertically still says down.
   void supervise(const MissionFacts& facts, Mission& mission);
   /// The mission lands: once down it ends in `outcome`, `reason` the result's reason.
   void landing(Outcome outcome, const std::string& reason);
@@ -59,10 +63,16 @@ class CommandPhases {
   /// Ends the mission on the ground (Done), aborted with `reason`.
   void abort_on_ground(const std::string& reason, Mission& mission);
 
+  struct TakeoffRefused {  ///< every `takeoff` refused: the last refusal, and when it came
+    std::string reply;
+    TimeNs since_ns = 0;
+  };
+
   const FlightConfig& config_;
   MissionCommands commands_;  ///< the non-rc commands, their retries and re-asks
   MissionResult result_;
   Outcome pending_outcome_ = Outcome::Aborted;  ///< the outcome a Land phase ends in
+  std::optional<TakeoffRefused> takeoff_refused_;  ///< set: TakeOff watches the state height
 };
 
 }  // namespace shelfcross::flight_sw

@@ -30,6 +30,11 @@ struct Options {
   std::function<bool(TimeNs)> frames_on = [](TimeNs) { return true; };
   std::function<int(TimeNs)> battery = [](TimeNs) { return 90; };
   std::vector<std::string> takeoff_replies = {"ok"};  ///< per attempt; "" = no reply
+  /// The first `takeoff` arrives twice (a duplicated datagram): the drone takes the first copy
+  /// (motors idle 1 s, then up at 0.45 m/s to 1 m) and refuses the second at once with
+  /// "error", the reply the flight software hears; every later `takeoff` is refused too. (The
+  /// first copy's "ok", once up, is left out: it would be drained as stale.)
+  bool takeoff_duplicated = false;
   /// Per attempt of `land`: the drone lands on the first, and replies this ("" = the reply is
   /// lost); later attempts find it on the ground and get "error", as from a Tello.
   std::string land_reply = "ok";
@@ -273,6 +278,9 @@ class Harness {
       } else if (c.text == "streamon") {
         replies_.push_back({t_ + 20 * kMs, "ok"});
         video_on_ = true;
+      } else if (c.text == "takeoff" && o_.takeoff_duplicated) {
+        if (!climb_from_ns_) climb_from_ns_ = t_ + 1000 * kMs;
+        replies_.push_back({t_ + 30 * kMs, "error"});
       } else if (c.text == "takeoff") {
         const size_t k = std::min(takeoff_attempt_++, o_.takeoff_replies.size() - 1);
         const std::string& reply = o_.takeoff_replies[k];
@@ -311,6 +319,11 @@ class Harness {
       if (landing_) {  // down at 1 m/s
         p_WB_.z() = std::max(0.0, p_WB_.z() - 1.0 * dt);
         vz_ = p_WB_.z() > 0.0 ? -1.0 : 0.0;
+      }
+      if (climb_from_ns_ && !airborne_ && t_ >= *climb_from_ns_) {  // Options::takeoff_duplicated
+        p_WB_.z() = std::min(1.0, p_WB_.z() + 0.45 * dt);
+        vz_ = p_WB_.z() < 1.0 ? 0.45 : 0.0;
+        airborne_ = p_WB_.z() >= 1.0;
       }
       if (airborne_ && !landing_) {
         const Eigen::Vector2d v_cmd(rc_.b / config_.rc.rc_per_mps_horizontal,
@@ -354,6 +367,7 @@ class Harness {
   double yaw_ = 0.0;
   bool video_on_ = false, airborne_ = false, landing_ = false;
   size_t takeoff_attempt_ = 0;
+  std::optional<TimeNs> climb_from_ns_;  ///< Options::takeoff_duplicated: the climb starts
   RcSticks rc_;
   std::deque<SdkReply> replies_;
   std::deque<CameraFrame> in_flight_;  ///< frames taken, not yet handed over
@@ -423,6 +437,32 @@ TEST(FlightSoftware, TakeoffRefusedIsRetriedThenGivenUpOnTheGround) {
   EXPECT_EQ(h.fsw().result().outcome, Outcome::Aborted);
   EXPECT_FALSE(h.fsw().result().landed);
   EXPECT_NE(h.fsw().result().reason.find("takeoff failed"), std::string::npos);
+  // ... once the state height has stayed low 3 s after the last refusal (no takeoff under way).
+  EXPECT_GT(h.now(), h.sent("takeoff").back() + 3 * kNsPerSecond);
+}
+
+// Every `takeoff` refused while the drone climbs (a duplicated datagram took off): the flight
+// software watches the state height instead of saying it stayed on the ground, and flies on
+// once the climb has ended, not in it.
+TEST(FlightSoftware, TakeoffRefusedWhileTakingOffIsSeenInTheStateHeight) {
+  Options o;
+  o.takeoff_duplicated = true;
+  o.blank_frames = true;
+  o.start_W_m.z() = 0.0;
+  Harness h(o);
+  h.run(10.0);
+  const auto cmds = h.non_rc();
+  EXPECT_EQ(std::count(cmds.begin(), cmds.end(), "takeoff"), 4);  // 1 + 3 retries, all refused
+  EXPECT_EQ(std::count(cmds.begin(), cmds.end(), "land"), 0);
+  EXPECT_FALSE(h.fsw().finished());
+  EXPECT_EQ(h.fsw().phase(), Phase::FindShelf);
+  // Up at 1 m only 1 s + 1 m / 0.45 m/s after the first `takeoff`: no phase of flight before.
+  const TimeNs up_ns = h.sent("takeoff").front() + 1000 * kMs + seconds_to_ns(1.0 / 0.45);
+  for (const FrameStep& st : h.frame_steps()) {
+    if (st.t_ns < up_ns) {
+      EXPECT_EQ(st.after, Phase::TakeOff) << "at " << ns_to_seconds(st.t_ns) << " s";
+    }
+  }
 }
 
 TEST(FlightSoftware, TakeoffRetriedAfterAnErrorThenFlies) {
