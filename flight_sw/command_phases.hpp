@@ -5,8 +5,8 @@
 // (MissionCommands keeps the SDK's rules, the retries and the re-asks): a lost `takeoff` reply
 // with the state height airborne is a success, a lost `land` `ok` with it down too, a `land`
 // refused in the air is asked again after a wait, a `takeoff` refused on every attempt ends on
-// the ground only once the state height shows no takeoff under way; the transition it calls for is taken through
-// the mission (mission.hpp).
+// the ground only once the state height shows no takeoff under way; the transition it calls
+// for is taken through the mission (mission.hpp).
 
 #include <optional>
 #include <string>
