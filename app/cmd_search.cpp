@@ -256,21 +256,23 @@ const CommandRegistration kSearch{
                   << " of " << o->budget << " stored; " << summary["failures"].size() << " " << o->failure_class
                   << " failures";
         if (!summary["first_failure_run"].is_null()) std::cout << ", the first at run " << summary["first_failure_run"];
-        std::cout << "\nestimate of P(" << o->failure_class << " failure): " << e["p_hat"].get<double>();
-        if (e["failures"].get<std::int64_t>() > 0) {
-          std::cout << ", 95 % interval [" << e["lower"].get<double>() << ", " << e["upper"].get<double>() << "]";
-        }
-        std::cout << " (from " << e["runs"] << " runs of round " << e["round"] << ")";
-        if (!e["doubts"].get<std::string>().empty()) {
-          std::cout << "; not to be trusted: " << e["doubts"].get<std::string>();
-        }
-        const nlohmann::json& m = e["every_round"];
-        std::cout << "\n  from every round (balance heuristic): " << m["p_hat"].get<double>();
-        if (m["failures"].get<std::int64_t>() > 0) {
-          std::cout << ", 95 % interval [" << m["lower"].get<double>() << ", " << m["upper"].get<double>() << "]";
-        }
-        std::cout << " (" << m["runs"] << " runs)";
-        if (!m["doubts"].get<std::string>().empty()) std::cout << "; not to be trusted: " << m["doubts"].get<std::string>();
+        // One estimate: its interval, or with no failure sampled the zero-failure bound (which
+        // holds whatever the weights; their doubts concern an estimate only).
+        const auto print_estimate = [](const nlohmann::json& x) {
+          if (x["failures"].get<std::int64_t>() == 0) {
+            std::cout << "none sampled: p <= " << x["zero_failure_upper_95"].get<double>()
+                      << " (one-sided 95 %, zero-failure bound)";
+            return;
+          }
+          std::cout << x["p_hat"].get<double>() << ", 95 % interval [" << x["lower"].get<double>() << ", "
+                    << x["upper"].get<double>() << "]";
+          if (!x["doubts"].get<std::string>().empty()) std::cout << "; not to be trusted: " << x["doubts"].get<std::string>();
+        };
+        std::cout << "\nestimate of P(" << o->failure_class << " failure) from the " << e["runs"] << " runs of round "
+                  << e["round"] << ": ";
+        print_estimate(e);
+        std::cout << "\n  from every round (balance heuristic, " << e["every_round"]["runs"] << " runs): ";
+        print_estimate(e["every_round"]);
         std::cout << "\nwrote " << o->out
                   << "/results.sqlite, report.md, search_summary.json, margins.csv\n";
         if (!r.complete) {
