@@ -266,7 +266,8 @@ const CommandRegistration kSearch{
           }
           std::cout << x["p_hat"].get<double>() << ", 95 % interval [" << x["lower"].get<double>() << ", "
                     << x["upper"].get<double>() << "]";
-          if (!x["doubts"].get<std::string>().empty()) std::cout << "; not to be trusted: " << x["doubts"].get<std::string>();
+          const std::string doubts = x["doubts"].get<std::string>();
+          if (!doubts.empty()) std::cout << "; not to be trusted: " << doubts;
         };
         std::cout << "\nestimate of P(" << o->failure_class << " failure) from the " << e["runs"] << " runs of round "
                   << e["round"] << ": ";

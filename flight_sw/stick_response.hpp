@@ -19,9 +19,9 @@
 // heading law's stick shrinks as the heading closes in, so a response to an older (larger)
 // stick, fitted without its dead time, reads as a stronger gain (a Tello at 1.2 with 0.1 s of
 // dead time and a 0.3 s yaw lag, flown by the heading law, read 1.27). D: the state's
-// heading-frame velocities summed over the records (0.1 m/s steps), the height's change (1 cm steps), the yaw's change (1 degree steps);
-// W = 1 s, long against those steps (0.05 m, 0.01 m, 0.017 rad of the few tenths a window
-// moves). Only windows during which rc datagrams went out throughout count: during take-off
+// heading-frame velocities summed over the records (0.1 m/s steps), the height's change (1 cm
+// steps), the yaw's change (1 degree steps); W = 1 s, long against those steps (0.05 m,
+// 0.01 m, 0.017 rad of the few tenths a window moves). Only windows during which rc datagrams went out throughout count: during take-off
 // and landing the Tello moves on its own.
 #include <array>
 #include <deque>
