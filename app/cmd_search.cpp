@@ -151,137 +151,145 @@ std::optional<verification::SearchRunResult> run_under_mpi(std::shared_ptr<const
 }
 #endif
 
+// The command's options, into `o`.
+void add_search_options(CLI::App& sub, SearchOptions& o) {
+  sub.add_option("--scenario", o.scenario, "scenario file (its dispersions are the nominal distributions)")
+      ->capture_default_str();
+  sub.add_option("--budget", o.budget, "runs in all")->capture_default_str()->check(CLI::Range(1, 10000000));
+  sub.add_option("--seed", o.seed, "search seed; run k's seed is a fixed hash of (seed, k), as in a campaign")
+      ->capture_default_str();
+  sub.add_option("--jobs", o.jobs, "worker processes (per worker rank under mpirun)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1024));
+  sub.add_option("--out", o.out, "output folder: results.sqlite, report.md, search_summary.json, margins.csv, PNGs")
+      ->capture_default_str();
+  sub.add_option("--class", o.failure_class, "failure class searched for: contact, crossing or mission")
+      ->capture_default_str();
+  sub.add_option("--round-runs", o.round_runs, "runs per adaptation round")
+      ->capture_default_str()
+      ->check(CLI::Range(2, 1000000));
+  sub.add_option("--estimation-runs", o.estimation_runs,
+                 "runs kept for the final proposal's estimate (default: half the budget)")
+      ->check(CLI::Range(1, 10000000));
+  sub.add_option("--elite-fraction", o.elite_fraction, "rho: the fraction of a round kept as elites")
+      ->capture_default_str()
+      ->check(CLI::Range(0.01, 0.5));
+  sub.add_option("--min-elites", o.min_elites, "at least this many elites per round, whatever rho says")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000000));
+  sub.add_option("--smoothing", o.smoothing,
+                 "alpha: the next proposal's parameters are alpha x the elites' fit + (1 - alpha) x the current")
+      ->capture_default_str()
+      ->check(CLI::Range(0.01, 1.0));
+  sub.add_option("--min-stddev-fraction", o.min_stddev_fraction,
+                 "a proposal's stddev floor on a bounded support, times the nominal's scale (stddev, or "
+                 "width / sqrt 12 when smaller)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.01, 10.0));
+  sub.add_option("--nominal-share", o.nominal_share,
+                 "the nominal's share in every proposal (defensive mixture; bounds each parameter's ratio by 1/share)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.01, 1.0));
+  sub.add_option("--parameters", o.parameters,
+                 "the dispersed parameters the search adapts (comma-separated; default: all); the others keep "
+                 "their nominal distribution")
+      ->delimiter(',');
+  sub.add_option("--campaign", o.campaign,
+                 "a campaign folder of the same scenario: its plain Monte Carlo estimates go beside the search's");
+  sub.add_option("--rank-timeout", o.rank_timeout_s,
+                 "under `mpirun --enable-recovery`: seconds of silence after which a worker rank counts as lost "
+                 "(the search then stops, to be resumed)")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 86400.0));
+  add_worker_limit_options(sub, o.limits);
+}
+
+// The search and its estimates, printed; 130 when interrupted (resumable).
+int run_search_command(const SearchOptions& o) {
+  const auto target = verification::parse_failure_class(o.failure_class);
+  if (!target) throw UsageError("--class '" + o.failure_class + "': expected contact, crossing or mission");
+  verification::SearchSettings settings;
+  settings.seed = o.seed;
+  settings.budget = o.budget;
+  settings.target = *target;
+  settings.ce.round_runs = o.round_runs;
+  settings.ce.elite_fraction = o.elite_fraction;
+  settings.ce.min_elites = o.min_elites;
+  settings.ce.smoothing = o.smoothing;
+  settings.ce.min_stddev_fraction = o.min_stddev_fraction;
+  settings.ce.nominal_share = o.nominal_share;
+  settings.ce.estimation_runs = o.estimation_runs < 0 ? o.budget / 2 : o.estimation_runs;
+  if (settings.ce.estimation_runs > o.budget) {
+    throw UsageError("--estimation-runs " + std::to_string(settings.ce.estimation_runs) + " exceeds --budget " +
+                     std::to_string(o.budget));
+  }
+  std::optional<std::filesystem::path> campaign;
+  if (!o.campaign.empty()) {
+    campaign = o.campaign;
+    if (!std::filesystem::exists(*campaign / "results.sqlite")) {
+      throw UsageError("--campaign " + o.campaign + ": no results.sqlite there");
+    }
+  }
+  auto nominal = std::make_shared<const verification::Scenario>(verification::load_scenario(o.scenario));
+  if (nominal->dispersions.empty()) throw UsageError(o.scenario + ": no dispersions to search over");
+  for (const std::string& name : o.parameters) {
+    if (!nominal->dispersions.count(name)) {
+      throw UsageError("--parameters: '" + name + "' is not dispersed in " + o.scenario);
+    }
+    settings.ce.adapted.insert(name);
+  }
+  std::signal(SIGINT, request_search_stop);
+  std::signal(SIGTERM, request_search_stop);
+  std::optional<verification::SearchRunResult> ran;
+#ifdef SHELFCROSS_WITH_MPI
+  if (distributed::launched_by_mpi()) {
+    ran = run_under_mpi(nominal, settings, o);
+    if (!ran) return 0;  // a worker rank: rank 0 reports
+  }
+#endif
+  if (!ran) ran = run_in_this_process(nominal, settings, o);
+  const verification::SearchRunResult& r = *ran;
+  const nlohmann::json summary = verification::write_search_report(o.out, campaign);
+  const nlohmann::json& e = summary["estimates"][o.failure_class];
+  std::cout << "search " << nominal->name << ": " << r.committed << " runs this time, " << summary["runs"]
+            << " of " << o.budget << " stored; " << summary["failures"].size() << " " << o.failure_class
+            << " failures";
+  if (!summary["first_failure_run"].is_null()) std::cout << ", the first at run " << summary["first_failure_run"];
+  // One estimate: its interval, or with no failure sampled the zero-failure bound (which
+  // holds whatever the weights; their doubts concern an estimate only).
+  const auto print_estimate = [](const nlohmann::json& x) {
+    if (x["failures"].get<std::int64_t>() == 0) {
+      std::cout << "none sampled: p <= " << x["zero_failure_upper_95"].get<double>()
+                << " (one-sided 95 %, zero-failure bound)";
+      return;
+    }
+    std::cout << x["p_hat"].get<double>() << ", 95 % interval [" << x["lower"].get<double>() << ", "
+              << x["upper"].get<double>() << "]";
+    const std::string doubts = x["doubts"].get<std::string>();
+    if (!doubts.empty()) std::cout << "; not to be trusted: " << doubts;
+  };
+  std::cout << "\nestimate of P(" << o.failure_class << " failure) from the " << e["runs"] << " runs of round "
+            << e["round"] << ": ";
+  print_estimate(e);
+  std::cout << "\n  from every round (balance heuristic, " << e["every_round"]["runs"] << " runs): ";
+  print_estimate(e["every_round"]);
+  std::cout << "\nwrote " << o.out
+            << "/results.sqlite, report.md, search_summary.json, margins.csv\n";
+  if (!r.complete) {
+    std::cout << "interrupted: run the same command again to resume\n";
+    return 130;
+  }
+  return 0;
+}
+
 const CommandRegistration kSearch{
     "search",
     "Search the scenario's dispersions for failures (cross-entropy) and estimate their probability by importance "
     "sampling (resumable)",
     [](CLI::App& sub) {
       auto o = std::make_shared<SearchOptions>();
-      sub.add_option("--scenario", o->scenario, "scenario file (its dispersions are the nominal distributions)")
-          ->capture_default_str();
-      sub.add_option("--budget", o->budget, "runs in all")->capture_default_str()->check(CLI::Range(1, 10000000));
-      sub.add_option("--seed", o->seed, "search seed; run k's seed is a fixed hash of (seed, k), as in a campaign")
-          ->capture_default_str();
-      sub.add_option("--jobs", o->jobs, "worker processes (per worker rank under mpirun)")
-          ->capture_default_str()
-          ->check(CLI::Range(1, 1024));
-      sub.add_option("--out", o->out, "output folder: results.sqlite, report.md, search_summary.json, margins.csv, PNGs")
-          ->capture_default_str();
-      sub.add_option("--class", o->failure_class, "failure class searched for: contact, crossing or mission")
-          ->capture_default_str();
-      sub.add_option("--round-runs", o->round_runs, "runs per adaptation round")
-          ->capture_default_str()
-          ->check(CLI::Range(2, 1000000));
-      sub.add_option("--estimation-runs", o->estimation_runs,
-                     "runs kept for the final proposal's estimate (default: half the budget)")
-          ->check(CLI::Range(1, 10000000));
-      sub.add_option("--elite-fraction", o->elite_fraction, "rho: the fraction of a round kept as elites")
-          ->capture_default_str()
-          ->check(CLI::Range(0.01, 0.5));
-      sub.add_option("--min-elites", o->min_elites, "at least this many elites per round, whatever rho says")
-          ->capture_default_str()
-          ->check(CLI::Range(1, 1000000));
-      sub.add_option("--smoothing", o->smoothing,
-                     "alpha: the next proposal's parameters are alpha x the elites' fit + (1 - alpha) x the current")
-          ->capture_default_str()
-          ->check(CLI::Range(0.01, 1.0));
-      sub.add_option("--min-stddev-fraction", o->min_stddev_fraction,
-                     "a proposal's stddev floor on a bounded support, times the nominal's scale (stddev, or "
-                     "width / sqrt 12 when smaller)")
-          ->capture_default_str()
-          ->check(CLI::Range(0.01, 10.0));
-      sub.add_option("--nominal-share", o->nominal_share,
-                     "the nominal's share in every proposal (defensive mixture; bounds each parameter's ratio by 1/share)")
-          ->capture_default_str()
-          ->check(CLI::Range(0.01, 1.0));
-      sub.add_option("--parameters", o->parameters,
-                     "the dispersed parameters the search adapts (comma-separated; default: all); the others keep "
-                     "their nominal distribution")
-          ->delimiter(',');
-      sub.add_option("--campaign", o->campaign,
-                     "a campaign folder of the same scenario: its plain Monte Carlo estimates go beside the search's");
-      sub.add_option("--rank-timeout", o->rank_timeout_s,
-                     "under `mpirun --enable-recovery`: seconds of silence after which a worker rank counts as lost "
-                     "(the search then stops, to be resumed)")
-          ->capture_default_str()
-          ->check(CLI::Range(1.0, 86400.0));
-      add_worker_limit_options(sub, o->limits);
-      return [o]() -> int {
-        const auto target = verification::parse_failure_class(o->failure_class);
-        if (!target) throw UsageError("--class '" + o->failure_class + "': expected contact, crossing or mission");
-        verification::SearchSettings settings;
-        settings.seed = o->seed;
-        settings.budget = o->budget;
-        settings.target = *target;
-        settings.ce.round_runs = o->round_runs;
-        settings.ce.elite_fraction = o->elite_fraction;
-        settings.ce.min_elites = o->min_elites;
-        settings.ce.smoothing = o->smoothing;
-        settings.ce.min_stddev_fraction = o->min_stddev_fraction;
-        settings.ce.nominal_share = o->nominal_share;
-        settings.ce.estimation_runs = o->estimation_runs < 0 ? o->budget / 2 : o->estimation_runs;
-        if (settings.ce.estimation_runs > o->budget) {
-          throw UsageError("--estimation-runs " + std::to_string(settings.ce.estimation_runs) + " exceeds --budget " +
-                           std::to_string(o->budget));
-        }
-        std::optional<std::filesystem::path> campaign;
-        if (!o->campaign.empty()) {
-          campaign = o->campaign;
-          if (!std::filesystem::exists(*campaign / "results.sqlite")) {
-            throw UsageError("--campaign " + o->campaign + ": no results.sqlite there");
-          }
-        }
-        auto nominal = std::make_shared<const verification::Scenario>(verification::load_scenario(o->scenario));
-        if (nominal->dispersions.empty()) throw UsageError(o->scenario + ": no dispersions to search over");
-        for (const std::string& name : o->parameters) {
-          if (!nominal->dispersions.count(name)) {
-            throw UsageError("--parameters: '" + name + "' is not dispersed in " + o->scenario);
-          }
-          settings.ce.adapted.insert(name);
-        }
-        std::signal(SIGINT, request_search_stop);
-        std::signal(SIGTERM, request_search_stop);
-        std::optional<verification::SearchRunResult> ran;
-#ifdef SHELFCROSS_WITH_MPI
-        if (distributed::launched_by_mpi()) {
-          ran = run_under_mpi(nominal, settings, *o);
-          if (!ran) return 0;  // a worker rank: rank 0 reports
-        }
-#endif
-        if (!ran) ran = run_in_this_process(nominal, settings, *o);
-        const verification::SearchRunResult& r = *ran;
-        const nlohmann::json summary = verification::write_search_report(o->out, campaign);
-        const nlohmann::json& e = summary["estimates"][o->failure_class];
-        std::cout << "search " << nominal->name << ": " << r.committed << " runs this time, " << summary["runs"]
-                  << " of " << o->budget << " stored; " << summary["failures"].size() << " " << o->failure_class
-                  << " failures";
-        if (!summary["first_failure_run"].is_null()) std::cout << ", the first at run " << summary["first_failure_run"];
-        // One estimate: its interval, or with no failure sampled the zero-failure bound (which
-        // holds whatever the weights; their doubts concern an estimate only).
-        const auto print_estimate = [](const nlohmann::json& x) {
-          if (x["failures"].get<std::int64_t>() == 0) {
-            std::cout << "none sampled: p <= " << x["zero_failure_upper_95"].get<double>()
-                      << " (one-sided 95 %, zero-failure bound)";
-            return;
-          }
-          std::cout << x["p_hat"].get<double>() << ", 95 % interval [" << x["lower"].get<double>() << ", "
-                    << x["upper"].get<double>() << "]";
-          const std::string doubts = x["doubts"].get<std::string>();
-          if (!doubts.empty()) std::cout << "; not to be trusted: " << doubts;
-        };
-        std::cout << "\nestimate of P(" << o->failure_class << " failure) from the " << e["runs"] << " runs of round "
-                  << e["round"] << ": ";
-        print_estimate(e);
-        std::cout << "\n  from every round (balance heuristic, " << e["every_round"]["runs"] << " runs): ";
-        print_estimate(e["every_round"]);
-        std::cout << "\nwrote " << o->out
-                  << "/results.sqlite, report.md, search_summary.json, margins.csv\n";
-        if (!r.complete) {
-          std::cout << "interrupted: run the same command again to resume\n";
-          return 130;
-        }
-        return 0;
-      };
+      add_search_options(sub, *o);
+      return [o]() -> int { return run_search_command(*o); };
     }};
 
 }  // namespace

@@ -33,7 +33,7 @@
 #include <opencv2/tracking.hpp>
 #include <opencv2/tracking/tracking_legacy.hpp>
 
-#include "flight_sw/control.hpp"
+#include "flight_sw/control/control.hpp"
 #include "verification/cosim/cosim.hpp"
 #include "verification/frames/frame_set.hpp"
 

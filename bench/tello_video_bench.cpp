@@ -28,7 +28,7 @@
 #include <opencv2/core/utility.hpp>
 
 #include "flight_sw/config.hpp"
-#include "flight_sw/perception.hpp"
+#include "flight_sw/perception/shelf_view.hpp"
 #include "flight_sw/tello/clock.hpp"
 #include "flight_sw/tello/h264_decoder.hpp"
 #include "flight_sw/tello/video_receiver.hpp"

@@ -48,6 +48,7 @@
 
 #include <Eigen/Core>
 
+#include "sdk/command.hpp"
 #include "shelfcross/camera.hpp"
 
 namespace shelfcross::flight_sw {
@@ -81,7 +82,7 @@ struct HsvRange {
   int val_max = 255;
 };
 
-/// Two implementations of the same perception (perception.hpp). `fast` is flown; `reference`
+/// Two implementations of the same perception (perception/). `fast` is flown; `reference`
 /// is the straightforward full-frame composition of OpenCV calls it replaced (HSV conversion
 /// and connected components on every frame, Median Flow, ArUco over the whole image), kept as
 /// the oracle that tests and `shelfcross frames --check` compare the fast one against: both
@@ -180,9 +181,10 @@ struct RcConversion {
 };
 
 struct Timeouts {
-  double command_reply_s = 7.0;
-  double takeoff_reply_s = 20.0;
-  double land_reply_s = 10.0;
+  // The reply timeouts' defaults are the SDK's table (sdk::ReplyTimeouts).
+  double command_reply_s = sdk::ReplyTimeouts{}.default_s;
+  double takeoff_reply_s = sdk::ReplyTimeouts{}.takeoff_s;
+  double land_reply_s = sdk::ReplyTimeouts{}.land_s;
   int command_retries = 3;       ///< attempts after the first
   double command_gap_s = 0.1;    ///< between two non-rc commands
   double video_start_s = 10.0;   ///< first frame after streamon

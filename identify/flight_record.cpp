@@ -2,9 +2,11 @@
 
 #include <fstream>
 #include <sstream>
+#include <variant>
 
 #include <nlohmann/json.hpp>
 
+#include "sdk/command.hpp"
 #include "sdk/state_record.hpp"
 
 namespace shelfcross::identify {
@@ -23,18 +25,12 @@ std::string seconds_text(TimeNs t_ns) {
   return s.str();
 }
 
-// "rc a b c d" with four integers in -100..100, or nothing.
+// "rc a b c d" with four integers in -100..100 (sdk::parse's), or nothing.
 std::optional<std::array<int, 4>> parse_rc(const std::string& text) {
-  std::istringstream in(text);
-  std::string verb;
-  std::array<int, 4> s{};
-  if (!(in >> verb) || verb != "rc") return std::nullopt;
-  for (int& v : s) {
-    if (!(in >> v) || v < -100 || v > 100) return std::nullopt;
-  }
-  std::string rest;
-  if (in >> rest) return std::nullopt;
-  return s;
+  const auto parsed = sdk::parse(text);
+  const auto* c = std::get_if<sdk::Command>(&parsed);
+  if (!c || c->verb != sdk::Verb::rc) return std::nullopt;
+  return std::array<int, 4>{c->args[0], c->args[1], c->args[2], c->args[3]};
 }
 
 // Each stream the identification reads must be in time order: a log whose records go back in

@@ -1,6 +1,8 @@
 #!/usr/bin/env python3
 """The include graph of the project's own code, checked: no include cycle between components,
-and no include of bench/ from the shipped programs (app/, flight_sw/).
+no include against the order of the rooms of flight_sw/ and verification/, no include of
+plant/, render/ or verification/ from flight_sw/, and no include of bench/ from the shipped
+programs (app/, flight_sw/).
 
   python3 scripts/include_graph.py [--root DIR]
 
@@ -9,8 +11,13 @@ cosim.hpp` and `cosim.cpp` are the component `verification/cosim/cosim`); it inc
 when either of its files names the other's header in `#include "..."`. A cycle (a component that
 reaches itself through such includes: `a.cpp` including `b.hpp` while `b.cpp` includes `a.hpp`,
 say) is what makes two files impossible to read, test or move one at a time. Tests (test/ folders)
-and fuzz targets are leaves and are not counted. Exit 0 when the graph is clean, 1 with each
-cycle and each forbidden include printed.
+and fuzz targets are leaves and are not counted.
+
+The rooms (a folder's first level below flight_sw/ or verification/; files at flight_sw/'s root,
+its configuration and text, are its base room "") may include only the rooms their order puts
+below them (ROOMS; flight_sw/README.md and verification/README.md draw them): an include that
+runs back up, or a room the order does not name, is forbidden. Exit 0 when the graph is clean,
+1 with each cycle and each forbidden include printed.
 """
 import argparse
 import os
@@ -23,6 +30,50 @@ SOURCE_FOLDERS = ["include", "config", "sdk", "plant", "render", "flight_sw", "v
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
 # Folders whose code ships in a program and so must not include benchmark code.
 SHIPPED = ("app/", "flight_sw/")
+# Folders the flight software never includes (it flies a real Tello without them).
+NOT_FOR_FLIGHT = ("plant/", "render/", "verification/")
+
+
+def _below(order):
+    """{room: the rooms it may include} for a chain of rooms, each above the ones before it."""
+    return {room: set(order[:i]) for i, room in enumerate(order)}
+
+
+# Each house's rooms and what each may include besides itself.
+ROOMS = {
+    "flight_sw": _below(["", "perception", "navigation", "control", "guidance", "mission", "tello"]),
+    # statistics <- scenario <- world <- cosim <- campaign <- report, search;  cosim <- frames
+    "verification": {
+        **_below(["statistics", "scenario", "world", "cosim", "campaign"]),
+        "report": {"statistics", "scenario", "world", "cosim", "campaign"},
+        "search": {"statistics", "scenario", "world", "cosim", "campaign"},
+        "frames": {"statistics", "scenario", "world", "cosim"},
+    },
+}
+
+
+def room_of(rel):
+    """(house, room) of a path under flight_sw/ or verification/, else None."""
+    parts = rel.split("/")
+    if parts[0] not in ROOMS:
+        return None
+    return parts[0], (parts[1] if len(parts) > 2 else "")
+
+
+def room_violation(rel, target):
+    """Why `rel` may not include `target` (both paths from the root), or None."""
+    if rel.startswith("flight_sw/") and target.startswith(NOT_FOR_FLIGHT):
+        return f"{rel}: includes {target} (the flight software never includes {target.split('/')[0]}/)"
+    here, there = room_of(rel), room_of(target)
+    if not here or not there or here[0] != there[0]:
+        return None
+    house, room = here
+    rooms = ROOMS[house]
+    if room not in rooms:
+        return f"{rel}: {house}/{room}/ is a room outside {house}'s documented order"
+    if there[1] != room and there[1] not in rooms[room]:
+        return f"{rel}: includes {target} ({house}'s room order puts {there[1] or 'its base'} above {room or 'its base'})"
+    return None
 
 
 def components(root):
@@ -56,6 +107,9 @@ def include_edges(root, comps):
                             out.add(stem)
                     if rel.startswith(SHIPPED) and target.startswith("bench/"):
                         forbidden.append(f"{rel}: includes {target} (benchmark code in a shipped program)")
+                    why = room_violation(rel, target)
+                    if why:
+                        forbidden.append(why)
         edges[comp] = out
     return edges, forbidden
 

@@ -10,7 +10,8 @@ ctest --preset release -j "$(nproc)"
 # and UndefinedBehaviorSanitizer (the debug preset; the whole suite under it: docs/getting-started.md). Only
 # these: the debug build of the rest (render, verification, app) would not fit CI's time.
 cmake --preset debug
-cmake --build build/debug --target config_test sdk_test plant_test flight_sw_test tello_test
+cmake --build build/debug --target config_test sdk_test plant_test flight_base_test perception_test navigation_test \
+  control_test guidance_test mission_test tello_test
 ctest --preset debug -j "$(nproc)" -L '^(config|sdk|plant|flight_sw|tello)$'
 # The parsers under libFuzzer (fuzz/README.md): each target a fixed number of inputs from a
 # fixed seed on its corpus (about 25 s each), when clang and libFuzzer's runtime are there

@@ -5,8 +5,8 @@ function, class and file of each folder checked and every one over its limit.
 
   python3 scripts/size_limits.py [--strict] [--top N] [FOLDER ...]
 
-FOLDER defaults to flight_sw and verification (every sub-folder included; test/ folders are
-not counted). Exit 0 in report mode (the default); with --strict, exit 1 when anything is over
+FOLDER defaults to CHECKED, the folders held to the limits (every sub-folder included; test/
+folders are not counted; bench/ and fuzz/ are not held to them). Exit 0 in report mode (the default); with --strict, exit 1 when anything is over
 its limit. Exit 2 on a usage error (a folder that does not exist).
 
 How it counts (a lexical scan, no compiler): comments, string and character literals are
@@ -24,6 +24,10 @@ import sys
 FUNCTION_LINES = 120
 CLASS_MEMBERS = 25
 FILE_LINES = 600
+
+# The folders CTest holds to the limits (`size_limits --strict`). plant/ and render/ join once
+# their classes and functions over the limits are split.
+CHECKED = ["include", "config", "sdk", "flight_sw", "verification", "identify", "distributed", "app"]
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 
@@ -158,7 +162,7 @@ def scan(path):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("folders", nargs="*", default=["flight_sw", "verification"])
+    ap.add_argument("folders", nargs="*", default=CHECKED)
     ap.add_argument("--strict", action="store_true", help="exit 1 when anything is over its limit")
     ap.add_argument("--top", type=int, default=3, help="how many of the largest to print per kind (default 3)")
     a = ap.parse_args()

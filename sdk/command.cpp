@@ -209,9 +209,9 @@ std::string rc_text(int a, int b, int c, int d) {
 }
 
 TimeNs ReplyTimeouts::timeout_for(std::string_view text) const {
-  if (text == "takeoff") return takeoff_ns;
-  if (text == "land") return land_ns;
-  return default_ns;
+  if (text == "takeoff") return seconds_to_ns(takeoff_s);
+  if (text == "land") return seconds_to_ns(land_s);
+  return seconds_to_ns(default_s);
 }
 
 }  // namespace shelfcross::sdk

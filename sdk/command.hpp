@@ -88,12 +88,17 @@ std::optional<CommandKind> classify_command(std::string_view text, std::string* 
 /// "rc a b c d" for sticks already in range (asserted).
 std::string rc_text(int a, int b, int c, int d);
 
-/// How long to wait for a command's reply (docs/tello_sdk.md: about 7 s; 20 s for takeoff).
+/// How long to wait for a command's reply, s: the one table of reply timeouts, which the
+/// driver, the flight software's configuration and tello_pilot's own landing take their
+/// defaults from. Clients wait about 7 s (docs/tello_sdk.md); `takeoff` is answered once its
+/// climb has ended, 20 s; `land` once the drone is down, and 10 s is the longest a landing
+/// may take (from the highest cruise height at the Tello's descent speed, with its re-sends).
 struct ReplyTimeouts {
-  TimeNs default_ns = 7 * kNsPerSecond;
-  TimeNs takeoff_ns = 20 * kNsPerSecond;
-  TimeNs land_ns = 7 * kNsPerSecond;
-  /// takeoff_ns for exactly "takeoff", land_ns for exactly "land", default_ns for any other text.
+  double default_s = 7.0;
+  double takeoff_s = 20.0;
+  double land_s = 10.0;
+  /// takeoff_s for exactly "takeoff", land_s for exactly "land", default_s for any other text,
+  /// in nanoseconds.
   TimeNs timeout_for(std::string_view text) const;
 };
 

@@ -4,10 +4,10 @@
 #include <cmath>
 #include <numbers>
 
+#include "shelfcross/rotation.hpp"
+
 namespace shelfcross::sdk {
 namespace {
-
-constexpr double kDegToRad = std::numbers::pi / 180.0;
 
 std::string_view trim(std::string_view s) {
   while (!s.empty() && (s.front() == ' ' || s.front() == '\r' || s.front() == '\n' || s.front() == '\t')) s.remove_prefix(1);
@@ -50,9 +50,9 @@ std::optional<StateRecord> parse_state_record(std::string_view datagram, TimeNs 
     }
     const std::optional<double> v = to_number(value);
     if (!v) return std::nullopt;
-    if (key == "pitch") { s.pitch_rad = -*v * kDegToRad; core_seen |= 1u; }
-    else if (key == "roll") { s.roll_rad = *v * kDegToRad; core_seen |= 2u; }
-    else if (key == "yaw") { s.yaw_rad = -*v * kDegToRad; core_seen |= 4u; }
+    if (key == "pitch") { s.pitch_rad = deg_to_rad(-*v); core_seen |= 1u; }
+    else if (key == "roll") { s.roll_rad = deg_to_rad(*v); core_seen |= 2u; }
+    else if (key == "yaw") { s.yaw_rad = deg_to_rad(-*v); core_seen |= 4u; }
     else if (key == "vgx") { s.vx_H_mps = *v * 0.1; core_seen |= 8u; }
     else if (key == "vgy") { s.vy_H_mps = -*v * 0.1; core_seen |= 16u; }
     else if (key == "vgz") { s.vz_H_mps = -*v * 0.1; core_seen |= 32u; }

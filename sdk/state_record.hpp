@@ -22,11 +22,13 @@
 #include <string>
 #include <string_view>
 
+#include "shelfcross/gravity.hpp"
 #include "shelfcross/sdk_messages.hpp"
 
 namespace shelfcross::sdk {
 
-inline constexpr double kStandardGravity_mps2 = 9.80665;
+/// The state record's accelerations are in thousandths of standard gravity (shelfcross/gravity.hpp).
+using shelfcross::kStandardGravity_mps2;
 /// tof reads this when the range sensor sees nothing valid.
 inline constexpr int kTofInvalid_cm = 6553;
 

@@ -14,8 +14,6 @@
 
 namespace shelfcross::tello {
 
-inline constexpr TimeNs kMs = 1'000'000;  ///< one millisecond in TimeNs
-
 /// A monotonic source of time. Implementations are safe to call from several threads (the
 /// video receiver stamps frames on its own thread).
 class Clock {

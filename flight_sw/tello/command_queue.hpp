@@ -8,7 +8,7 @@
 #include <optional>
 #include <string>
 
-#include "flight_sw/command_pacer.hpp"
+#include "flight_sw/mission/command_pacer.hpp"
 #include "flight_sw/tello/command_wire.hpp"
 #include "flight_sw/tello/sdk_driver_types.hpp"
 

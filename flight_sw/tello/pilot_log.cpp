@@ -68,8 +68,8 @@ void PilotLog::approach_view(const flight_sw::Telemetry& tm, const Clock& clock)
   if (tm.phase != flight_sw::Phase::Approach) return;
   nlohmann::json j = {{"tracker_ok", tm.tracking.tracker_ok}, {"e_z_m", tm.control.e_z_m}, {"e_psi_rad", tm.control.e_psi_rad},
                       {"settled", tm.control.settled}, {"holding_short", tm.control.holding_short},
-                      {"rejected_poses", tm.tracking.rejected_poses}, {"wrong_level_poses", tm.tracking.wrong_level_poses},
-                      {"level_unsure_poses", tm.tracking.level_unsure_poses},
+                      {"rejected_poses", tm.tracking.counts.rejected_poses}, {"wrong_level_poses", tm.tracking.counts.wrong_level_poses},
+                      {"level_unsure_poses", tm.tracking.counts.level_unsure_poses},
                       {"damaged_frames", tm.link.damaged_frames}, {"band_decided_frames", tm.link.band_decided_frames},
                       {"unflown_frames", tm.link.unflown_frames}};
   if (tm.pose && tm.pose_in_cell_frame) {

@@ -8,7 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "flight_sw/flight_software.hpp"
+#include "flight_sw/mission/flight_software.hpp"
 #include "flight_sw/tello/clock.hpp"
 #include "flight_sw/tello/flight_log.hpp"
 #include "flight_sw/tello/sdk_driver.hpp"

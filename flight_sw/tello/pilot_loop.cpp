@@ -6,7 +6,7 @@
 #include <sstream>
 #include <variant>
 
-#include "flight_sw/stick_response.hpp"
+#include "flight_sw/control/stick_response.hpp"
 #include "flight_sw/tello/drone_watch.hpp"
 #include "flight_sw/tello/pilot_log.hpp"
 #include "flight_sw/tello/stick_program.hpp"
@@ -353,10 +353,10 @@ class PilotLoop::Impl {
                             {"fsw_damaged_frames", tm.link.damaged_frames},
                             {"fsw_band_decided_frames", tm.link.band_decided_frames},
                             {"fsw_unflown_frames", tm.link.unflown_frames},
-                            {"fsw_hidden_target_pictures", tm.tracking.hidden_target_pictures},
-                            {"fsw_rejected_poses", tm.tracking.rejected_poses},
-                            {"fsw_wrong_level_poses", tm.tracking.wrong_level_poses},
-                            {"fsw_level_unsure_poses", tm.tracking.level_unsure_poses},
+                            {"fsw_hidden_target_pictures", tm.tracking.counts.hidden_target_pictures},
+                            {"fsw_rejected_poses", tm.tracking.counts.rejected_poses},
+                            {"fsw_wrong_level_poses", tm.tracking.counts.wrong_level_poses},
+                            {"fsw_level_unsure_poses", tm.tracking.counts.level_unsure_poses},
                             {"fsw_stale_replies", tm.link.stale_replies},
                             {"fsw_bad_frames", tm.link.bad_frames},
                             {"fsw_sticks", flight_sw::stick_response_text(tm.control.sticks)}});
@@ -365,9 +365,9 @@ class PilotLoop::Impl {
             << "\n  driver: " << driver_counters << "\n  video: " << video_counters
             << "\n  flight software: damaged_frames=" << tm.link.damaged_frames
             << " band_decided_frames=" << tm.link.band_decided_frames << " unflown_frames=" << tm.link.unflown_frames
-            << " hidden_target_pictures=" << tm.tracking.hidden_target_pictures
-            << " rejected_poses=" << tm.tracking.rejected_poses << " wrong_level_poses=" << tm.tracking.wrong_level_poses
-            << " level_unsure_poses=" << tm.tracking.level_unsure_poses
+            << " hidden_target_pictures=" << tm.tracking.counts.hidden_target_pictures
+            << " rejected_poses=" << tm.tracking.counts.rejected_poses << " wrong_level_poses=" << tm.tracking.counts.wrong_level_poses
+            << " level_unsure_poses=" << tm.tracking.counts.level_unsure_poses
             << "\n  the Tello's answer to its sticks, times nominal: "
             << flight_sw::stick_response_text(tm.control.sticks);
     return summary.str();

@@ -24,11 +24,12 @@
 #include <string>
 
 #include "flight_sw/config.hpp"
-#include "flight_sw/flight_software.hpp"
+#include "flight_sw/mission/flight_software.hpp"
 #include "flight_sw/tello/clock.hpp"
 #include "flight_sw/tello/flight_log.hpp"
 #include "flight_sw/tello/sdk_driver.hpp"
 #include "flight_sw/tello/video_receiver.hpp"
+#include "sdk/command.hpp"
 
 namespace shelfcross::tello {
 
@@ -40,7 +41,7 @@ struct Failsafes {
   double video_land_s = 8.0;           ///< airborne and no frame this long: land
   int critical_battery_pct = 10;       ///< battery at or below: land
   double max_flight_s = 480.0;         ///< airborne this long: land
-  double land_reply_s = 7.0;           ///< the program's own land: reply timeout (3 retries)
+  double land_reply_s = sdk::ReplyTimeouts{}.land_s;  ///< the program's own land: reply timeout (3 retries)
 };
 
 struct PilotLoopConfig {

@@ -11,7 +11,7 @@
 //  - the SDK's rules for non-rc commands, kept by flight_sw::CommandPacer (the flight
 //    software's MissionCommands keeps them with the same pacer): one outstanding at a time,
 //    queued commands wait for its reply or timeout; at least command_gap_ns between two
-//    sends; each waits for its reply (ReplyTimeouts: 7 s, 20 s for takeoff);
+//    sends; each waits for its reply (sdk::ReplyTimeouts: 7 s, 20 s for takeoff, 10 s for land);
 //  - the driver's own: a command is re-sent up to `retries` times when no reply comes; then
 //    it fails;
 //  - a refusal ("error", "error Not joystick", "error No valid imu", ...: any reply but "ok")

@@ -1,6 +1,6 @@
 #include "flight_sw/tello/state_listener.hpp"
 
-#include "flight_sw/command_pacer.hpp"
+#include "flight_sw/mission/command_pacer.hpp"
 
 namespace shelfcross::tello {
 

@@ -9,7 +9,7 @@
 #include <optional>
 #include <string>
 
-#include "flight_sw/flight_software.hpp"
+#include "flight_sw/mission/flight_software.hpp"
 #include "flight_sw/tello/clock.hpp"
 #include "flight_sw/tello/pilot_log.hpp"
 

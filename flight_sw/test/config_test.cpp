@@ -5,7 +5,7 @@
 
 #include "config/strict_yaml.hpp"
 #include "flight_sw/config.hpp"
-#include "flight_sw/flight_software.hpp"
+#include "flight_sw/mission/flight_software.hpp"
 
 namespace shelfcross::flight_sw {
 namespace {

@@ -16,7 +16,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "flight_sw/config.hpp"
-#include "flight_sw/perception.hpp"
+#include "flight_sw/perception/shelf_view.hpp"
 #include "shelfcross/camera.hpp"
 
 namespace shelfcross::flight_sw::testing {

@@ -20,6 +20,7 @@
 #include "identify/identification.hpp"
 #include "identify/response_fit.hpp"
 #include "plant/params.hpp"
+#include "sdk/command.hpp"
 #include "shelfcross/random.hpp"
 #include "shelfcross/rotation.hpp"
 #include "verification/world/tello_state_format.hpp"
@@ -93,9 +94,7 @@ inline std::string synthetic_log(const KnownDrone& drone) {
     const TimeNs t = t_takeoff + seconds_to_ns(t_s[k]);
     for (; next_rc < rc.size() && rc[next_rc].first <= t; ++next_rc) {
       const auto& s = rc[next_rc].second;
-      std::ostringstream text;
-      text << "rc " << s[0] << " " << s[1] << " " << s[2] << " " << s[3];
-      log << log_line(rc[next_rc].first, "rc_sent", {{"command", text.str()}});
+      log << log_line(rc[next_rc].first, "rc_sent", {{"command", sdk::rc_text(s[0], s[1], s[2], s[3])}});
     }
     StateRecord r;
     r.vx_H_mps = y[0][k] + noise.normal(0.0, drone.velocity_noise_mps);

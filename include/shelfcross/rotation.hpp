@@ -1,6 +1,6 @@
 #pragma once
-// Angles and rotations, each stated once: the angle wrap and the ZYX Euler decomposition of the
-// attitude convention in sdk_messages.hpp (R = Rz(yaw) Ry(pitch) Rx(roll)).
+// Angles and rotations, each stated once: degrees and radians, the angle wrap and the ZYX Euler
+// decomposition of the attitude convention in sdk_messages.hpp (R = Rz(yaw) Ry(pitch) Rx(roll)).
 
 #include <algorithm>
 #include <cmath>
@@ -9,6 +9,11 @@
 #include <Eigen/Core>
 
 namespace shelfcross {
+
+/// Degrees to radians (the SDK's attitude and turns are whole degrees): a_deg (pi / 180).
+constexpr double deg_to_rad(double a_deg) { return a_deg * (std::numbers::pi / 180.0); }
+/// Radians to degrees: a_rad (180 / pi).
+constexpr double rad_to_deg(double a_rad) { return a_rad * (180.0 / std::numbers::pi); }
 
 /// `a_rad` wrapped into [-pi, pi]: the IEEE remainder by 2 pi, exact (no loop, no drift) for
 /// any finite angle. NaN or an infinity gives NaN.

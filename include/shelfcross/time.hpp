@@ -14,6 +14,8 @@ namespace shelfcross {
 using TimeNs = std::int64_t;
 
 inline constexpr TimeNs kNsPerSecond = 1'000'000'000;
+/// One millisecond in TimeNs.
+inline constexpr TimeNs kMs = 1'000'000;
 
 /// The k-th tick of a clock running at `rate_hz` ticks per second, first tick at 0:
 /// t_k = floor(k * 1e9 / rate_hz), exact in integers for k * 1e9 < 2^63 (k < 9.2e9).

@@ -59,12 +59,51 @@ class IncludeGraphTest(unittest.TestCase):
 
     def test_a_longer_cycle_through_headers_is_found(self):
         code, out = run(tree({
-            "verification/x/a.hpp": '#include "verification/x/b.hpp"\n',
-            "verification/x/b.hpp": '#include "verification/x/c.hpp"\n',
-            "verification/x/c.cpp": '#include "verification/x/a.hpp"\n',
+            "verification/cosim/a.hpp": '#include "verification/cosim/b.hpp"\n',
+            "verification/cosim/b.hpp": '#include "verification/cosim/c.hpp"\n',
+            "verification/cosim/c.cpp": '#include "verification/cosim/a.hpp"\n',
         }))
         self.assertEqual(code, 1)
-        self.assertIn("verification/x/a <-> verification/x/b <-> verification/x/c", out)
+        self.assertIn("verification/cosim/a <-> verification/cosim/b <-> verification/cosim/c", out)
+
+    def test_rooms_include_only_the_rooms_below_them(self):
+        code, out = run(tree({
+            "flight_sw/config.hpp": "#pragma once\n",
+            "flight_sw/perception/tags.hpp": '#include "flight_sw/config.hpp"\n',
+            "flight_sw/guidance/law.hpp": '#include "flight_sw/perception/tags.hpp"\n',
+            "flight_sw/mission/unit.hpp": '#include "flight_sw/guidance/law.hpp"\n',
+            "flight_sw/tello/driver.cpp": '#include "flight_sw/mission/unit.hpp"\n',
+            "verification/campaign/c.hpp": '#include "verification/cosim/r.hpp"\n',
+            "verification/cosim/r.hpp": '#include "verification/world/w.hpp"\n',
+            "verification/world/w.hpp": "#pragma once\n",
+        }))
+        self.assertEqual(code, 0, out)
+
+    def test_an_include_that_runs_back_up_the_room_order_is_forbidden(self):
+        code, out = run(tree({
+            "flight_sw/navigation/pose.hpp": '#include "flight_sw/guidance/law.hpp"\n',
+            "flight_sw/guidance/law.hpp": "#pragma once\n",
+            "flight_sw/config.cpp": '#include "flight_sw/perception/tags.hpp"\n',
+            "flight_sw/perception/tags.hpp": "#pragma once\n",
+            "verification/world/w.cpp": '#include "verification/campaign/c.hpp"\n',
+            "verification/campaign/c.hpp": "#pragma once\n",
+        }))
+        self.assertEqual(code, 1)
+        self.assertIn("flight_sw/navigation/pose.hpp: includes flight_sw/guidance/law.hpp", out)
+        self.assertIn("flight_sw/config.cpp: includes flight_sw/perception/tags.hpp", out)
+        self.assertIn("verification/world/w.cpp: includes verification/campaign/c.hpp", out)
+        self.assertIn("3 forbidden includes", out)
+
+    def test_a_room_outside_the_order_and_the_simulation_in_flight_are_forbidden(self):
+        code, out = run(tree({
+            "verification/elsewhere/e.hpp": '#include "verification/world/w.hpp"\n',
+            "verification/world/w.hpp": "#pragma once\n",
+            "flight_sw/mission/m.cpp": '#include "plant/dynamics.hpp"\n',
+            "plant/dynamics.hpp": "#pragma once\n",
+        }))
+        self.assertEqual(code, 1)
+        self.assertIn("verification/elsewhere/ is a room outside verification's documented order", out)
+        self.assertIn("flight_sw/mission/m.cpp: includes plant/dynamics.hpp", out)
 
     def test_tests_are_leaves(self):
         code, out = run(tree({

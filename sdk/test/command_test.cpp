@@ -137,6 +137,7 @@ TEST(SdkCommandClassify, ReplyTimeoutsFollowTheProtocol) {
   EXPECT_EQ(t.timeout_for("takeoff"), 20 * kNsPerSecond);
   EXPECT_EQ(t.timeout_for("command"), 7 * kNsPerSecond);
   EXPECT_EQ(t.timeout_for("battery?"), 7 * kNsPerSecond);
+  EXPECT_EQ(t.timeout_for("land"), 10 * kNsPerSecond);
 }
 
 

@@ -1,6 +1,7 @@
 // The state record parser: the SDK's samples, sign conventions, what is refused.
 
 #include "sdk/state_record.hpp"
+#include "shelfcross/rotation.hpp"
 
 #include <cmath>
 
@@ -9,7 +10,7 @@
 namespace shelfcross::sdk {
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
+constexpr double kDeg = deg_to_rad(1.0);  // one degree
 
 // The three real samples of docs/tello_sdk.md.
 constexpr const char* kSdk13 =

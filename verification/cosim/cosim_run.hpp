@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "flight_sw/flight_software.hpp"
+#include "flight_sw/mission/flight_software.hpp"
 #include "render/renderer.hpp"
 #include "verification/cosim/run_hash.hpp"
 #include "verification/cosim/run_result.hpp"

@@ -13,7 +13,7 @@
 
 #include <Eigen/Core>
 
-#include "flight_sw/flight_software.hpp"
+#include "flight_sw/mission/flight_software.hpp"
 #include "shelfcross/camera.hpp"
 #include "shelfcross/cell_index.hpp"
 #include "verification/world/metrics.hpp"
@@ -82,7 +82,7 @@ struct RunMetrics {
   InventoryScore inventory;
   std::string flight_software_result;    ///< outcome and reason of the flight software
   /// The sticks' measured answer by the end of the run and the scale they were sent at, per
-  /// flight_sw::StickAxis (flight_sw/stick_response.hpp); empty where the run gave too little
+  /// flight_sw::StickAxis (flight_sw/control/stick_response.hpp); empty where the run gave too little
   /// to measure.
   flight_sw::StickEstimates sticks;
   LinkMetrics link;

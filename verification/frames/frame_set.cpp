@@ -10,7 +10,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "flight_sw/navigation.hpp"
+#include "flight_sw/navigation/navigation.hpp"
 #include "render/ground_truth.hpp"
 #include "render/noise.hpp"
 #include "render/renderer.hpp"
@@ -74,7 +74,7 @@ Eigen::Isometry3d body_pose(const Eigen::Vector3d& p_WB_m, double yaw_rad) {
   return X;
 }
 
-/// Grid frame G (flight_sw/navigation.hpp) in shelf 0's frame S: G's origin is the grid
+/// Grid frame G (flight_sw/navigation/navigation.hpp) in shelf 0's frame S: G's origin is the grid
 /// centre on the front bars' centre plane, axes as S.
 Eigen::Vector3d grid_origin_S(const ShelfSpec& shelf) {
   const double top = beam_z_S_m(shelf, static_cast<int>(shelf.row_pitch_m.size()));

@@ -57,7 +57,7 @@
 #include <Eigen/Geometry>
 #include <opencv2/core/mat.hpp>
 
-#include "flight_sw/flight_software.hpp"
+#include "flight_sw/mission/flight_software.hpp"
 #include "shelfcross/cell_index.hpp"
 #include "verification/scenario/scenario.hpp"
 

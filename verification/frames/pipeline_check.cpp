@@ -4,7 +4,7 @@
 #include <cmath>
 #include <sstream>
 
-#include "flight_sw/mission_text.hpp"
+#include "flight_sw/text.hpp"
 #include "shelfcross/rotation.hpp"
 
 namespace shelfcross::frames {

@@ -4,9 +4,9 @@
 
 #include <algorithm>
 #include <cassert>
-#include <chrono>
 #include <stdexcept>
 
+#include "flight_sw/tello/clock.hpp"
 #include "verification/world/mission_setup.hpp"
 #include "verification/world/tello_state_format.hpp"
 
@@ -148,12 +148,10 @@ EmulatorReport TelloEmulator::report() const {
 }
 
 void run_tello_emulator(TelloEmulator& emulator, const std::atomic<bool>& stop, double max_seconds) {
-  // The emulator's one wall clock: simulated time follows the time elapsed since here.
-  const auto origin = std::chrono::steady_clock::now();
-  const auto elapsed_ns = [&] {
-    return static_cast<TimeNs>(
-        std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - origin).count());
-  };
+  // The emulator's one wall clock, the driver's (its origin here): simulated time follows the
+  // time elapsed since here.
+  const tello::SteadyClock clock;
+  const auto elapsed_ns = [&] { return clock.now_ns(); };
   const TimeNs max_ns = max_seconds > 0.0 ? seconds_to_ns(max_seconds) : 0;
   for (;;) {
     const TimeNs now = elapsed_ns();

@@ -23,7 +23,7 @@
 // world tick the co-simulation uses too: plant, contacts, arena, crossings, clearance), then
 // commands due by then are handed to the firmware, and replies, state records and frame
 // captures due by then go out.
-// run_tello_emulator() is the one place that reads the wall clock (steady_clock) and calls
+// run_tello_emulator() is the one place that reads the wall clock (tello::SteadyClock) and calls
 // advance(); tests call advance() with times of their own.
 //
 // Video (tello-sim) runs on a worker thread that owns the renderer and the encoder; in the
@@ -140,8 +140,8 @@ class TelloEmulator {
   } ending_;
 };
 
-/// Runs the emulator against the wall clock (std::chrono::steady_clock, read here and nowhere
-/// else): advance(elapsed) whenever a command datagram arrives or something is due, until it
+/// Runs the emulator against the wall clock (tello::SteadyClock, the driver's, read here and
+/// nowhere else in the emulator): advance(elapsed) whenever a command datagram arrives or something is due, until it
 /// finishes, `stop` becomes true (reason "signal") or max_seconds pass (> 0; "max_seconds").
 void run_tello_emulator(TelloEmulator& emulator, const std::atomic<bool>& stop, double max_seconds = 0.0);
 

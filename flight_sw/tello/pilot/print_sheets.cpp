@@ -10,7 +10,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "flight_sw/perception.hpp"
+#include "flight_sw/perception/shelf_view.hpp"
 #include "flight_sw/tello/pilot/pilot.hpp"
 
 namespace shelfcross::tello::pilot {

@@ -7,6 +7,8 @@
 #include <cstdlib>
 
 #include "flight_sw/tello/calibration_manoeuvre.hpp"
+#include "shelfcross/gravity.hpp"
+#include "shelfcross/rotation.hpp"
 
 namespace shelfcross::tello {
 namespace {
@@ -93,7 +95,7 @@ TEST(CalibrationManoeuvre, HeightNeverGoesBelowTheTakeoffAndEachAxisEndsWhereItB
 TEST(CalibrationManoeuvre, StaysInsideTheSlowModesTiltForTheStrongestFastestDrone) {
   // A horizontal step of s / 100 asks for K s / (100 tau): K 1.25 m/s, tau 0.3 s at worst.
   const CalibrationManoeuvre m;
-  const double tilt_limit_mps2 = 9.80665 * std::tan(9.0 * 3.14159265358979323846 / 180.0);
+  const double tilt_limit_mps2 = kStandardGravity_mps2 * std::tan(deg_to_rad(9.0));
   for (const ManoeuvreStep& s : m.steps()) {
     const int horizontal = std::max(std::abs(s.sticks[0]), std::abs(s.sticks[1]));
     EXPECT_LT(1.25 * horizontal / 100.0 / 0.3, tilt_limit_mps2) << s.what;
