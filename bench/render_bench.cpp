@@ -10,7 +10,7 @@
 // BM_RenderFrame/supersample:S/noise:N is the whole Renderer::render_into (lens mesh + upload
 // + draw + readback [+ S x S block average] + RGBA->BGR [+ noise]) with the default lens and
 // lighting; noise:1 is the co-simulation's default sensor noise (cosim.render_noise_stddev,
-// 2 grey levels), the configuration of the target. BM_RenderMeshOnly and
+// 2 grey levels), the configuration the renderer's frame budget is set for. BM_RenderMeshOnly and
 // BM_RenderFinishOnly time two CPU stages alone: the per-frame lens mesh (cull, clip, split,
 // project) and the fused RGBA->BGR + noise pass; draw + readback is the rest.
 #include <benchmark/benchmark.h>

@@ -56,7 +56,9 @@ verification::Scenario calibrated_scenario(const verification::Scenario& scenari
 std::string overlay_yaml(const Identification& id);
 
 /// The true values of a drone tello-sim flew: its report's drawn `dispersions` applied to the
-/// scenario's nominals, in the names of Identification::parameters.
+/// scenario's nominals, in the names of Identification::parameters. Throws std::runtime_error
+/// when the report cannot be read or is not a tello-sim report with numeric dispersions, and
+/// std::logic_error for a dispersion with no nominal in the scenario.
 std::map<std::string, double> emulator_truth(const std::string& report_json_path, const verification::Scenario& scenario);
 
 }  // namespace shelfcross::identify

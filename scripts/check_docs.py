@@ -6,8 +6,13 @@ documentation check").
       Static checks over the text files git tracks or would (ls-files --cached --others
       --exclude-standard; every file but build/ and out/ when DIR is not a git
       work tree), exit 1 on any finding, each printed as file:line: reason:
-      - words of development history: development sessions, issue numbers, branch names,
-        absolute paths of a development machine (HISTORY below);
+      - words of development history: development sessions, issue numbers, the one issue a
+        change was made for, branch names, absolute paths of a development machine (HISTORY
+        below), and in every file but the Markdown documents (code, tests, scripts, data) a
+        commit by its hash (CODE_HISTORY: a measured figure's page may name the commit it was
+        measured on; code says what it does and why);
+      - in code, tests, scripts and data, a document of the repository named that does not
+        exist: a path under docs/ or an upper-case name at the root (DOC_NAME);
       - Markdown links to relative paths that do not exist, and backticked repository paths
         (`docs/results.md`, `scenarios/stress/grid_2x2.yaml`) that do not exist;
       - README.md longer than README_MAX_LINES, or without the two commands in its first
@@ -38,11 +43,18 @@ RUNNABLE_MARKER = "<!-- runnable -->"
 HISTORY = re.compile(
     r"\bsessions? [0-9]+"             # a development session by its number
     r"|\bissues? [0-9]+\b"            # an issue by its number
+    r"|\bthe[ ]issue\b"               # "the" issue a change was made for
     r"|\bbranch[ ]issue"              # a branch named after an issue
     r"|/work[/]"                      # the development machine's work tree
     r"|/tmp/[A-Za-z0-9_]+[/]"         # its scratch folders
     r"|\bthis (2-core )?VM\b",        # the development machine named as such
     re.IGNORECASE)
+
+# In code, tests, scripts and data: a commit by its hash ("commit" and 7 to 40 hex digits).
+CODE_HISTORY = re.compile(r"\bcommits?[ ][0-9a-f]{7,40}\b", re.IGNORECASE)
+# A document of the repository named in a code, test or data file: a page under docs/ or an
+# upper-case name at the root ("docs/method.md", "README.md").
+DOC_NAME = re.compile(r"(?<![\w./-])(docs/[A-Za-z0-9_\-/]+\.md|[A-Z][A-Z0-9_]+\.md)\b")
 
 LINK = re.compile(r"!?\[[^\]]*\]\(([^)\s]+)(?:\s+\"[^\"]*\")?\)")
 CODE_SPAN = re.compile(r"(?<!`)`([^`\n]+)`(?!`)")
@@ -116,11 +128,22 @@ class Repository:
 
 
 def check_history(repo, name, lines, findings):
+    in_code = not name.endswith(".md")
     for number, line in enumerate(lines, 1):
-        m = HISTORY.search(line)
+        m = HISTORY.search(line) or (CODE_HISTORY.search(line) if in_code else None)
         if m:
             findings.append(f"{name}:{number}: development history or a development machine's "
                             f"path: \"{m.group(0)}\" (describe the product, and a machine by its kind)")
+
+
+def check_document_names(repo, name, lines, findings):
+    """Documents a code, test or data file names (its comments' references) must exist."""
+    if name.endswith(".md") or name.startswith("scripts/test/"):
+        return
+    for number, line in enumerate(lines, 1):
+        for m in DOC_NAME.finditer(line):
+            if not repo.exists(m.group(1)):
+                findings.append(f"{name}:{number}: names a document that does not exist: {m.group(1)}")
 
 
 def check_links(repo, name, lines, findings):
@@ -175,6 +198,7 @@ def static_checks(root):
         if lines is None:
             continue
         check_history(repo, name, lines, findings)
+        check_document_names(repo, name, lines, findings)
         if name.endswith(".md"):
             check_links(repo, name, lines, findings)
     check_readme(repo, findings)

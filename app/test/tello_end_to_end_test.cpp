@@ -245,8 +245,8 @@ TEST_F(TelloEndToEnd, PilotFliesTheEmulatorTakesInventoryCrossesAndLands) {
 // error-concealed (a lost datagram damages the rest of its 1 s group of pictures: 847 of 855
 // in one flight), and since the identity check the flight software mostly gives up
 // safely there rather than decide on such pictures: over the co-simulation's sdk link, 1 of 16
-// runs at 5 % video datagram loss crossed, 15 aborted, 0 contacts (commit 4d31c84,
-// lossy_level_check_on.yaml). What must hold at 5 %, flight after
+// runs at 5 % video datagram loss crossed, 15 aborted, 0 contacts
+// (lossy_level_check_on.yaml). What must hold at 5 %, flight after
 // flight: no contact, landed, nothing listed wrong in the inventory; a crossing when it comes.
 TEST_F(TelloEndToEnd, SameWithFivePercentLossOnEveryChannel) {
   const std::vector<std::string> faults{"--loss-commands", "0.05", "--loss-replies", "0.05", "--loss-state", "0.05",

@@ -55,6 +55,8 @@ struct CalibrationAmplitudes {
 
 class CalibrationManoeuvre {
  public:
+  /// Throws std::invalid_argument when an amplitude lies outside 5..80 (its pulses reach 1.2
+  /// times it, within the sticks' 100).
   explicit CalibrationManoeuvre(const CalibrationAmplitudes& amplitudes = {});
   const std::vector<ManoeuvreStep>& steps() const { return steps_; }
   double duration_s() const;

@@ -70,6 +70,7 @@ class H264Decoder {
 };
 
 /// Peak signal-to-noise ratio of two 8-bit images of one size and type, dB (inf if equal).
+/// Throws std::invalid_argument when they differ in size or type.
 double psnr_db(const cv::Mat& a, const cv::Mat& b);
 
 }  // namespace shelfcross::tello

@@ -90,7 +90,7 @@ std::vector<std::pair<int, int>> suspect_macroblocks(const PictureEvidence& e, i
 /// Follows the damage of one stream picture by picture. Not thread-safe; one per decoder.
 class PictureDamage {
  public:
-  /// A picture of width x height pixels (both > 0; std::invalid_argument otherwise).
+  /// A picture of width x height pixels (both > 0; throws std::invalid_argument otherwise).
   PictureDamage(int width_px, int height_px, int concealment_reach_px = 8);
   /// The next decoded picture: returns its damaged rows (disjoint, top down; empty: whole).
   std::vector<RowSpan> update(const PictureEvidence& e);

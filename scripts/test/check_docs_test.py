@@ -93,6 +93,28 @@ class StaticChecks(unittest.TestCase):
                 files["plant/dynamics.cpp"] = f"// measured in {word}\nint x;\n"
                 self.assert_fails_with(files, "plant/dynamics.cpp:1: development history")
 
+    def test_the_issue_fails_and_a_commit_hash_fails_in_code(self):
+        for name, text in [("plant/dynamics.cpp", "// Defaults of th" + "e issue\nint x;\n"),
+                           ("plant/test/dynamics_test.cpp", "// as flown on comm" + "it 4d31c84\nint x;\n"),
+                           ("scenarios/a.yaml", "# measured at comm" + "it bfd468c\nversion: 1\n")]:
+            with self.subTest(name=name):
+                files = good_files()
+                files[name] = text
+                self.assert_fails_with(files, f"{name}:1: development history")
+
+    def test_a_page_may_name_the_commit_its_figures_were_measured_on(self):
+        files = good_files()
+        files["docs/guide.md"] += "Measured on comm" + "it 4d31c84.\n"
+        code, out = run_check(make_repository(files))
+        self.assertEqual(code, 0, out)
+
+    def test_code_that_names_a_missing_document_fails(self):
+        files = good_files()
+        files["fuzz/corpus/a.yaml"] = "# The shelf (MET" + "HOD.md section 6) and docs/guid" + "e.md\n"
+        self.assert_fails_with(files, "fuzz/corpus/a.yaml:1: names a document that does not exist: METHOD.md")
+        code, out = run_check(make_repository(files))
+        self.assertNotIn("docs/guide.md", out.replace("fuzz/corpus/a.yaml:1: names a document that does not exist: METHOD.md", ""))
+
     def test_words_that_only_look_like_history_pass(self):
         files = good_files()
         files["docs/guide.md"] += "Each session of the pilot, the issues it raises, /tmp/ and the VM kind.\n"

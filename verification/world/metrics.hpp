@@ -12,8 +12,8 @@
 namespace shelfcross::verification {
 
 /// A settling band: |e| <= max(fraction * |e(t0)|, floor).
-/// Defaults of the issue: 2 % of the initial error, never tighter than 1 cm (altitude) or
-/// 0.5 deg (heading); the floor is given in the error's unit.
+/// Defaults: 2 % of the initial error, never tighter than 1 cm (altitude) or 0.5 deg
+/// (heading); the floor is given in the error's unit.
 struct SettlingBand {
   double fraction = 0.02;
   double floor = 0.0;

@@ -24,12 +24,14 @@ namespace shelfcross::tello::pilot {
 /// Exit codes: 0 the mission ended (crossed, or no empty cell) or a signal stopped it and the
 /// drone landed (or the calibration was written); 1 the mission was aborted or a program
 /// failsafe landed it, or a runtime failure (no drone, land unacknowledged, port busy);
-/// 2 bad input (main); 130 stopped by a signal on the ground.
+/// 2 bad input (main); 130 stopped by a signal on the ground. Throws UsageError when the
+/// flight log cannot be opened (bad input, exit 2).
 int run_pilot(const PilotOptions& options, const Clock& clock, const std::atomic<int>& signals);
 
 /// Calibration mode: `command`, `streamon`, then chessboard views from the stream until
 /// options.calibration_views are collected; writes the OpenCV calibration file. No motion
-/// command is ever sent (the driver runs in dry-run mode).
+/// command is ever sent (the driver runs in dry-run mode). Throws UsageError when the flight
+/// log cannot be opened.
 int run_calibration(const PilotOptions& options, const Clock& clock, const std::atomic<int>& signals);
 
 /// --print-markers mode: PNG sheets (300 dpi) of the box markers and the colour tag of the

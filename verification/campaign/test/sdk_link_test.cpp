@@ -81,8 +81,8 @@ TEST(SdkLink, IdealModelCarriesWholeFramesWithoutDatagrams) {
 
 // A lost `land` after the crossing (every land datagram lost) with the wall 1 m behind the
 // landing point. The Tello flies the last sticks it got: without the driver's stop-sticks
-// rule the crossing's forward stick stays on and the vehicle flies into the wall (what the
-// lossy end-to-end flight found, commit a127787); with it, the sticks were centred on the
+// rule the crossing's forward stick stays on and the vehicle flies into the wall (as a lossy
+// end-to-end flight does); with it, the sticks were centred on the
 // wire before the land, so the vehicle hovers until its watchdog lands it.
 TEST(SdkLink, LostLandWithoutTheStopSticksRuleFliesIntoTheWall) {
   Scenario s = load_scenario(kDefault);

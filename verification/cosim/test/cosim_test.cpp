@@ -6,9 +6,9 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "flight_sw/inventory.hpp"
-#include "flight_sw/navigation.hpp"
-#include "flight_sw/perception.hpp"
+#include "flight_sw/navigation/navigation.hpp"
+#include "flight_sw/perception/inventory.hpp"
+#include "flight_sw/perception/shelf_view.hpp"
 #include "render/ground_truth.hpp"
 #include "verification/campaign/campaign.hpp"
 #include "verification/cosim/cosim.hpp"
@@ -221,7 +221,7 @@ TEST(RenderedFrames, PnPPoseWithinTwoCentimetresAndOneDegreeAtOnePointFiveMetres
 // Safety in every run, a crossing in most: behind the sdk link (the default) run 0 of seed 2026
 // meets 0.8 % video datagram loss, two thirds of its pictures arrive error-concealed, and the
 // flight software, unable to confirm a centred pose on nearly whole pictures, gives up safely
-// ("could not centre on the target cell", commit 4d31c84): a lost run, not a contact.
+// ("could not centre on the target cell"): a lost run, not a contact.
 TEST(Campaign, SmallDefaultCampaignNeverTouchesTheShelfAndMostlyCrosses) {
   const std::shared_ptr<const Scenario> s = default_with([](Scenario&) {});
   const CampaignMeta meta{write_scenario(*s), 2026, 3};
