@@ -1,0 +1,190 @@
+// The mission room's units alone (video_intake.hpp, transfer_flight.hpp): inputs in, what the
+// unit decides out, with no FlightSoftware around them.
+#include <gtest/gtest.h>
+
+#include <optional>
+
+#include <opencv2/core.hpp>
+
+#include "flight_sw/config.hpp"
+#include "flight_sw/mission/cell_crossing.hpp"
+#include "flight_sw/mission/facts.hpp"
+#include "flight_sw/mission/transfer_flight.hpp"
+#include "flight_sw/mission/video_intake.hpp"
+#include "shelfcross/time.hpp"
+
+namespace shelfcross::flight_sw {
+namespace {
+
+CameraFrame frame(const FlightConfig& c, int damage_events = 0, std::vector<RowSpan> rows = {}) {
+  CameraFrame f;
+  f.bgr = cv::Mat(c.camera.height_px, c.camera.width_px, CV_8UC3, cv::Scalar(10, 200, 30));
+  f.damaged = damage_events > 0;
+  f.damage_events = damage_events;
+  f.damaged_rows = std::move(rows);
+  return f;
+}
+
+const VideoIntake::DecisionRegion kNoRegion = [] { return std::optional<cv::Rect2d>(); };
+
+TEST(VideoIntake, AWholePictureDecidesAndAWrongSizedFrameIsRefused) {
+  const FlightConfig c;
+  VideoIntake intake(c);
+  MissionFacts facts;
+  facts.now_ns = kNsPerSecond;
+  const CameraFrame whole = frame(c);
+  const std::optional<Picture> p = intake.take(whole, facts, kNoRegion);
+  ASSERT_TRUE(p);
+  EXPECT_TRUE(p->decides);
+  EXPECT_TRUE(p->whole());
+  EXPECT_EQ(p->t_ns, kNsPerSecond);
+  CameraFrame small;
+  small.bgr = cv::Mat(10, 10, CV_8UC3);
+  EXPECT_FALSE(intake.take(small, facts, kNoRegion));
+  EXPECT_EQ(facts.telemetry.link.bad_frames, 1);
+}
+
+TEST(VideoIntake, APictureTooDamagedToDecideStillDecidesWhereItsDamageLiesClearOfTheDecision) {
+  const FlightConfig c;
+  VideoIntake intake(c);
+  MissionFacts facts;
+  const int events = c.perception.decide_max_damage_events + 1;
+  const CameraFrame f = frame(c, events, {{0, 40}});
+  EXPECT_FALSE(intake.take(f, facts, kNoRegion)->decides);  // the region unknown: no decision
+  const double margin = c.perception.band_margin_px;
+  const auto clear = [&] { return std::optional<cv::Rect2d>(cv::Rect2d(0, 40 + margin + 1, 100, 100)); };
+  const std::optional<Picture> p = intake.take(f, facts, clear);
+  ASSERT_TRUE(p);
+  EXPECT_TRUE(p->decides);
+  EXPECT_EQ(p->bgr.at<cv::Vec3b>(10, 10), cv::Vec3b(128, 128, 128));  // the damaged rows blanked
+  EXPECT_EQ(p->bgr.at<cv::Vec3b>(300, 10), cv::Vec3b(10, 200, 30));
+  EXPECT_EQ(facts.telemetry.link.band_decided_frames, 1);
+  const auto near = [&] { return std::optional<cv::Rect2d>(cv::Rect2d(0, 40 + margin - 1, 100, 100)); };
+  EXPECT_FALSE(intake.take(f, facts, near)->decides);
+  EXPECT_EQ(facts.telemetry.link.damaged_frames, 3);
+}
+
+TEST(VideoIntake, NoFrameHoversOnceThenLands) {
+  const FlightConfig c;
+  VideoIntake intake(c);
+  MissionFacts facts;
+  intake.airborne_from(0);
+  facts.now_ns = seconds_to_ns(0.9 * c.timeouts.video_hover_s);
+  EXPECT_EQ(intake.stall(facts), VideoStall::None);
+  facts.now_ns = seconds_to_ns(1.1 * c.timeouts.video_hover_s);
+  EXPECT_EQ(intake.stall(facts), VideoStall::Hover);
+  EXPECT_TRUE(intake.stalled());
+  EXPECT_EQ(intake.stall(facts), VideoStall::None);  // once per stall
+  facts.now_ns = seconds_to_ns(1.1 * c.timeouts.video_land_s);
+  EXPECT_EQ(intake.stall(facts), VideoStall::Land);
+  const CameraFrame f = frame(c);
+  ASSERT_TRUE(intake.take(f, facts, kNoRegion));
+  EXPECT_FALSE(intake.stalled());
+  EXPECT_EQ(facts.telemetry.event, "video back");
+}
+
+TEST(TransferFlight, FliesItsWaypointsOneLegAtATimeAndArrivesAtTheLast) {
+  FlightConfig c;
+  c.strategy.mode = Strategy::over_tops;
+  c.layout.shelf_count = 2;
+  c.layout.shelf_spacing_m = 4.0;
+  TransferFlight t;
+  PoseEstimate pose_G;  // at the viewpoint, facing the shelf
+  pose_G.X_FB.translation() = Eigen::Vector3d(-1.5, 0.0, 0.0);
+  t.plan(c, pose_G, 0.0, Eigen::Vector3d(0.0, 0.0, 1.0), Eigen::Vector3d(-1.5, 0.0, 0.0), false, 0);
+  EXPECT_EQ(t.waypoint(), 0u);
+  EXPECT_EQ(t.hold_yaw_O_rad(), 0.0);
+  const double tol = c.strategy.waypoint_tolerance_m;
+  // Not there: the error points at the first waypoint, straight up.
+  TransferFlight::Progress p = t.on_state(Eigen::Vector3d(0.0, 0.0, 1.0), tol, kNsPerSecond);
+  EXPECT_FALSE(p.next_leg);
+  EXPECT_FALSE(p.arrived);
+  EXPECT_NEAR(p.e_O_m.x(), 0.0, 1e-12);
+  EXPECT_GT(p.e_O_m.z(), 0.0);
+  // Step onto each waypoint in turn.
+  int legs = 0;
+  Eigen::Vector3d at(0.0, 0.0, 1.0);
+  for (int k = 0; k < 10 && !p.arrived; ++k) {
+    at += p.e_O_m;
+    p = t.on_state(at, tol, (2 + k) * kNsPerSecond);
+    legs += p.next_leg ? 1 : 0;
+  }
+  EXPECT_TRUE(p.arrived);
+  EXPECT_EQ(legs, 2);  // up, across, and down to the next viewpoint
+  EXPECT_NEAR(at.x(), c.layout.shelf_spacing_m, 1e-9);
+}
+
+// A crossing along +x of O from the origin, 2 m long, stoppable for its first 0.5 m, 5 cm of
+// slack either way, holding 1.0 m of state height.
+CrossingStart straight_crossing() {
+  CrossingStart start;
+  start.end.line_m = 2.0;
+  start.end.timed_ns = 10 * kNsPerSecond;
+  start.watch.stop_before_m = 0.5;
+  start.watch.slack_y_m = 0.05;
+  start.watch.slack_z_m = 0.05;
+  start.height_m = 1.0;
+  return start;
+}
+
+StateRecord state_at(TimeNs t_ns, double vx_H_mps, double vy_H_mps, double height_m) {
+  StateRecord s;
+  s.t_ns = t_ns;
+  s.vx_H_mps = vx_H_mps;
+  s.vy_H_mps = vy_H_mps;
+  s.height_m = height_m;
+  return s;
+}
+
+TEST(CellCrossing, HoldsTheCellsHeightByTheStateHeight) {
+  const FlightConfig c;
+  CellCrossing crossing(c);
+  EXPECT_FALSE(crossing.holding());
+  crossing.begin(straight_crossing());
+  ASSERT_TRUE(crossing.holding());
+  EXPECT_GT(crossing.vz_mps(0.9), 0.0);
+  EXPECT_LT(crossing.vz_mps(1.1), 0.0);
+  EXPECT_EQ(crossing.vz_mps(1.0), 0.0);
+  crossing.stop();
+  EXPECT_FALSE(crossing.holding());
+}
+
+TEST(CellCrossing, StopsADriftSeenBeforeTheCellAndFliesOnPastThatPoint) {
+  const FlightConfig c;
+  CellCrossing crossing(c);
+  crossing.begin(straight_crossing());
+  MissionFacts facts;
+  // Straight along the line at 0.4 m/s: no stop.
+  facts.on_state(state_at(0, 0.4, 0.0, 1.0));
+  EXPECT_FALSE(crossing.watch(state_at(0, 0.4, 0.0, 1.0), facts));
+  // Drifting sideways at 0.2 m/s: carried 10 cm across within the lag, past the 5 cm slack.
+  const StateRecord drifting = state_at(100 * kMs, 0.0, 0.2, 1.0);
+  facts.on_state(drifting);
+  const std::optional<CrossingStop> stop = crossing.watch(drifting, facts);
+  ASSERT_TRUE(stop);
+  EXPECT_EQ(stop->why.rfind("drift seen before the cell", 0), 0u) << stop->why;
+  EXPECT_EQ(facts.telemetry.control.crossings_backed_out, 1);
+  // The same drift once the vehicle cannot stop short of the front face: flown on.
+  MissionFacts past;
+  past.on_state(state_at(0, 1.0, 0.0, 1.0));
+  past.on_state(state_at(kNsPerSecond, 1.0, 0.0, 1.0));  // 1 m along the line
+  EXPECT_FALSE(crossing.watch(state_at(kNsPerSecond, 0.0, 0.2, 1.0), past));
+  EXPECT_EQ(past.telemetry.control.crossings_backed_out, 0);
+}
+
+TEST(CellCrossing, EndsWhenTheOdometryHasFlownTheLine) {
+  const FlightConfig c;
+  CellCrossing crossing(c);
+  crossing.begin(straight_crossing());
+  MissionFacts facts;
+  for (int k = 0; k <= 19; ++k) facts.on_state(state_at(k * 100 * kMs, 1.0, 0.0, 1.0));
+  facts.now_ns = 1900 * kMs;
+  EXPECT_FALSE(crossing.flown(facts.now_ns, facts));  // 1.9 m of 2
+  facts.on_state(state_at(2000 * kMs, 1.0, 0.0, 1.0));
+  facts.on_state(state_at(2100 * kMs, 1.0, 0.0, 1.0));
+  facts.now_ns = 2100 * kMs;
+  EXPECT_TRUE(crossing.flown(facts.now_ns, facts));  // 2.1 m
+}
+
+}  // namespace
+}  // namespace shelfcross::flight_sw
