@@ -82,11 +82,11 @@ void BM_RenderMeshOnly(benchmark::State& state) {
 }
 BENCHMARK(BM_RenderMeshOnly)->MeasureProcessCPUTime()->Unit(benchmark::kMillisecond);
 
-// A rolling-shutter frame (render_rolling_into): the camera turning at 0.5 rad/s (the
-// approach's largest yaw rate) over a 20 ms readout, with the sensor noise, on a renderer whose
-// faces are clipped rolling_shutter_margin_px = 93 px outside the image: the margin
+// A rolling-shutter frame (render_rolling_into): the camera turning at 0.5 rad/s over a 20 ms
+// readout, with the sensor noise, on a renderer whose faces are clipped
+// rolling_shutter_margin_px = 47 px outside the image: the margin
 // render_options_for gives a scenario whose readout may reach the 30 fps frame period
-// (fx 921 px x 3 rad/s x 33.3 ms). turning:0 is the same renderer held still (the global
+// (fx 921 px x 3 rad/s x 33.3 ms / 2). turning:0 is the same renderer held still (the global
 // shutter's path, with the wider margin).
 Renderer& rolling_bench_renderer() {
   ::setenv("LP_NUM_THREADS", "1", 1);
@@ -94,7 +94,7 @@ Renderer& rolling_bench_renderer() {
   static Renderer r(shelfcross::render::test::paper_test_shelf(), CameraIntrinsics{}, [] {
     RenderOptions o;
     o.noise_stddev = kDefaultNoise;
-    o.rolling_shutter_margin_px = 93.0;
+    o.rolling_shutter_margin_px = 47.0;
     return o;
   }());
   return r;

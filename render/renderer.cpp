@@ -142,11 +142,10 @@ void Renderer::Impl::build(const SceneLayout& layout) {
 
 void Renderer::Impl::draw(const Eigen::Isometry3d& X_WC_start, const Eigen::Isometry3d& X_WC_end) {
   egl.make_current();
-  const ReadoutPoses readout(X_WC_start, X_WC_end);
-  if (readout.still()) {
+  if (X_WC_start.matrix() == X_WC_end.matrix()) {  // a still camera: the global shutter's path
     mesher.build(X_WC_end);
   } else {
-    mesher.build(readout);
+    mesher.build(ReadoutPoses(X_WC_start, X_WC_end));
   }
   const std::vector<GpuVertex>& vertices = mesher.vertices();
   const std::vector<std::uint32_t>& indices = mesher.indices();
