@@ -122,8 +122,10 @@ StateRecord TelloWorld::state_record(TimeNs t) const {
   return state_from_truth(tello_.state(), last_.a_W_mps2, ground_z_m_, firmware.battery_pct(), firmware.motor_on_time_s(), t);
 }
 
-Eigen::Isometry3d TelloWorld::recent_camera_pose(TimeNs t) const {
-  const auto& h = clocks_.recent_X_WC;
+namespace {
+// The camera pose at t from the poses h of recent ticks (ascending times), interpolated
+// between the ticks around t.
+Eigen::Isometry3d pose_at(const std::deque<std::pair<TimeNs, Eigen::Isometry3d>>& h, TimeNs t) {
   // The first tick at or after t (the vehicle sat at its first recorded pose before it).
   auto b = std::lower_bound(h.begin(), h.end(), t, [](const auto& e, TimeNs x) { return e.first < x; });
   if (b == h.begin()) return h.front().second;
@@ -132,6 +134,7 @@ Eigen::Isometry3d TelloWorld::recent_camera_pose(TimeNs t) const {
   const double s = static_cast<double>(t - a->first) / static_cast<double>(b->first - a->first);
   return render::interpolate_pose(a->second, b->second, s);
 }
+}  // namespace
 
 std::optional<TelloWorld::Capture> TelloWorld::capture_due(TimeNs t) {
   Clocks& k = clocks_;
@@ -149,7 +152,7 @@ std::optional<TelloWorld::Capture> TelloWorld::capture_due(TimeNs t) {
   c.period_ns = event_time(k.k_frame + 1, k.frame_mhz) - c.t_ns;
   c.X_WC_prev = k.X_WC_prev_frame;
   c.X_WC = X_WC;
-  c.X_WC_readout_start = readout_ns > 0 ? recent_camera_pose(t - readout_ns) : X_WC;
+  c.X_WC_readout_start = readout_ns > 0 ? pose_at(k.recent_X_WC, t - readout_ns) : X_WC;
   c.noise_seed = k.render_noise.next_u64();  // one per capture, sent or not
   k.X_WC_prev_frame = c.X_WC;
   while (event_time(k.k_frame, k.frame_mhz) <= t) ++k.k_frame;

@@ -144,8 +144,6 @@ class TelloWorld {
     /// before (capture_due records them).
     std::deque<std::pair<TimeNs, Eigen::Isometry3d>> recent_X_WC;
   } clocks_;
-  /// The camera pose at t (recent_X_WC's span), interpolated between the ticks around t.
-  Eigen::Isometry3d recent_camera_pose(TimeNs t) const;
 };
 
 }  // namespace shelfcross::verification
