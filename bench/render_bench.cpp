@@ -13,6 +13,8 @@
 // 2 grey levels), the configuration the renderer's frame budget is set for. BM_RenderMeshOnly and
 // BM_RenderFinishOnly time two CPU stages alone: the per-frame lens mesh (cull, clip, split,
 // project) and the fused RGBA->BGR + noise pass; draw + readback is the rest.
+// BM_RenderFrameRolling/turning:1 is a rolling-shutter frame (see below), turning:0 the same
+// renderer held still.
 #include <benchmark/benchmark.h>
 
 #include <cstdlib>
@@ -79,6 +81,43 @@ void BM_RenderMeshOnly(benchmark::State& state) {
   state.counters["triangles"] = static_cast<double>(mesher.indices().size() / 3);
 }
 BENCHMARK(BM_RenderMeshOnly)->MeasureProcessCPUTime()->Unit(benchmark::kMillisecond);
+
+// A rolling-shutter frame (render_rolling_into): the camera turning at 0.5 rad/s over a 20 ms
+// readout, with the sensor noise, on a renderer whose faces are clipped
+// rolling_shutter_margin_px = 47 px outside the image: the margin
+// render_options_for gives a scenario whose readout may reach the 30 fps frame period
+// (fx 921 px x 3 rad/s x 33.3 ms / 2). turning:0 is the same renderer held still (the global
+// shutter's path, with the wider margin).
+Renderer& rolling_bench_renderer() {
+  ::setenv("LP_NUM_THREADS", "1", 1);
+  cv::setNumThreads(1);
+  static Renderer r(shelfcross::render::test::paper_test_shelf(), CameraIntrinsics{}, [] {
+    RenderOptions o;
+    o.noise_stddev = kDefaultNoise;
+    o.rolling_shutter_margin_px = 47.0;
+    return o;
+  }());
+  return r;
+}
+
+void BM_RenderFrameRolling(benchmark::State& state) {
+  Renderer& r = rolling_bench_renderer();
+  const bool turning = state.range(0) != 0;
+  const Eigen::Isometry3d X_end = bench_pose();
+  const Eigen::Isometry3d X_start =
+      turning ? shelfcross::render::test::camera_looking_forward({0.8, 0.0, 0.98}, -0.5 * 0.020) : X_end;
+  state.SetLabel(r.gl_renderer_name());
+  cv::Mat bgr;
+  std::uint64_t seed = 0;
+  r.render_rolling_into(X_start, X_end, seed, bgr);
+  for (auto _ : state) {
+    r.render_rolling_into(X_start, X_end, ++seed, bgr);
+    benchmark::DoNotOptimize(bgr.data);
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_RenderFrameRolling)->Arg(1)->Arg(0)->ArgName("turning")->MeasureProcessCPUTime()
+    ->Unit(benchmark::kMillisecond);
 
 void BM_RenderFinishOnly(benchmark::State& state) {
   cv::setNumThreads(1);

@@ -174,6 +174,32 @@ void build_kd_cells(LensGrid& g, Fits&& fits, double x_to_y_pixels) {
   find_hanging_points(g.cells);
 }
 
+// The lens's statistics at normalised point p by central differences of step h, over 36
+// directions e: Mf = max |D''(e, e)|, Mp = max |n(e) . D''(e, e)| with n(e) the unit normal of
+// J e (the image direction of e), Jmin = min |J e|. False where the Jacobian is not positive
+// (the lens folds over).
+bool second_derivative_stats(const CameraIntrinsics& K, const Vec2& p, double h, LensStats::Stats& st) {
+  const Vec2 c = pixel_of_normalized(K, p);
+  const Vec2 xp = pixel_of_normalized(K, p + Vec2(h, 0)), xm = pixel_of_normalized(K, p - Vec2(h, 0));
+  const Vec2 yp = pixel_of_normalized(K, p + Vec2(0, h)), ym = pixel_of_normalized(K, p - Vec2(0, h));
+  const Vec2 pp = pixel_of_normalized(K, p + Vec2(h, h)), pm = pixel_of_normalized(K, p + Vec2(h, -h));
+  const Vec2 mp = pixel_of_normalized(K, p + Vec2(-h, h)), mm = pixel_of_normalized(K, p + Vec2(-h, -h));
+  const Vec2 dxx = (xp - 2.0 * c + xm) / (h * h), dyy = (yp - 2.0 * c + ym) / (h * h);
+  const Vec2 dxy = (pp - pm - mp + mm) / (4.0 * h * h);
+  const Vec2 jx = (xp - xm) / (2.0 * h), jy = (yp - ym) / (2.0 * h);
+  if (!(jx.x() * jy.y() - jx.y() * jy.x() > 0.0)) return false;
+  for (int k = 0; k < 36; ++k) {
+    const double th = M_PI * k / 36.0, ex = std::cos(th), ey = std::sin(th);
+    const Vec2 d2 = ex * ex * dxx + 2.0 * ex * ey * dxy + ey * ey * dyy;
+    const Vec2 je = ex * jx + ey * jy;
+    const double jn = je.norm();
+    st.Mf = std::max(st.Mf, d2.norm());
+    st.Mp = std::max(st.Mp, std::abs(je.x() * d2.y() - je.y() * d2.x()) / jn);
+    st.Jmin = std::min(st.Jmin, jn);
+  }
+  return true;
+}
+
 }  // namespace
 
 LensGrids make_lens_grids(const CameraIntrinsics& K, double tolerance_px, double margin_px) {
@@ -223,26 +249,9 @@ LensGrids make_lens_grids(const CameraIntrinsics& K, double tolerance_px, double
     for (int i = 0; i < nx; ++i) {
       const Vec2 p(ox + i * step, oy + j * step);
       const Vec2 c = pixel_of_normalized(K, p);
-      const Vec2 xp = pixel_of_normalized(K, p + Vec2(h, 0)), xm = pixel_of_normalized(K, p - Vec2(h, 0));
-      const Vec2 yp = pixel_of_normalized(K, p + Vec2(0, h)), ym = pixel_of_normalized(K, p - Vec2(0, h));
-      const Vec2 pp = pixel_of_normalized(K, p + Vec2(h, h)), pm = pixel_of_normalized(K, p + Vec2(h, -h));
-      const Vec2 mp = pixel_of_normalized(K, p + Vec2(-h, h)), mm = pixel_of_normalized(K, p + Vec2(-h, -h));
-      const Vec2 dxx = (xp - 2.0 * c + xm) / (h * h), dyy = (yp - 2.0 * c + ym) / (h * h);
-      const Vec2 dxy = (pp - pm - mp + mm) / (4.0 * h * h);
-      const Vec2 jx = (xp - xm) / (2.0 * h), jy = (yp - ym) / (2.0 * h);
-      if (!(jx.x() * jy.y() - jx.y() * jy.x() > 0.0)) {
-        fail(c.x(), c.y(), "folds over (Jacobian not positive) in the region the image sees");
-      }
       Stats st;
-      for (int k = 0; k < 36; ++k) {
-        const double th = M_PI * k / 36.0, ex = std::cos(th), ey = std::sin(th);
-        const Vec2 d2 = ex * ex * dxx + 2.0 * ex * ey * dxy + ey * ey * dyy;
-        const Vec2 je = ex * jx + ey * jy;
-        const double jn = je.norm();
-        st.Mf = std::max(st.Mf, d2.norm());
-        st.Mp = std::max(st.Mp, std::abs(je.x() * d2.y() - je.y() * d2.x()) / jn);
-        st.Jmin = std::min(st.Jmin, jn);
-      }
+      if (!second_derivative_stats(K, p, h, st))
+        fail(c.x(), c.y(), "folds over (Jacobian not positive) in the region the image sees");
       // The direction samples are 5 degrees apart: a 2 % allowance for the maxima between them.
       st.Mf *= 1.02, st.Mp *= 1.02;
       lattice[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(i)] = st;
@@ -324,13 +333,13 @@ void split_by_grid(const LensGrid& grid, const std::vector<Vec2>& poly, std::vec
 }
 
 LensMesher::LensMesher(const CameraIntrinsics& K, int supersample, double near_m, double far_m,
-                       double tolerance_px)
+                       double tolerance_px, double margin_px)
     : K_(K),
       s_(supersample),
       near_m_(near_m),
       far_m_(far_m),
       tolerance_px_(tolerance_px),
-      grids_(make_lens_grids(K, tolerance_px)),
+      grids_(make_lens_grids(K, tolerance_px, margin_px)),
       region_(LensGrid::one_cell(grids_.edges.x_min, grids_.edges.x_max, grids_.edges.y_min, grids_.edges.y_max)) {
   const int s = supersample;
   clip_from_camera_ = gl_clip_from_camera(s * K.fx_px, s * K.fy_px, s * K.cx_px + 0.5 * (s - 1),
@@ -340,6 +349,17 @@ LensMesher::LensMesher(const CameraIntrinsics& K, int supersample, double near_m
 
 Eigen::Vector2d LensMesher::pixel_of(const Vec2& xy) const {
   return s_ * pixel_of_normalized(K_, xy) + Vec2::Constant(0.5 * (s_ - 1));
+}
+
+Eigen::Vector4d LensMesher::clip_of(const Vec2& px, double Z) const {
+  const double fx_s = s_ * K_.fx_px, fy_s = s_ * K_.fy_px;
+  const double cx_s = s_ * K_.cx_px + 0.5 * (s_ - 1), cy_s = s_ * K_.cy_px + 0.5 * (s_ - 1);
+  return clip_from_camera_ * Eigen::Vector4d((px.x() - cx_s) / fx_s * Z, (px.y() - cy_s) / fy_s * Z, Z, 1.0);
+}
+
+void LensMesher::build(const ReadoutPoses& readout) {
+  build(readout.middle_pose());
+  readout.move_vertices(*this, vertices_, points_C_);
 }
 
 void LensMesher::set_faces(FaceGroup group, std::vector<MeshFace> faces) {
@@ -525,16 +545,10 @@ bool LensMesher::add_face(const Face& f, const Eigen::Isometry3d& X_CW, const Ve
   // Texture coordinates, affine on the face: uv = uv0 + s (uv1 - uv0) + t (uv3 - uv0).
   const Vec3 g1_C = R_CW * f.e1_dual_W, g2_C = R_CW * f.e2_dual_W;
   const Eigen::Vector2f duv1 = m.uv[1] - m.uv[0], duv3 = m.uv[3] - m.uv[0];
-  // Clip coordinates: the point with the vertex's true depth Z that the x s pinhole camera of
-  // gl_clip_from_camera sees at the vertex's (distorted) pixel, so x_ndc = 2 (u_s + 0.5) / W - 1
-  // as for any pinhole point and w = Z for perspective-correct interpolation.
-  const Eigen::Matrix4d& P = clip_from_camera_;
-  const double fx_s = s_ * K_.fx_px, fy_s = s_ * K_.fy_px;
-  const double cx_s = s_ * K_.cx_px + 0.5 * (s_ - 1), cy_s = s_ * K_.cy_px + 0.5 * (s_ - 1);
+  // Clip coordinates from the vertex's (distorted) pixel and its true depth Z (clip_of).
   auto add_vertex = [&](const Vec2& xy, const Vec2& px) {
     const double Z = d_C / n_C.dot(Vec3(xy.x(), xy.y(), 1.0));
-    const Eigen::Vector4d clip =
-        P * Eigen::Vector4d((px.x() - cx_s) / fx_s * Z, (px.y() - cy_s) / fy_s * Z, Z, 1.0);
+    const Eigen::Vector4d clip = clip_of(px, Z);
     GpuVertex gv;
     for (int c = 0; c < 4; ++c) gv.clip[c] = static_cast<float>(clip[c]);
     for (int c = 0; c < 3; ++c) gv.rgb[c] = m.rgb[c];

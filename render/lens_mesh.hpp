@@ -65,6 +65,7 @@
 #include <Eigen/Geometry>
 
 #include "render/lens_stats.hpp"
+#include "render/rolling_shutter.hpp"
 #include "shelfcross/camera.hpp"
 
 namespace shelfcross::render {
@@ -161,8 +162,9 @@ class LensMesher {
  public:
   /// `supersample` s: the image is rasterised at s times the size, pixel u_s = s u + (s-1)/2
   /// (the centre of the s x s block that becomes pixel u). Clip planes at Z = near_m, far_m.
+  /// Faces are clipped margin_px (output pixels) outside the image (the lens grids' region).
   LensMesher(const CameraIntrinsics& K, int supersample, double near_m, double far_m,
-             double tolerance_px);
+             double tolerance_px, double margin_px = 2.0);
 
   void set_faces(FaceGroup group, std::vector<MeshFace> faces);
   /// Whether the group is drawn with the depth test (the default). A group drawn without it
@@ -173,11 +175,15 @@ class LensMesher {
   /// The triangles of one frame from camera pose X_WC: vertices() and indices(), the
   /// indices of group g at [first_index(g), first_index(g + 1)).
   void build(const Eigen::Isometry3d& X_WC);
+  /// The same under a rolling shutter (rolling_shutter.hpp): culled, clipped and split at the
+  /// readout's middle pose, then every vertex moved to where the pose of its own row puts its
+  /// point of the face.
+  void build(const ReadoutPoses& readout);
 
   const std::vector<GpuVertex>& vertices() const { return vertices_; }
   const std::vector<std::uint32_t>& indices() const { return indices_; }
   /// The camera-frame point (metres) of each vertex, in double precision: what the vertex is
-  /// the projection of (for tests).
+  /// the projection of (for tests; under a rolling shutter, in the camera at its row's pose).
   const std::vector<Eigen::Vector3d>& points_C() const { return points_C_; }
   std::size_t first_index(int group) const { return group_start_[static_cast<std::size_t>(group)]; }
 
@@ -198,6 +204,13 @@ class LensMesher {
 
   /// The pixel (at the rasterised size) of a normalised point: exact, double precision.
   Eigen::Vector2d pixel_of(const Eigen::Vector2d& xy) const;
+  /// GL's clip coordinates of a vertex at pixel px (rasterised size) with depth Z: the point
+  /// with that depth that the x s pinhole camera of gl_clip_from_camera sees at px, so x_ndc =
+  /// 2 (u_s + 0.5) / W - 1 as for any pinhole point and w = Z (perspective-correct interpolation).
+  Eigen::Vector4d clip_of(const Eigen::Vector2d& px, double Z) const;
+  int supersample() const { return s_; }
+  const CameraIntrinsics& intrinsics() const { return K_; }
+  double near_m() const { return near_m_; }
 
  private:
   struct Face {

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <map>
+#include <limits>
 #include <sstream>
 #include <vector>
 
@@ -11,207 +11,17 @@
 #include <GL/gl.h>
 #include <GL/glext.h>
 
-#include <opencv2/aruco.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "render/frame_target.hpp"
+#include "render/gl_program.hpp"
 #include "render/lens_mesh.hpp"
 #include "render/noise.hpp"
+#include "render/rolling_shutter.hpp"
 #include "render/scene.hpp"
+#include "render/world_faces.hpp"
 
 namespace shelfcross::render {
-namespace {
-
-// Printed black is not black: ~4 % reflectance; in the sRGB-encoded product texel * colour
-// this is about 0.2 of white.
-constexpr std::uint8_t kBlackTexel = 51;
-// Tags are lit only lightly so that their colour survives the lighting range:
-// shade_tag = kTagFlat + (1 - kTagFlat) * shade.
-constexpr double kTagFlat = 0.7;
-// Albedo of the marker paper.
-constexpr double kPaperAlbedo = 0.90;
-// The texture coordinates of a face without texture: zeros. (Eigen's default constructor leaves
-// a vector's coefficients unset, and copying them would read indeterminate values.)
-const std::array<Eigen::Vector2f, 4> kNoTexture{Eigen::Vector2f::Zero(), Eigen::Vector2f::Zero(),
-                                                Eigen::Vector2f::Zero(), Eigen::Vector2f::Zero()};
-
-double srgb_encode(double linear) {
-  const double c = std::clamp(linear, 0.0, 1.0);
-  return c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055;
-}
-
-// Vertices arrive in clip coordinates, the lens already applied (lens_mesh.hpp). Flat faces
-// pass on only their colour (fewer interpolants: cheaper triangle set-up on llvmpipe).
-const char* kFlatVertexShader = R"(#version 330 core
-layout(location = 0) in vec4 clip;
-layout(location = 1) in vec3 rgb;
-flat out vec3 v_rgb;
-void main() {
-  gl_Position = clip;
-  v_rgb = rgb;
-}
-)";
-
-const char* kTexturedVertexShader = R"(#version 330 core
-layout(location = 0) in vec4 clip;
-layout(location = 1) in vec3 rgb;
-layout(location = 2) in vec2 uv;
-flat out vec3 v_rgb;
-out vec2 v_uv;
-void main() {
-  gl_Position = clip;
-  v_rgb = rgb;
-  v_uv = uv;
-}
-)";
-
-// Untextured faces: the colour alone. (On llvmpipe a texture fetch per pixel costs more than
-// the rest of the pipeline, so only marker faces pay for it.)
-const char* kFlatFragmentShader = R"(#version 330 core
-flat in vec3 v_rgb;
-layout(location = 0) out vec4 colour;
-void main() {
-  colour = vec4(v_rgb, 1.0);
-}
-)";
-
-const char* kTexturedFragmentShader = R"(#version 330 core
-flat in vec3 v_rgb;
-in vec2 v_uv;
-uniform sampler2D atlas;
-layout(location = 0) out vec4 colour;
-void main() {
-  colour = vec4(v_rgb * texture(atlas, v_uv).r, 1.0);
-}
-)";
-
-GLuint compile_shader(GLenum type, const char* source) {
-  GLuint s = glCreateShader(type);
-  glShaderSource(s, 1, &source, nullptr);
-  glCompileShader(s);
-  GLint ok = 0;
-  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    char log[2048] = {0};
-    glGetShaderInfoLog(s, sizeof log, nullptr, log);
-    glDeleteShader(s);
-    throw RenderError(std::string("OpenGL: shader compilation failed: ") + log);
-  }
-  return s;
-}
-
-GLuint link_program(const char* vertex_source, const char* fragment_source) {
-  const GLuint vs = compile_shader(GL_VERTEX_SHADER, vertex_source);
-  const GLuint fs = compile_shader(GL_FRAGMENT_SHADER, fragment_source);
-  const GLuint program = glCreateProgram();
-  glAttachShader(program, vs);
-  glAttachShader(program, fs);
-  glLinkProgram(program);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
-  GLint ok = 0;
-  glGetProgramiv(program, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    char log[2048] = {0};
-    glGetProgramInfoLog(program, sizeof log, nullptr, log);
-    glDeleteProgram(program);
-    throw RenderError(std::string("OpenGL: program link failed: ") + log);
-  }
-  return program;
-}
-
-void check_gl(const char* where) {
-  const GLenum e = glGetError();
-  if (e != GL_NO_ERROR) {
-    std::ostringstream os;
-    os << "OpenGL: error 0x" << std::hex << e << " during " << where;
-    throw RenderError(os.str());
-  }
-}
-
-// Builds the faces of the whole static world (lens_mesh.hpp turns them into triangles per frame).
-class FaceBuilder {
- public:
-  FaceBuilder(const Lighting& lighting, double light_scale)
-      : lighting_(lighting), light_scale_(light_scale) {
-    light_to_W_ = -lighting.direction_W.normalized();
-  }
-
-  // Lambert: ambient + directional * max(0, n . l), l toward the light.
-  double shade(const Eigen::Vector3d& n_W) const {
-    return lighting_.ambient + lighting_.directional * std::max(0.0, n_W.dot(light_to_W_));
-  }
-  // The face's 8-bit colour k / 255, k = round(255 srgb): the byte GL writes for it, whether
-  // a fragment or a clear (renderer.cpp clears to a room face's colour) writes it.
-  Eigen::Vector3f colour(const Rgb& albedo, double shade_factor) const {
-    const double k = shade_factor * light_scale_;
-    auto byte = [](double linear) {
-      return static_cast<float>(std::nearbyint(255.0 * srgb_encode(linear)) / 255.0);
-    };
-    return {byte(albedo.r * k), byte(albedo.g * k), byte(albedo.b * k)};
-  }
-
-  // A quad c0 c1 c2 c3 (in order around its edge), seen from the side n_W points to.
-  void face(FaceGroup group, const std::array<Eigen::Vector3d, 4>& c, const Eigen::Vector3d& n_W,
-            const Eigen::Vector3f& rgb, const std::array<Eigen::Vector2f, 4>& uv = kNoTexture,
-            int solid = -1) {
-    MeshFace f;
-    f.corners_W_m = c;
-    f.normal_W = n_W;
-    f.rgb = rgb;
-    f.uv = uv;
-    f.solid = solid;
-    faces_[static_cast<std::size_t>(group)].push_back(f);
-  }
-  // A new id for the faces of one closed solid (MeshFace::solid).
-  int new_solid() { return next_solid_++; }
-
-  // An axis-aligned box [lo, hi] in a frame X_WF: six faces, lit by and seen along their
-  // outward normals.
-  void cuboid(const Eigen::Isometry3d& X_WF, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
-              const Rgb& albedo) {
-    const int solid = new_solid();
-    for (int axis = 0; axis < 3; ++axis) {
-      const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
-      for (int side = 0; side < 2; ++side) {
-        Eigen::Vector3d n_F = Eigen::Vector3d::Zero();
-        n_F[axis] = side ? 1.0 : -1.0;
-        std::array<Eigen::Vector3d, 4> c;
-        const double uv_a[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-        for (int k = 0; k < 4; ++k) {
-          Eigen::Vector3d p;
-          p[axis] = side ? hi[axis] : lo[axis];
-          p[a1] = uv_a[k][0] ? hi[a1] : lo[a1];
-          p[a2] = uv_a[k][1] ? hi[a2] : lo[a2];
-          c[static_cast<size_t>(k)] = X_WF * p;
-        }
-        const Eigen::Vector3d n_W = X_WF.linear() * n_F;
-        face(kFlatFaces, c, n_W, colour(albedo, shade(n_W)), kNoTexture, solid);
-      }
-    }
-  }
-
-  std::vector<MeshFace>& faces(FaceGroup group) { return faces_[static_cast<std::size_t>(group)]; }
-
- private:
-  Lighting lighting_;
-  double light_scale_;
-  Eigen::Vector3d light_to_W_;
-  std::array<std::vector<MeshFace>, kFaceGroups> faces_;
-  int next_solid_ = 0;
-};
-
-Eigen::Isometry3d interpolate_pose(const Eigen::Isometry3d& X0, const Eigen::Isometry3d& X1,
-                                   double s) {
-  const Eigen::Quaterniond q0(X0.linear()), q1(X1.linear());
-  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-  X.linear() = q0.slerp(s, q1).normalized().toRotationMatrix();
-  X.translation() = (1.0 - s) * X0.translation() + s * X1.translation();
-  return X;
-}
-
-}  // namespace
-
 struct Renderer::Impl {
   Warehouse warehouse;
   CameraIntrinsics K;
@@ -240,7 +50,7 @@ struct Renderer::Impl {
       : warehouse(w),
         K(k),
         options(o),
-        mesher(k, o.supersample, o.near_m, o.far_m, kLensChordTolerance_px),
+        mesher(k, o.supersample, o.near_m, o.far_m, kLensChordTolerance_px, 2.0 + o.rolling_shutter_margin_px),
         hi_width(k.width_px * o.supersample),
         hi_height(k.height_px * o.supersample),
         egl(o.egl_platform) {
@@ -252,7 +62,9 @@ struct Renderer::Impl {
 
   void build(const SceneLayout& layout);
   void release_gl();  // deletes the GL objects build() made (context current)
-  void draw(const Eigen::Isometry3d& X_WC);  // the frame into the framebuffer
+  // The frame into the framebuffer: row v exposed at the pose of readout fraction v / rows
+  // between X_WC_start and X_WC_end (equal poses: a global shutter at X_WC_end).
+  void draw(const Eigen::Isometry3d& X_WC_start, const Eigen::Isometry3d& X_WC_end);
   void read();                                // framebuffer -> image() (1x image size)
   void finish(std::uint64_t noise_seed, cv::Mat& bgr);  // image() -> bgr
   // RGBA rows first_row.. of the frame -> the same rows of bgr (allocated): BGR, noise added
@@ -262,80 +74,11 @@ struct Renderer::Impl {
 };
 
 void Renderer::Impl::build(const SceneLayout& layout) {
-  // ---- marker atlas: tile 0 white, then one tile per distinct marker ID ----
-  const int tile = layout.marker_bits + 2 + 2 * kQuietZoneCells;
-  std::map<int, int> tile_of_id;
-  for (const MarkerQuad& m : layout.markers) tile_of_id.emplace(m.marker_id, 0);
-  int next_tile = 1;
-  for (auto& [id, t] : tile_of_id) t = next_tile++;
-  const int atlas_w = tile * next_tile;
-  cv::Mat atlas_img(tile, atlas_w, CV_8UC1, cv::Scalar(255));
-  const cv::Ptr<cv::aruco::Dictionary> dict =
-      cv::aruco::getPredefinedDictionary(layout.aruco_dictionary_id);
-  for (const auto& [id, t] : tile_of_id) {
-    cv::Mat marker;  // one pixel per marker cell, black border one cell wide
-    cv::aruco::drawMarker(dict, id, layout.marker_bits + 2, marker, 1);
-    cv::Mat dst = atlas_img(cv::Rect(t * tile + kQuietZoneCells, kQuietZoneCells,
-                                     layout.marker_bits + 2, layout.marker_bits + 2));
-    marker.copyTo(dst);
-  }
-  atlas_img.setTo(cv::Scalar(kBlackTexel), atlas_img == 0);
-
-  // ---- static world ----
-  FaceBuilder mesh(warehouse.lighting, options.light_scale);
-  for (const Cuboid& c : layout.cuboids) {
-    const Rgb& albedo = c.kind == Cuboid::Kind::kBox ? warehouse.box_colour : warehouse.bar_colour;
-    mesh.cuboid(layout.X_WS[static_cast<size_t>(c.shelf)], c.min_S_m, c.max_S_m, albedo);
-  }
-  for (const TagQuad& t : layout.tags) {
-    mesh.face(kDecalFaces, t.corners_W_m, t.normal_W,
-              mesh.colour(warehouse.tag_colour, kTagFlat + (1.0 - kTagFlat) * mesh.shade(t.normal_W)));
-    // Tags are coloured on their outer side only: half-way between the tag and the bar, a
-    // backing square in the bar colour, facing inward, is what shows from inside the shelf (a
-    // tag of the back face seen through the cells from the front is not a tag blob).
-    std::array<Eigen::Vector3d, 4> back = t.corners_W_m;
-    for (auto& c : back) c -= 0.5 * kSurfaceOffset_m * t.normal_W;
-    mesh.face(kFlatFaces, back, -t.normal_W, mesh.colour(warehouse.bar_colour, mesh.shade(-t.normal_W)));
-  }
-  // Room: floor, ceiling, four walls, as the inside of the arena box (normals inward).
-  const Eigen::Vector3d lo = warehouse.arena_min_W_m, hi = warehouse.arena_max_W_m;
-  arena = Eigen::AlignedBox3d(lo, hi);
-  const int room_solid = mesh.new_solid();
-  auto room_face = [&](int axis, bool high, const Rgb& albedo) {
-    // One face of the arena box, lit by and seen along its inward normal.
-    const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
-    std::array<Eigen::Vector3d, 4> c;
-    const double uv_a[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-    for (int k = 0; k < 4; ++k) {
-      Eigen::Vector3d p;
-      p[axis] = high ? hi[axis] : lo[axis];
-      p[a1] = uv_a[k][0] ? hi[a1] : lo[a1];
-      p[a2] = uv_a[k][1] ? hi[a2] : lo[a2];
-      c[static_cast<size_t>(k)] = p;
-    }
-    Eigen::Vector3d n = Eigen::Vector3d::Zero();
-    n[axis] = high ? -1.0 : 1.0;
-    mesh.face(kRoomFaces, c, n, mesh.colour(albedo, mesh.shade(n)), kNoTexture, room_solid);
-  };
-  room_face(2, false, warehouse.floor_colour);
-  room_face(2, true, warehouse.wall_colour);
-  for (int axis : {0, 1})
-    for (bool high : {false, true}) room_face(axis, high, warehouse.wall_colour);
-  for (const MarkerQuad& m : layout.markers) {
-    const float u0 = static_cast<float>(tile_of_id.at(m.marker_id) * tile) / atlas_w;
-    const float u1 = static_cast<float>((tile_of_id.at(m.marker_id) + 1) * tile) / atlas_w;
-    // Corners TL TR BR BL <- image rows top (v = 0) to bottom (v = 1).
-    mesh.face(kTexturedFaces, m.quiet_corners_W_m, m.normal_W,
-              mesh.colour({kPaperAlbedo, kPaperAlbedo, kPaperAlbedo}, mesh.shade(m.normal_W)),
-              {Eigen::Vector2f(u0, 0.f), Eigen::Vector2f(u1, 0.f), Eigen::Vector2f(u1, 1.f),
-               Eigen::Vector2f(u0, 1.f)});
-  }
-  room_first = true;
-  for (FaceGroup g : {kFlatFaces, kDecalFaces, kTexturedFaces})
-    for (const MeshFace& f : mesh.faces(g))
-      for (const Eigen::Vector3d& c : f.corners_W_m) room_first = room_first && arena.contains(c);
+  WorldFaces world = build_world_faces(warehouse, layout, options.light_scale);
+  arena = world.arena;
+  room_first = world.room_first;
   for (FaceGroup g : {kRoomFaces, kFlatFaces, kDecalFaces, kTexturedFaces})
-    mesher.set_faces(g, std::move(mesh.faces(g)));
+    mesher.set_faces(g, std::move(world.faces[static_cast<std::size_t>(g)]));
   // Drawn first, without the depth test (draw): the room's faces need no depth inside.
   mesher.set_depth_tested(kRoomFaces, !room_first);
 
@@ -346,8 +89,8 @@ void Renderer::Impl::build(const SceneLayout& layout) {
   gl_renderer = r ? r : "?";
   gl_version = v ? v : "?";
 
-  flat_program = link_program(kFlatVertexShader, kFlatFragmentShader);
-  textured_program = link_program(kTexturedVertexShader, kTexturedFragmentShader);
+  flat_program = link_flat_program();
+  textured_program = link_textured_program();
   glUseProgram(textured_program);
   glUniform1i(glGetUniformLocation(textured_program, "atlas"), 0);
 
@@ -369,7 +112,8 @@ void Renderer::Impl::build(const SceneLayout& layout) {
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, atlas);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  glTexImage2D(GL_TEXTURE_2D, 0, GL_R8, atlas_w, tile, 0, GL_RED, GL_UNSIGNED_BYTE, atlas_img.data);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_R8, world.atlas.cols, world.atlas.rows, 0, GL_RED, GL_UNSIGNED_BYTE,
+               world.atlas.data);
   // Nearest: marker cells stay crisp; cell edges fall exactly where the geometry puts them.
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
@@ -396,9 +140,13 @@ void Renderer::Impl::build(const SceneLayout& layout) {
   band.create(kBandRows, K.width_px, CV_8UC4);
 }
 
-void Renderer::Impl::draw(const Eigen::Isometry3d& X_WC) {
+void Renderer::Impl::draw(const Eigen::Isometry3d& X_WC_start, const Eigen::Isometry3d& X_WC_end) {
   egl.make_current();
-  mesher.build(X_WC);
+  if (X_WC_start.matrix() == X_WC_end.matrix()) {  // a still camera: the global shutter's path
+    mesher.build(X_WC_end);
+  } else {
+    mesher.build(ReadoutPoses(X_WC_start, X_WC_end));
+  }
   const std::vector<GpuVertex>& vertices = mesher.vertices();
   const std::vector<std::uint32_t>& indices = mesher.indices();
   target.bind();
@@ -412,11 +160,15 @@ void Renderer::Impl::draw(const Eigen::Isometry3d& X_WC) {
   // plane from every wall along every ray (Z >= distance / max |(x, y, 1)|) and nearer than the
   // far plane to every corner (each pixel then shows exactly one room face or something in
   // front of it).
-  const Eigen::Vector3d p = X_WC.translation();
-  const double wall_distance = std::min((p - arena.min()).minCoeff(), (arena.max() - p).minCoeff());
-  double farthest = 0.0;
-  for (int c = 0; c < 8; ++c)
-    farthest = std::max(farthest, (arena.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c)) - p).norm());
+  // (Under a rolling shutter, from both ends of the readout: the straight path between them
+  // stays inside the box the two bound.)
+  double wall_distance = std::numeric_limits<double>::infinity(), farthest = 0.0;
+  for (const Eigen::Isometry3d* X : {&X_WC_start, &X_WC_end}) {
+    const Eigen::Vector3d p = X->translation();
+    wall_distance = std::min({wall_distance, (p - arena.min()).minCoeff(), (arena.max() - p).minCoeff()});
+    for (int c = 0; c < 8; ++c)
+      farthest = std::max(farthest, (arena.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c)) - p).norm());
+  }
   const bool room_covers = room_first && wall_distance > options.near_m * max_ray_stretch &&
                            farthest < options.far_m;
   // When the room covers the view, its largest face is not drawn: the colour fill that starts
@@ -522,13 +274,15 @@ Renderer::Renderer(const Warehouse& warehouse, const CameraIntrinsics& intrinsic
   if (!(options.noise_stddev >= 0.0) || options.motion_blur_samples < 1 ||
       options.motion_blur_samples > 64 || !(options.light_scale >= 0.0) ||
       options.supersample < 1 || options.supersample > 4 || !(options.near_m > 0.0) ||
-      !(options.far_m > options.near_m)) {
+      !(options.far_m > options.near_m) || !(options.rolling_shutter_margin_px >= 0.0) ||
+      !(options.rolling_shutter_margin_px <= 1000.0)) {
     std::ostringstream os;
     os << "render options invalid: need noise_stddev >= 0 (" << options.noise_stddev
        << "), motion_blur_samples 1..64 (" << options.motion_blur_samples
        << "), light_scale >= 0 (" << options.light_scale << "), supersample 1..4 ("
        << options.supersample << "), 0 < near_m < far_m (" << options.near_m << ", "
-       << options.far_m << ")";
+       << options.far_m << "), rolling_shutter_margin_px 0..1000 ("
+       << options.rolling_shutter_margin_px << ")";
     throw RenderError(os.str());
   }
   const SceneLayout layout = build_scene_layout(warehouse);  // validates before EGL
@@ -577,7 +331,13 @@ cv::Mat Renderer::render(const Eigen::Isometry3d& X_WC, std::uint64_t noise_seed
 
 void Renderer::render_into(const Eigen::Isometry3d& X_WC, std::uint64_t noise_seed,
                            cv::Mat& bgr) {
-  impl_->draw(X_WC);
+  impl_->draw(X_WC, X_WC);
+  impl_->read_and_finish(noise_seed, bgr);
+}
+
+void Renderer::render_rolling_into(const Eigen::Isometry3d& X_WC_start, const Eigen::Isometry3d& X_WC_end,
+                                   std::uint64_t noise_seed, cv::Mat& bgr) {
+  impl_->draw(X_WC_start, X_WC_end);
   impl_->read_and_finish(noise_seed, bgr);
 }
 
@@ -591,11 +351,20 @@ cv::Mat Renderer::render_blurred(const Eigen::Isometry3d& X_WC_prev, const Eigen
 void Renderer::render_blurred_into(const Eigen::Isometry3d& X_WC_prev,
                                    const Eigen::Isometry3d& X_WC, std::uint64_t noise_seed,
                                    cv::Mat& bgr) {
+  render_blurred_rolling_into(X_WC_prev, X_WC, X_WC, noise_seed, bgr);
+}
+
+void Renderer::render_blurred_rolling_into(const Eigen::Isometry3d& X_WC_prev,
+                                           const Eigen::Isometry3d& X_WC_start,
+                                           const Eigen::Isometry3d& X_WC, std::uint64_t noise_seed,
+                                           cv::Mat& bgr) {
   const int n = impl_->options.motion_blur_samples;
   if (n == 1) {
-    render_into(X_WC, noise_seed, bgr);
+    render_rolling_into(X_WC_start, X_WC, noise_seed, bgr);
     return;
   }
+  const bool still = X_WC_start.matrix() == X_WC.matrix();
+  const Eigen::Isometry3d X_CC_readout = X_WC.inverse(Eigen::Isometry) * X_WC_start;
   Impl& m = *impl_;
   cv::Mat& image = m.image();
   m.acc.create(image.size(), CV_16UC4);
@@ -603,7 +372,8 @@ void Renderer::render_blurred_into(const Eigen::Isometry3d& X_WC_prev,
   for (int k = 0; k < n; ++k) {
     const Eigen::Isometry3d X =
         k == n - 1 ? X_WC : interpolate_pose(X_WC_prev, X_WC, static_cast<double>(k + 1) / n);
-    m.draw(X);
+    // Each sub-pose's readout ends at it, with the readout's own motion (start relative to end).
+    m.draw(still ? X : X * X_CC_readout, X);
     m.read();
     cv::add(m.acc, image, m.acc, cv::noArray(), CV_16U);
   }

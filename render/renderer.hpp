@@ -24,6 +24,9 @@
 //   5. RGBA -> BGR, fused with the noise when there is some: seeded, see noise.hpp (a field
 //      drawn once, a seeded window of it per frame). Without supersampling or motion blur,
 //      3 and 5 go band by band (a few dozen rows read, then converted while in the cache).
+// A rolling shutter (render_rolling_into, rolling_shutter.hpp) changes step 1 alone: the faces
+// are culled, clipped and split at the readout's middle pose, and every vertex is then moved to
+// where the pose of its own image row puts it; a still camera takes the global path unchanged.
 // Deterministic: the same warehouse, intrinsics, options, pose and seed give byte-identical
 // images from one renderer or several (same machine and driver). No MSAA.
 //
@@ -59,6 +62,11 @@ struct RenderOptions {
   int supersample = 1;            ///< s x s ordered supersampling, 1..4 (deterministic AA)
   double near_m = 0.05;           ///< clip planes of the camera
   double far_m = 50.0;
+  /// Rolling shutter (render_rolling_into): how far, in output pixels, a row's pose may shift
+  /// the picture against the readout's middle pose. Faces are clipped this much farther
+  /// outside the image (2 px beyond it without), so that the border stays covered; 0 for a
+  /// global shutter (rolling_shutter.hpp).
+  double rolling_shutter_margin_px = 0.0;
   /// kFromEnvironment reads SHELFCROSS_EGL=auto|device|surfaceless (unset: auto).
   EglPlatform egl_platform = EglPlatform::kFromEnvironment;
 };
@@ -81,6 +89,13 @@ class Renderer {
   /// allocation when the caller keeps the Mat).
   void render_into(const Eigen::Isometry3d& X_WC, std::uint64_t noise_seed, cv::Mat& bgr);
 
+  /// Rolling shutter (rolling_shutter.hpp): image row v (0 at the top) exposed at readout
+  /// fraction tau = v / height, seen from the pose interpolated between X_WC_start (tau = 0,
+  /// the readout's start) and X_WC_end (tau = 1): translation linearly, rotation by slerp.
+  /// Equal poses (a still camera) give render_into(X_WC_end)'s picture bit for bit.
+  void render_rolling_into(const Eigen::Isometry3d& X_WC_start, const Eigen::Isometry3d& X_WC_end,
+                           std::uint64_t noise_seed, cv::Mat& bgr);
+
   /// Motion blur: the average of motion_blur_samples renders at the sub-poses
   /// s_k = (k + 1) / N, k = 0..N-1, between X_WC_prev (s = 0, excluded) and X_WC (s = 1),
   /// translation interpolated linearly and rotation by slerp. N = 1 is render(X_WC).
@@ -88,6 +103,11 @@ class Renderer {
                          std::uint64_t noise_seed = 0);
   void render_blurred_into(const Eigen::Isometry3d& X_WC_prev, const Eigen::Isometry3d& X_WC,
                            std::uint64_t noise_seed, cv::Mat& bgr);
+  /// Motion blur under a rolling shutter whose readout ends at X_WC and starts at X_WC_start:
+  /// each sub-pose X_k is the end of a readout with the same motion, from X_k X_WC^-1 X_WC_start
+  /// to X_k. X_WC_start == X_WC gives render_blurred_into's picture.
+  void render_blurred_rolling_into(const Eigen::Isometry3d& X_WC_prev, const Eigen::Isometry3d& X_WC_start,
+                                   const Eigen::Isometry3d& X_WC, std::uint64_t noise_seed, cv::Mat& bgr);
 
   /// Re-targets the renderer at another warehouse (a run's dispersed boxes or lighting) in
   /// the same EGL context: the scene is rebuilt; a warehouse equal to the current one costs

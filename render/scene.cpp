@@ -28,6 +28,68 @@ int aruco_dictionary_id(const std::string& name) {
   throw RenderError("warehouse: unknown ArUco dictionary '" + name + "' (known: " + known + ")");
 }
 
+namespace {
+
+// A square on the plane x_S = x of shelf frame S, centred (y, z), half size h, corners in aruco
+// order as seen from outside: on the front (normal -x_S) left is +y_S, on the back left is -y_S.
+std::array<Eigen::Vector3d, 4> square_W(const Eigen::Isometry3d& X_WS, double x, double y, double z,
+                                        double h, bool front) {
+  const double l = front ? h : -h;  // y offset of the viewer's "left"
+  return {X_WS * Eigen::Vector3d(x, y + l, z + h), X_WS * Eigen::Vector3d(x, y - l, z + h),
+          X_WS * Eigen::Vector3d(x, y - l, z - h), X_WS * Eigen::Vector3d(x, y + l, z - h)};
+}
+
+// Shelf si's boxes (validated: in the grid, a known marker, fitting their cell, one per cell),
+// each a cuboid with a marker on its front and back faces.
+void add_boxes(const Warehouse& w, int si, const Eigen::Isometry3d& X_WS, int dictionary_size,
+               double quiet_half_m, SceneLayout& out) {
+  const ShelfSpec& s = w.shelves[static_cast<size_t>(si)];
+  const int ncols = static_cast<int>(s.column_pitch_m.size());
+  const int nrows = static_cast<int>(s.row_pitch_m.size());
+  const double tp = s.post_thickness_m, tb = s.beam_thickness_m, d = s.depth_m;
+  const Eigen::Vector3d n_front_W = X_WS.linear() * Eigen::Vector3d(-1, 0, 0);
+  for (const BoxPlacement& b : s.boxes) {
+    std::ostringstream where;
+    where << "box at level " << b.level << ", column " << b.column;
+    if (b.level < 1 || b.level > nrows || b.column < 1 || b.column > ncols)
+      fail(s, si, where.str() + " is outside the " + std::to_string(nrows) + " x " +
+                      std::to_string(ncols) + " grid");
+    if (b.marker_id < 0 || b.marker_id >= dictionary_size)
+      fail(s, si, where.str() + ": marker_id " + std::to_string(b.marker_id) +
+                      " is not in " + w.aruco_dictionary + " (0.." +
+                      std::to_string(dictionary_size - 1) + ")");
+    const double clear_w = s.column_pitch_m[static_cast<size_t>(b.column - 1)] - tp;
+    const double clear_h = s.row_pitch_m[static_cast<size_t>(b.level - 1)] - tb;
+    if (w.box_size_m.y() > clear_w || w.box_size_m.z() > clear_h || w.box_size_m.x() > d - tp)
+      fail(s, si, where.str() + ": the box does not fit in its cell");
+    for (const BoxPlacement& other : s.boxes) {
+      if (&other != &b && other.level == b.level && other.column == b.column)
+        fail(s, si, where.str() + ": two boxes in one cell");
+    }
+    const Eigen::Vector3d c = cell_centre_S_m(s, b.level, b.column);
+    const Eigen::Vector3d centre_S(0.5 * d, c.y(),
+                                   beam_z_S_m(s, b.level - 1) + 0.5 * tb + 0.5 * w.box_size_m.z());
+    out.cuboids.push_back({si, Cuboid::Kind::kBox, centre_S - 0.5 * w.box_size_m, centre_S + 0.5 * w.box_size_m});
+    for (bool front : {true, false}) {
+      const double x = front ? centre_S.x() - 0.5 * w.box_size_m.x() - kSurfaceOffset_m
+                             : centre_S.x() + 0.5 * w.box_size_m.x() + kSurfaceOffset_m;
+      MarkerQuad m;
+      m.shelf = si;
+      m.level = b.level;
+      m.column = b.column;
+      m.marker_id = b.marker_id;
+      m.front_face = front;
+      m.centre_W_m = X_WS * Eigen::Vector3d(x, centre_S.y(), centre_S.z());
+      m.normal_W = front ? n_front_W : Eigen::Vector3d(-n_front_W);
+      m.corners_W_m = square_W(X_WS, x, centre_S.y(), centre_S.z(), 0.5 * w.marker_size_m, front);
+      m.quiet_corners_W_m = square_W(X_WS, x, centre_S.y(), centre_S.z(), quiet_half_m, front);
+      out.markers.push_back(m);
+    }
+  }
+}
+
+}  // namespace
+
 SceneLayout build_scene_layout(const Warehouse& w) {
   SceneLayout out;
   out.aruco_dictionary_id = aruco_dictionary_id(w.aruco_dictionary);
@@ -93,15 +155,6 @@ SceneLayout build_scene_layout(const Warehouse& w) {
       }
     }
 
-    // A square on the plane x_S = x, centred (y, z), half size h, corners in aruco order as
-    // seen from outside: on the front (normal -x_S) left is +y_S, on the back left is -y_S.
-    auto square = [&](double x, double y, double z, double h, bool front) {
-      const double l = front ? h : -h;  // y offset of the viewer's "left"
-      std::array<Eigen::Vector3d, 4> c = {
-          X_WS * Eigen::Vector3d(x, y + l, z + h), X_WS * Eigen::Vector3d(x, y - l, z + h),
-          X_WS * Eigen::Vector3d(x, y - l, z - h), X_WS * Eigen::Vector3d(x, y + l, z - h)};
-      return c;
-    };
     const Eigen::Vector3d n_front_W = X_WS.linear() * Eigen::Vector3d(-1, 0, 0);
     const double bar_half = 0.5 * std::max(tp, tb);
     for (bool front : {true, false}) {
@@ -115,50 +168,13 @@ SceneLayout build_scene_layout(const Warehouse& w) {
           t.level_boundary = j;
           t.centre_W_m = X_WS * Eigen::Vector3d(x, post_y_S_m(s, i), beam_z_S_m(s, j));
           t.normal_W = front ? n_front_W : Eigen::Vector3d(-n_front_W);
-          t.corners_W_m = square(x, post_y_S_m(s, i), beam_z_S_m(s, j), 0.5 * w.tag_size_m, front);
+          t.corners_W_m = square_W(X_WS, x, post_y_S_m(s, i), beam_z_S_m(s, j), 0.5 * w.tag_size_m, front);
           out.tags.push_back(t);
         }
       }
     }
 
-    for (const BoxPlacement& b : s.boxes) {
-      std::ostringstream where;
-      where << "box at level " << b.level << ", column " << b.column;
-      if (b.level < 1 || b.level > nrows || b.column < 1 || b.column > ncols)
-        fail(s, si, where.str() + " is outside the " + std::to_string(nrows) + " x " +
-                        std::to_string(ncols) + " grid");
-      if (b.marker_id < 0 || b.marker_id >= dictionary_size)
-        fail(s, si, where.str() + ": marker_id " + std::to_string(b.marker_id) +
-                        " is not in " + w.aruco_dictionary + " (0.." +
-                        std::to_string(dictionary_size - 1) + ")");
-      const double clear_w = s.column_pitch_m[static_cast<size_t>(b.column - 1)] - tp;
-      const double clear_h = s.row_pitch_m[static_cast<size_t>(b.level - 1)] - tb;
-      if (w.box_size_m.y() > clear_w || w.box_size_m.z() > clear_h || w.box_size_m.x() > d - tp)
-        fail(s, si, where.str() + ": the box does not fit in its cell");
-      for (const BoxPlacement& other : s.boxes) {
-        if (&other != &b && other.level == b.level && other.column == b.column)
-          fail(s, si, where.str() + ": two boxes in one cell");
-      }
-      const Eigen::Vector3d c = cell_centre_S_m(s, b.level, b.column);
-      const Eigen::Vector3d centre_S(0.5 * d, c.y(),
-                                     beam_z_S_m(s, b.level - 1) + 0.5 * tb + 0.5 * w.box_size_m.z());
-      add(Cuboid::Kind::kBox, centre_S - 0.5 * w.box_size_m, centre_S + 0.5 * w.box_size_m);
-      for (bool front : {true, false}) {
-        const double x = front ? centre_S.x() - 0.5 * w.box_size_m.x() - kSurfaceOffset_m
-                               : centre_S.x() + 0.5 * w.box_size_m.x() + kSurfaceOffset_m;
-        MarkerQuad m;
-        m.shelf = si;
-        m.level = b.level;
-        m.column = b.column;
-        m.marker_id = b.marker_id;
-        m.front_face = front;
-        m.centre_W_m = X_WS * Eigen::Vector3d(x, centre_S.y(), centre_S.z());
-        m.normal_W = front ? n_front_W : Eigen::Vector3d(-n_front_W);
-        m.corners_W_m = square(x, centre_S.y(), centre_S.z(), 0.5 * w.marker_size_m, front);
-        m.quiet_corners_W_m = square(x, centre_S.y(), centre_S.z(), quiet_half_m, front);
-        out.markers.push_back(m);
-      }
-    }
+    add_boxes(w, si, X_WS, dictionary_size, quiet_half_m, out);
   }
   return out;
 }

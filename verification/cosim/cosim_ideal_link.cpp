@@ -182,9 +182,10 @@ void IdealLink::capture(TimeNs t) {
   const TimeNs arrival = faults_.due(DatagramFaults::Channel::video, t);
   cv::Mat& frame_bgr = free_frame_buffer();
   if (run_.cs.motion_blur_samples > 1) {
-    run_.renderer.render_blurred_into(capture->X_WC_prev, capture->X_WC, capture->noise_seed, frame_bgr);
+    run_.renderer.render_blurred_rolling_into(capture->X_WC_prev, capture->X_WC_readout_start, capture->X_WC,
+                                              capture->noise_seed, frame_bgr);
   } else {
-    run_.renderer.render_into(capture->X_WC, capture->noise_seed, frame_bgr);
+    run_.renderer.render_rolling_into(capture->X_WC_readout_start, capture->X_WC, capture->noise_seed, frame_bgr);
   }
   to_fsw_.push({arrival, seq_++, CameraFrame{arrival, capture->index, frame_bgr}});
 }

@@ -85,6 +85,7 @@ RunSetup disperse(const Scenario& nominal, std::uint64_t run_seed, const DrawnVa
   }
   if (has("camera_cx_error_px")) setup.believed_camera.cx_px += value("camera_cx_error_px");
   if (has("camera_cy_error_px")) setup.believed_camera.cy_px += value("camera_cy_error_px");
+  if (has("camera_readout_s")) s->readout_s = std::min(value("camera_readout_s"), 1.0 / s->frame_rate_hz);
   plant::AutopilotParams& ap = s->autopilot;
   if (has("rc_gain_scale")) {
     ap.rc_horizontal_mps_at_100 *= value("rc_gain_scale");

@@ -53,6 +53,7 @@ const std::vector<DispersionParameter>& dispersion_parameters() {
       {"shelf_behind_lateral_m", -5.0, 5.0},
       {"ambient_scale", 0.0, 3.0},
       {"light_azimuth_rad", -2.0 * kPi, 2.0 * kPi},
+      {"camera_readout_s", 0.0, 0.1},
   };
   return table;
 }

@@ -234,6 +234,8 @@ void visit_camera(V& v, Scenario& s) {
   v.field("p2", c.p2);
   v.field("k3", c.k3);
   v.field("frame_rate_hz", s.frame_rate_hz, between(1.0, 240.0));
+  v.field("readout_s", s.readout_s, between(0.0, 0.1));
+  v.check("readout_s", s.readout_s * s.frame_rate_hz <= 1.0, "a readout must fit in one frame period");
   v.section("mount", [&](auto& m) {
     m.field("pitch_rad", s.camera_mount.pitch_rad,
             between(-0.5 * std::numbers::pi, 0.5 * std::numbers::pi));

@@ -50,6 +50,9 @@ struct Scenario {
   CameraIntrinsics camera;
   CameraMount camera_mount;
   double frame_rate_hz = 30.0;  ///< the video stream (docs/tello_sdk.md: 30 fps)
+  /// Rolling shutter: the time from the first row's exposure to one row past the last (0: a
+  /// global shutter; render/rolling_shutter.hpp).
+  double readout_s = 0.0;
   plant::VehicleParams vehicle;
   plant::WindParams wind;
   plant::AutopilotParams autopilot;

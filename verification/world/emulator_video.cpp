@@ -102,7 +102,8 @@ void EmulatorVideo::capture(const TelloWorld::Capture& capture, TimeNs t, TimeNs
     // if the encoder counted (the Tello's encoder sees every frame).
     const bool key = !was_on_ || capture.index >= next_key_capture_;
     if (key) next_key_capture_ = capture.index + key_interval_captures(config_, scenario_);
-    const FrameJob job{capture.index, t, capture.X_WC_prev, capture.X_WC, capture.noise_seed, key, *to};
+    const FrameJob job{capture.index, t, capture.X_WC_prev, capture.X_WC, capture.X_WC_readout_start,
+                       capture.noise_seed, key, *to};
     was_on_ = true;
     if (inline_renderer_) {
       // The co-simulation: rendered and encoded now, in simulated time (an encoding
@@ -169,9 +170,9 @@ void EmulatorVideo::worker_loop() {
 
 EmulatorVideo::EncodedFrame EmulatorVideo::encode(Coder& coder, render::Renderer& renderer, const FrameJob& job) {
   if (coder.motion_blur) {
-    renderer.render_blurred_into(job.X_WC_prev, job.X_WC, job.noise_seed, coder.bgr);
+    renderer.render_blurred_rolling_into(job.X_WC_prev, job.X_WC_readout_start, job.X_WC, job.noise_seed, coder.bgr);
   } else {
-    renderer.render_into(job.X_WC, job.noise_seed, coder.bgr);
+    renderer.render_rolling_into(job.X_WC_readout_start, job.X_WC, job.noise_seed, coder.bgr);
   }
   const std::string access_unit = coder.encoder.encode(coder.bgr, job.force_key);
   const std::vector<int> types = sdk::nal_unit_types(access_unit);

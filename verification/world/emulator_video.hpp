@@ -55,6 +55,7 @@ class EmulatorVideo {
     TimeNs t_ns = 0;
     Eigen::Isometry3d X_WC_prev = Eigen::Isometry3d::Identity();
     Eigen::Isometry3d X_WC = Eigen::Isometry3d::Identity();
+    Eigen::Isometry3d X_WC_readout_start = Eigen::Isometry3d::Identity();
     std::uint64_t noise_seed = 0;
     bool force_key = false;
     tello::Endpoint to;

@@ -107,6 +107,15 @@ render::RenderOptions render_options_for(const Scenario& s) {
   render::RenderOptions o;
   o.noise_stddev = s.cosim.render_noise_stddev;
   o.motion_blur_samples = s.cosim.motion_blur_samples;
+  // A rolling shutter shifts the picture's rows against the readout's middle pose by up to
+  // f * omega * readout / 2 for a turn at omega: the margin allows a turn at the autopilot's
+  // largest yaw rate, for the longest readout the scenario can draw (one renderer serves every
+  // run of a campaign).
+  double readout_s = s.readout_s;
+  if (const auto d = s.dispersions.find("camera_readout_s"); d != s.dispersions.end())
+    readout_s = std::max(readout_s, std::min(d->second.highest(), 1.0 / s.frame_rate_hz));
+  o.rolling_shutter_margin_px =
+      std::ceil(0.5 * std::max(s.camera.fx_px, s.camera.fy_px) * s.autopilot.max_yaw_rate_radps * readout_s);
   return o;
 }
 

@@ -1,9 +1,11 @@
 #include "verification/world/tello_world.hpp"
 
 #include <algorithm>
+#include <iterator>
 #include <stdexcept>
 
 #include "render/ground_truth.hpp"
+#include "render/rolling_shutter.hpp"
 
 namespace shelfcross::verification {
 
@@ -37,7 +39,7 @@ TelloWorld::TelloWorld(const RunSetup& setup, int monitored_shelves)
       half_length_m_(0.5 * sc_.vehicle.size_m.x() + sc_.cosim.vehicle_margin_m),
       last_{0, body_pose(tello_.state()), tello_.state().v_WB_W_mps},
       clocks_{millihertz(sc_.frame_rate_hz), millihertz(sc_.cosim.state_rate_hz), 0, 0,
-              render::camera_pose_W(last_.X_WB, sc_.camera_mount), RandomStream(setup.seed, StreamId::render_noise)} {
+              render::camera_pose_W(last_.X_WB, sc_.camera_mount), RandomStream(setup.seed, StreamId::render_noise), {}} {
   if (monitored_shelves < 1 || monitored_shelves > static_cast<int>(sc_.warehouse.shelves.size())) {
     throw std::invalid_argument("monitored shelves must be 1.." + std::to_string(sc_.warehouse.shelves.size()));
   }
@@ -45,6 +47,7 @@ TelloWorld::TelloWorld(const RunSetup& setup, int monitored_shelves)
   for (int i = 0; i < monitored_shelves; ++i) {
     monitors_.emplace_back(sc_.warehouse.shelves[static_cast<size_t>(i)], last_.X_WB.translation());
   }
+  if (sc_.readout_s > 0.0) clocks_.recent_X_WC.emplace_back(0, clocks_.X_WC_prev_frame);
 }
 
 TickReport TelloWorld::tick(TimeNs t) {
@@ -119,15 +122,37 @@ StateRecord TelloWorld::state_record(TimeNs t) const {
   return state_from_truth(tello_.state(), last_.a_W_mps2, ground_z_m_, firmware.battery_pct(), firmware.motor_on_time_s(), t);
 }
 
+namespace {
+// The camera pose at t from the poses h of recent ticks (ascending times), interpolated
+// between the ticks around t.
+Eigen::Isometry3d pose_at(const std::deque<std::pair<TimeNs, Eigen::Isometry3d>>& h, TimeNs t) {
+  // The first tick at or after t (the vehicle sat at its first recorded pose before it).
+  auto b = std::lower_bound(h.begin(), h.end(), t, [](const auto& e, TimeNs x) { return e.first < x; });
+  if (b == h.begin()) return h.front().second;
+  if (b == h.end()) return h.back().second;
+  const auto a = std::prev(b);
+  const double s = static_cast<double>(t - a->first) / static_cast<double>(b->first - a->first);
+  return render::interpolate_pose(a->second, b->second, s);
+}
+}  // namespace
+
 std::optional<TelloWorld::Capture> TelloWorld::capture_due(TimeNs t) {
   Clocks& k = clocks_;
+  const Eigen::Isometry3d X_WC = render::camera_pose_W(body_pose(tello_.state()), sc_.camera_mount);
+  const TimeNs readout_ns = seconds_to_ns(sc_.readout_s);
+  if (readout_ns > 0) {
+    // Keep the ticks of the last readout and the one before it (to interpolate at its start).
+    if (k.recent_X_WC.back().first < t) k.recent_X_WC.emplace_back(t, X_WC);
+    while (k.recent_X_WC.size() > 2 && k.recent_X_WC[1].first <= t - readout_ns) k.recent_X_WC.pop_front();
+  }
   if (t < event_time(k.k_frame, k.frame_mhz)) return std::nullopt;
   Capture c;
   c.index = k.k_frame;
   c.t_ns = event_time(k.k_frame, k.frame_mhz);
   c.period_ns = event_time(k.k_frame + 1, k.frame_mhz) - c.t_ns;
   c.X_WC_prev = k.X_WC_prev_frame;
-  c.X_WC = render::camera_pose_W(body_pose(tello_.state()), sc_.camera_mount);
+  c.X_WC = X_WC;
+  c.X_WC_readout_start = readout_ns > 0 ? pose_at(k.recent_X_WC, t - readout_ns) : X_WC;
   c.noise_seed = k.render_noise.next_u64();  // one per capture, sent or not
   k.X_WC_prev_frame = c.X_WC;
   while (event_time(k.k_frame, k.frame_mhz) <= t) ++k.k_frame;

@@ -27,9 +27,11 @@
 // at or after tick(f, frame_rate_hz); each capture draws one render-noise seed, dropped or not.
 
 #include <cstdint>
+#include <deque>
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -84,6 +86,10 @@ class TelloWorld {
     TimeNs t_ns = 0;  ///< the capture instant (the scheduled one, tick(index, frame_rate))
     Eigen::Isometry3d X_WC_prev = Eigen::Isometry3d::Identity();
     Eigen::Isometry3d X_WC = Eigen::Isometry3d::Identity();
+    /// The camera pose at the start of a rolling shutter's readout, camera.readout_s before
+    /// this tick (whose pose X_WC ends it), interpolated between the poses of the ticks around
+    /// it; X_WC itself for a global shutter (readout_s 0).
+    Eigen::Isometry3d X_WC_readout_start = Eigen::Isometry3d::Identity();
     std::uint64_t noise_seed = 0;
     TimeNs period_ns = 0;  ///< to the next capture
   };
@@ -134,6 +140,9 @@ class TelloWorld {
     std::int64_t k_frame = 0, k_state = 0;
     Eigen::Isometry3d X_WC_prev_frame;
     RandomStream render_noise;
+    /// With a rolling shutter: the camera pose at each tick of the last readout_s and the one
+    /// before (capture_due records them).
+    std::deque<std::pair<TimeNs, Eigen::Isometry3d>> recent_X_WC;
   } clocks_;
 };
 

@@ -269,6 +269,17 @@ TEST(Scenario, RefusesOutOfRangeValues) {
   expect_refused(insert_line(11, "wind: {gust_stddev_mps: -1}"), 11, "out of range");
 }
 
+TEST(Scenario, CameraReadoutTimeInRange) {
+  EXPECT_EQ(parse_scenario(kBase, "base.yaml").readout_s, 0.0);  // a global shutter by default
+  const Scenario s = parse_scenario(insert_line(11, "camera: {readout_s: 0.02}"), "rolling.yaml");
+  EXPECT_EQ(s.readout_s, 0.02);
+  EXPECT_EQ(parse_scenario(write_scenario(s), "again.yaml"), s);
+  expect_refused(insert_line(11, "camera: {readout_s: -0.001}"), 11, "out of range");
+  expect_refused(insert_line(11, "camera: {readout_s: 0.2}"), 11, "out of range");
+  expect_refused(insert_line(11, "camera: {readout_s: 0.05}"), 11, "one frame period");
+  expect_refused(insert_line(11, "camera: {readout_s: soon}"), 11, "expected a number");
+}
+
 TEST(Scenario, RefusesBoxInNonExistentCell) {
   expect_refused(replace_line(10, "        - {level: 3, column: 2, marker_id: 4}"), 10,
                  "level 3 does not exist");
