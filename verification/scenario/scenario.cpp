@@ -367,6 +367,7 @@ void visit_cosim(V& v, CosimSettings& c) {
   v.field("settling_floor_z_m", c.settling_floor_z_m, kNonNegative);
   v.field("settling_floor_yaw_rad", c.settling_floor_yaw_rad, kNonNegative);
   v.field("settling_floor_y_m", c.settling_floor_y_m, kNonNegative);
+  v.field("near_miss_m", c.near_miss_m, between(0.0, 0.5));
   v.section("link", [&](auto& l) { visit_link(l, c.link); });
   v.section("pilot", [&](auto& p) { p.field("stop_rc_repeats", c.pilot.stop_rc_repeats, between(0, 10));
     p.field("level_check", c.pilot.level_check);

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "verification/campaign/stored_run.hpp"
+
 namespace shelfcross::verification {
 namespace {
 
@@ -16,6 +18,7 @@ const char* failure_class_name(FailureClass c) {
     case FailureClass::contact: return "contact";
     case FailureClass::crossing: return "crossing";
     case FailureClass::mission: return "mission";
+    case FailureClass::near_miss: return "near_miss";
   }
   return "?";
 }
@@ -32,6 +35,7 @@ double RunMargins::of(FailureClass c) const {
     case FailureClass::contact: return contact_m;
     case FailureClass::crossing: return crossing_m;
     case FailureClass::mission: return mission;
+    case FailureClass::near_miss: return near_miss_m;
   }
   return kNaN;
 }
@@ -47,6 +51,9 @@ RunMargins run_margins(const Scenario& nominal, const std::string& outcome, cons
   } else {
     m.contact_m = metrics ? metrics->truth.min_clearance_m.value_or(kNaN) : kNaN;
   }
+  // Near miss: the clearance below the scenario's threshold (contacts lower it too).
+  m.near_miss_m = m.contact_m - nominal.cosim.near_miss_m;
+  m.near_miss_run = is_near_miss(outcome, metrics, nominal.cosim.near_miss_m);
   // Crossing: the room at the entered cell's front face.
   m.crossing_m = kNaN;
   if (metrics && metrics->truth.entry_offset_y_m && metrics->truth.entry_offset_z_m && !nominal.warehouse.shelves.empty()) {

@@ -260,6 +260,8 @@ TEST(Scenario, RefusesOutOfRangeValues) {
   expect_refused(insert_line(11, "camera: {height_px: -720}"), 11, "out of range");
   expect_refused(insert_line(11, "camera: {frame_rate_hz: 241}"), 11, "out of range");
   expect_refused(insert_line(11, "camera: {frame_rate_hz: 0.5}"), 11, "out of range");
+  expect_refused(insert_line(11, "cosim: {near_miss_m: -0.01}"), 11, "out of range");
+  expect_refused(insert_line(11, "cosim: {near_miss_m: 0.6}"), 11, "out of range");
   expect_refused(insert_line(11, "camera: {width_px: 960, cx_px: 961}"), 11, "principal point");
   expect_refused(replace_line(6, "      column_pitch_m: [0.34, -0.48]"), 6, "out of range");
   expect_refused(insert_line(6, "      depth_m: -0.34"), 6, "out of range");
