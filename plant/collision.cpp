@@ -91,6 +91,7 @@ const char* to_string(ElementKind kind) {
     case ElementKind::rail: return "rail";
     case ElementKind::tag: return "tag";
     case ElementKind::box: return "box";
+    case ElementKind::deck: return "deck";
   }
   return "?";
 }
@@ -190,11 +191,19 @@ struct CollisionWorld::Impl {
     for (const BoxPlacement& b : s.boxes) {
       assert(b.level >= 1 && b.level <= nrows && b.column >= 1 && b.column <= ncols);
       const Eigen::Vector3d cell = cell_centre_S_m(s, b.level, b.column);
-      const double z_floor = beam_z_S_m(s, b.level - 1) + 0.5 * tb;
       add_box(ElementKind::box, index,
               shelf + "box marker " + std::to_string(b.marker_id) + " (level " +
                   std::to_string(b.level) + ", column " + std::to_string(b.column) + ")",
-              X_WS, {0.5 * depth, cell.y(), z_floor + 0.5 * w.box_size_m.z()}, 0.5 * w.box_size_m);
+              X_WS, {0.5 * depth, cell.y(), cell_floor_z_S_m(s, b.level) + 0.5 * w.box_size_m.z()},
+              0.5 * w.box_size_m);
+    }
+    if (s.deck_thickness_m > 0.0) {
+      const double t = s.deck_thickness_m;
+      for (int j = 0; j < nrows; ++j) {
+        add_box(ElementKind::deck, index, shelf + "deck " + boundary_level_name(j, nrows), X_WS,
+                {0.5 * depth, 0.5 * (y_left + y_right), beam_z_S_m(s, j) + 0.5 * tb + 0.5 * t},
+                {0.5 * depth, 0.5 * (y_left - y_right), 0.5 * t});
+      }
     }
   }
 

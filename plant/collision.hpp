@@ -16,8 +16,13 @@
 //   tag   (i, j, face):        a tag_size_m square card kTagThickness_m thick on the outer surface
 //                              of the intersection (x_S = -max(T_p, T_b) / 2 outward); a tag is
 //                              stuck to the shelf, so touching it is touching the shelf;
+//   deck  (boundary j < nrows): only where deck_thickness_m > 0: a board from the top of the
+//                              beams (z = beam_z(j) + T_b / 2) up by deck_thickness_m, x_S 0..D,
+//                              across the shelf between the outer posts' centre lines;
 //   box   (placement):         box_size_m, centred on its cell's (y, x_S = D / 2) and standing on
-//                              the top of the rails under it (z = beam_z(level - 1) + T_b / 2).
+//                              its cell's floor (cell_floor_z_S_m: the rails, or the deck).
+// Element ids follow this order per shelf (posts, beams, rails, tags, boxes, then decks), so a
+// shelf without decks has the ids it had before decks existed.
 // The floor is the half-space z < 0; the walls and the ceiling are the half-spaces outside the
 // arena box (arena_min_W_m, arena_max_W_m), exact for any distance (no thin slabs to tunnel).
 //
@@ -55,7 +60,11 @@
 
 namespace shelfcross::plant {
 
-enum class ElementKind { floor, wall, post, beam, rail, tag, box };
+enum class ElementKind { floor, wall, post, beam, rail, tag, box, deck };
+/// Every kind, in declaration order (readers of a stored kind name look it up here).
+inline constexpr ElementKind kElementKinds[] = {ElementKind::floor, ElementKind::wall, ElementKind::post,
+                                                ElementKind::beam,  ElementKind::rail, ElementKind::tag,
+                                                ElementKind::box,   ElementKind::deck};
 
 /// "floor", "wall", "post", ... for logs and reports.
 const char* to_string(ElementKind kind);
@@ -69,7 +78,7 @@ struct Element {
   bool operator==(const Element&) const = default;
 };
 
-/// True for the parts of a shelf (bars, tags, boxes); false for floor, walls and ceiling.
+/// True for the parts of a shelf (bars, tags, boxes, decks); false for floor, walls and ceiling.
 inline bool is_shelf_part(ElementKind kind) {
   return kind != ElementKind::floor && kind != ElementKind::wall;
 }
@@ -127,7 +136,7 @@ class CollisionWorld {
   std::vector<Contact> overlaps(const Eigen::Isometry3d& X_WB, TimeNs t_ns,
                                 FloorContacts floor = FloorContacts::report) const;
 
-  /// The nearest shelf part (post, beam, rail, tag or box; not floor, walls or ceiling) and the
+  /// The nearest shelf part (post, beam, rail, tag, box or deck; not floor, walls or ceiling) and the
   /// exact signed box-to-box distance to it.
   Clearance clearance_to_shelves(const Eigen::Isometry3d& X_WB) const;
 

@@ -266,6 +266,36 @@ TEST(CollisionWorld, BoxesAndWallsAreHitAndNamed) {
   EXPECT_EQ(all.back().element.name, "wall x+");
 }
 
+// Solid decks (warehouse.hpp): one board on every cell floor, after every other element of the
+// shelf (a shelf without decks keeps its ids); a vehicle sinking into an empty cell touches the
+// deck's top where the open shelf has nothing; boxes stand on the deck.
+TEST(CollisionWorld, SolidDecksAreTouchedAndCarryTheBoxes) {
+  Warehouse w = test_warehouse();
+  w.shelves[0].deck_thickness_m = 0.018;
+  const CollisionWorld decked(w, kTello, kMargin);
+  const CollisionWorld open(test_warehouse(), kTello, kMargin);
+  ASSERT_EQ(decked.elements().size(), open.elements().size() + 4u);  // under levels 1 to 4
+  for (size_t i = 0; i < open.elements().size(); ++i) EXPECT_EQ(decked.elements()[i], open.elements()[i]);
+  const Element& deck = element_named(decked, "shelf 0 deck under level 2");
+  EXPECT_EQ(deck.kind, ElementKind::deck);
+  EXPECT_TRUE(is_shelf_part(deck.kind));
+  EXPECT_STREQ(to_string(ElementKind::deck), "deck");
+  // Level 2, column 2 (wide, empty): centre y = 0.24; its floor: beam 0.64 + 0.01 + 0.018 = 0.668.
+  const auto c = fly(decked, {3.17, 0.24, 0.81}, {3.17, 0.24, 0.5}, 0.5);
+  ASSERT_TRUE(c);
+  EXPECT_EQ(c->element.name, "shelf 0 deck under level 2");
+  EXPECT_NEAR(c->point_W_m.z(), 0.668, 1e-9);
+  // Without the deck the open cell floor (rails at its sides only, beams at its faces) lets the
+  // vehicle sink through into the cell below.
+  EXPECT_FALSE(fly(open, {3.17, 0.24, 0.81}, {3.17, 0.24, 0.5}, 0.5));
+  // Clearance at the cell centre: to the deck 0.81 - 0.668 - 0.0205 - 0.01 below.
+  EXPECT_NEAR(decked.clearance_to_shelves(pose({3.17, 0.24, 0.81})).distance_m, 0.81 - 0.668 - 0.0305, 1e-9);
+  // The box with marker 7 (level 2, column 3) stands on the deck: its top at 0.668 + 0.22.
+  const Element& box = element_named(decked, "shelf 0 box marker 7 (level 2, column 3)");
+  const double above_m = decked.distance_to(pose({3.17, -0.17, 0.668 + 0.22 + 0.0305 + 0.05}), box.id);
+  EXPECT_NEAR(above_m, 0.05, 1e-9);
+}
+
 TEST(CollisionWorld, RotatedShelfIsPlacedByItsPose) {
   Warehouse w = test_warehouse();
   // The shelf turned to face +y from y = 2: its front face is the plane y = 2, and its column 1

@@ -77,7 +77,7 @@ void visit_box(V& v, BoxPlacement& b, const ShelfSpec& s, std::set<std::pair<int
           "marker ID " + std::to_string(b.marker_id) + " is used by another box");
   if (b.level < 1 || b.column < 1 || b.level > nrows || b.column > ncols) return;  // refused above
   const double clear_width = s.column_pitch_m[static_cast<size_t>(b.column - 1)] - s.post_thickness_m;
-  const double clear_height = s.row_pitch_m[static_cast<size_t>(b.level - 1)] - s.beam_thickness_m;
+  const double clear_height = cell_clear_height_m(s, b.level);
   v.check("column", w.box_size_m.y() <= clear_width,
           "a box " + metres(w.box_size_m.y()) + " wide does not fit the clear width " +
               metres(clear_width) + " of column " + std::to_string(b.column));
@@ -97,16 +97,18 @@ void visit_shelf(V& v, ShelfSpec& s, Context& ctx) {
   v.field("yaw_rad", s.yaw_rad, kYaw);
   v.field("post_thickness_m", s.post_thickness_m, kPositive);
   v.field("beam_thickness_m", s.beam_thickness_m, kPositive);
+  v.field("deck_thickness_m", s.deck_thickness_m, between(0.0, 0.1));
   v.list("column_pitch_m", s.column_pitch_m, kPositive, Need::required);
   v.list("row_pitch_m", s.row_pitch_m, kPositive, Need::required);
   for (const char* key : {"column_pitch_m", "row_pitch_m"}) {
     const std::vector<double>& pitches =
         std::string(key) == "column_pitch_m" ? s.column_pitch_m : s.row_pitch_m;
-    const double bar = std::string(key) == "column_pitch_m" ? s.post_thickness_m : s.beam_thickness_m;
+    const double bar = std::string(key) == "column_pitch_m" ? s.post_thickness_m : s.beam_thickness_m + s.deck_thickness_m;
     v.check(key, !pitches.empty() && pitches.size() <= 64, "a shelf has 1 to 64 columns and rows");
     for (double p : pitches) {
       v.check(key, p > bar, "pitch " + metres(p) + " leaves no opening between bars " +
-                                metres(bar) + " thick");
+                                metres(bar) + " thick" + (s.deck_thickness_m > 0.0 && std::string(key) == "row_pitch_m"
+                                                              ? " (beam and deck)" : ""));
       v.check(key, w.tag_size_m < p,
               "tags of " + metres(w.tag_size_m) + " are larger than the cell pitch " + metres(p) +
                   " (adjacent tags would overlap)");
@@ -429,7 +431,7 @@ std::vector<BoxPlacement> place_random_boxes(const Warehouse& w, const ShelfSpec
   for (int level = 1; level <= static_cast<int>(s.row_pitch_m.size()); ++level) {
     for (int column = 1; column <= static_cast<int>(s.column_pitch_m.size()); ++column) {
       const bool fits = w.box_size_m.y() <= s.column_pitch_m[static_cast<size_t>(column - 1)] - s.post_thickness_m &&
-                        w.box_size_m.z() <= s.row_pitch_m[static_cast<size_t>(level - 1)] - s.beam_thickness_m;
+                        w.box_size_m.z() <= cell_clear_height_m(s, level);
       if (fits) cells.emplace_back(level, column);
     }
   }

@@ -73,7 +73,10 @@ RunMargins run_margins(const Scenario& nominal, const std::string& outcome, cons
     const double s_y = 0.5 * nominal.vehicle.size_m.y() + nominal.cosim.vehicle_margin_m;
     const double s_z = 0.5 * nominal.vehicle.size_m.z() + nominal.cosim.vehicle_margin_m;
     const double room_y = 0.5 * (pitch_y - shelf.post_thickness_m) - s_y - std::abs(e_y);
-    const double room_z = 0.5 * (pitch_z - shelf.beam_thickness_m) - s_z - std::abs(e_z);
+    // A deck (warehouse.hpp) raises the opening's floor: its clear height loses the deck's
+    // thickness t and its centre rises t / 2 above the cell centre.
+    const double t = shelf.deck_thickness_m;
+    const double room_z = 0.5 * (pitch_z - shelf.beam_thickness_m - t) - s_z - std::abs(e_z - 0.5 * t);
     m.crossing_m = std::min(room_y, room_z);
   }
   // Mission: a success by the share of the timeout left (0 for one that landed in the grace

@@ -19,9 +19,10 @@
 //   crossing  m: the room left at the front face of the cell the vehicle entered: with e_y, e_z
 //             the body origin's offsets from the cell centre at the front face (entry_offset_*),
 //             the cell's clear half-opening h_y = (column pitch - post thickness) / 2,
-//             h_z = (row pitch - beam thickness) / 2, and the vehicle box's half-extents s_y, s_z
+//             h_z = (row pitch - beam thickness - t) / 2 with t the shelf's deck thickness (0
+//             without decks), and the vehicle box's half-extents s_y, s_z
 //             (size_m / 2 + cosim.vehicle_margin_m),
-//                 min(h_y - s_y - |e_y|, h_z - s_z - |e_z|)
+//                 min(h_y - s_y - |e_y|, h_z - s_z - |e_z - t / 2|)
 //             (the box taken level and square to the shelf): negative when the box overlapped
 //             the opening's edge as it entered. The cell is the one crossed, else the target,
 //             else (neither known) the shelf's narrowest column and lowest row pitch. NaN when

@@ -89,6 +89,19 @@ TEST(Scenario, BaseIsValid) {
   EXPECT_TRUE(s.start.landed);
 }
 
+// The shipped decked warehouse is the default scenario but for its decks and its name.
+TEST(Scenario, DeckedWarehouseIsTheDefaultWithDecks) {
+  Scenario decked = load_scenario(std::string(SHELFCROSS_SOURCE_DIR) + "/scenarios/warehouse_decked.yaml");
+  const Scenario plain = load_scenario(kDefaultPath);
+  EXPECT_EQ(plain.warehouse.shelves[0].deck_thickness_m, 0.0);
+  EXPECT_EQ(decked.warehouse.shelves[0].deck_thickness_m, 0.018);
+  EXPECT_NEAR(cell_clear_height_m(decked.warehouse.shelves[0], 2), 0.302, 1e-12);
+  EXPECT_NEAR(cell_floor_z_S_m(decked.warehouse.shelves[0], 2), 0.668, 1e-12);
+  decked.warehouse.shelves[0].deck_thickness_m = 0.0;
+  decked.name = plain.name;
+  EXPECT_EQ(decked, plain);
+}
+
 TEST(Scenario, DefaultScenarioIsThePaperTestShelf) {
   const Scenario s = load_scenario(kDefaultPath);
   EXPECT_EQ(s.name, "paper_test_shelf");
@@ -265,6 +278,10 @@ TEST(Scenario, RefusesOutOfRangeValues) {
   expect_refused(insert_line(11, "camera: {width_px: 960, cx_px: 961}"), 11, "principal point");
   expect_refused(replace_line(6, "      column_pitch_m: [0.34, -0.48]"), 6, "out of range");
   expect_refused(insert_line(6, "      depth_m: -0.34"), 6, "out of range");
+  expect_refused(insert_line(6, "      deck_thickness_m: -0.01"), 6, "out of range");
+  expect_refused(insert_line(6, "      deck_thickness_m: 0.2"), 6, "out of range");
+  // A 9 cm deck leaves 0.34 - 0.02 - 0.09 = 0.23 m: the 0.24 m boxes no longer fit.
+  expect_refused(insert_line(6, "      deck_thickness_m: 0.09"), 10, "does not fit the clear height");
   expect_refused(insert_line(6, "      post_thickness_m: 0"), 6, "out of range");
   expect_refused(insert_line(11, "autopilot: {tilt_limit_slow_rad: 0.5, tilt_limit_fast_rad: 0.4}"),
                  11, "tilt_limit_slow_rad");
