@@ -45,6 +45,13 @@
 // the speed, the step or the bar). A start pose already touching or overlapping is a contact at
 // the step's start time with its penetration depth.
 //
+// Ray cast (ray_cast): the first surface a ray meets, for the sensors that look at the world (the
+// downward range sensor and the vision positioning system). Candidates are the shelf parts whose
+// bounds meet the ray segment's bounds (the same broadphase); each box is met in closed form
+// (the slab method in the box's own frame: the ray's parameter interval inside each pair of
+// faces, intersected); the half-spaces by n . (o + t u) = c. An origin inside an element meets it
+// at distance 0.
+//
 // Thread safety: queries are const and use only thread-local scratch space, so one world may be
 // queried by several threads at once (the runs of a campaign can share it).
 
@@ -101,6 +108,13 @@ struct Clearance {
 /// asks for the first contact that is not the floor while on the ground.
 enum class FloorContacts { report, ignore };
 
+/// The first surface met by a ray (CollisionWorld::ray_cast).
+struct RayHit {
+  double distance_m = 0.0;  ///< from the ray's origin along its direction, >= 0
+  Element element;          ///< what was met: its kind says floor, box top, beam, rail, ...
+  Eigen::Vector3d point_W_m = Eigen::Vector3d::Zero();
+};
+
 class CollisionWorld {
  public:
   /// Distances below this count as touching (a contact). Far below any geometric tolerance.
@@ -139,6 +153,12 @@ class CollisionWorld {
   /// The nearest shelf part (post, beam, rail, tag, box or deck; not floor, walls or ceiling) and the
   /// exact signed box-to-box distance to it.
   Clearance clearance_to_shelves(const Eigen::Isometry3d& X_WB) const;
+
+  /// The first element (shelf part, floor, wall or ceiling) met by the ray from origin_W_m along
+  /// direction_W (any length > 0; normalised here) within max_range_m, or nullopt. Ties between
+  /// elements at the same distance go to the lower element id.
+  std::optional<RayHit> ray_cast(const Eigen::Vector3d& origin_W_m, const Eigen::Vector3d& direction_W,
+                                 double max_range_m) const;
 
   /// Signed distance from the vehicle at X_WB to one element (see the header comment).
   double distance_to(const Eigen::Isometry3d& X_WB, int element_id) const;

@@ -6,9 +6,10 @@ namespace shelfcross::plant {
 
 SimulatedTello::SimulatedTello(const VehicleParams& vehicle, const AutopilotParams& autopilot,
                                const WindParams& wind, std::uint64_t wind_seed, IntegratorSettings settings,
-                               double x_m, double y_m, double yaw_rad)
+                               double x_m, double y_m, double yaw_rad, const SensesSetup& senses)
     : plant_(vehicle, wind, wind_seed, settings),
-      autopilot_(autopilot, vehicle),
+      autopilot_(autopilot, vehicle,
+                 TelloSenses(senses.params, vehicle, senses.world, senses.light_level, senses.seed)),
       rate_hz_(static_cast<std::int64_t>(autopilot.rate_hz)) {
   plant_.reset(Quadrotor::landed_state(vehicle, x_m, y_m, yaw_rad), 0);
 }

@@ -19,12 +19,22 @@
 
 namespace shelfcross::plant {
 
+/// The firmware's senses (plant/tello_senses.hpp): their parameters, the world they look at
+/// (null: the floor alone; it must outlive the Tello), the light level in [0, 1] and the seed
+/// of their random streams. The default senses the truth exactly.
+struct SensesSetup {
+  SensesParams params;
+  const CollisionWorld* world = nullptr;
+  double light_level = 1.0;
+  std::uint64_t seed = 0;
+};
+
 class SimulatedTello {
  public:
   /// Starts landed at (x, y) with the given yaw, at t = 0, motors off.
   SimulatedTello(const VehicleParams& vehicle, const AutopilotParams& autopilot, const WindParams& wind,
                  std::uint64_t wind_seed, IntegratorSettings settings = {}, double x_m = 0.0, double y_m = 0.0,
-                 double yaw_rad = 0.0);
+                 double yaw_rad = 0.0, const SensesSetup& senses = {});
 
   /// Advances to t_ns (>= time_ns()), then gives the command text to the firmware. Returns
   /// its immediate reply, if any. Throws NumericalFailure.

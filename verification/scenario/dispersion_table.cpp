@@ -53,6 +53,19 @@ const std::vector<DispersionParameter>& dispersion_parameters() {
       {"shelf_behind_lateral_m", -5.0, 5.0},
       {"ambient_scale", 0.0, 3.0},
       {"light_azimuth_rad", -2.0 * kPi, 2.0 * kPi},
+      {"vps_noise_mps", 0.0, 1.0},
+      {"vps_bias_stddev_mps", 0.0, 1.0},
+      {"vps_min_range_m", 0.0, 10.0},
+      {"vps_floor_texture", 0.0, 1.0},
+      {"vps_box_texture", 0.0, 1.0},
+      {"vps_bar_texture", 0.0, 1.0},
+      {"tof_noise_m", 0.0, 1.0},
+      {"height_noise_m", 0.0, 1.0},
+      {"baro_noise_m", 0.0, 5.0},
+      {"baro_drift_m_per_sqrt_s", 0.0, 1.0},
+      {"height_hold_range_blend", 0.0, 1.0},
+      {"height_hold_range_below_m", 0.0, 100.0},
+      {"height_hold_time_constant_s", 0.01, 60.0},
   };
   return table;
 }

@@ -22,6 +22,7 @@
 #include "shelfcross/aruco_dictionaries.hpp"
 #include "verification/scenario/dispersion_table.hpp"
 #include "verification/scenario/scenario_yaml.hpp"
+#include "verification/scenario/senses_yaml.hpp"
 
 namespace shelfcross::verification {
 namespace {
@@ -403,6 +404,7 @@ void visit_scenario(V& v, Scenario& s, Context& ctx) {
   v.section("vehicle", [&](auto& p) { visit_vehicle(p, s.vehicle); });
   v.section("wind", [&](auto& p) { visit_wind(p, s.wind); });
   v.section("autopilot", [&](auto& p) { visit_autopilot(p, s.autopilot); });
+  v.section("senses", [&](auto& p) { visit_senses(p, s.senses); });
   // The start is checked against the vehicle and the warehouse, so it comes last.
   v.section("start", [&](auto& p) { visit_start(p, s); }, Need::required);
   v.section("cosim", [&](auto& c) { visit_cosim(c, s.cosim); });

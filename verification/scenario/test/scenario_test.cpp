@@ -3,6 +3,7 @@
 #include <cmath>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -286,6 +287,39 @@ TEST(Scenario, RefusesOutOfRangeValues) {
   expect_refused(insert_line(11, "autopilot: {tilt_limit_slow_rad: 0.5, tilt_limit_fast_rad: 0.4}"),
                  11, "tilt_limit_slow_rad");
   expect_refused(insert_line(11, "wind: {gust_stddev_mps: -1}"), 11, "out of range");
+}
+
+TEST(Scenario, RefusesEachSensesKeyOutOfRange) {
+  // Every key of the senses section, just outside its range, on its own line.
+  expect_refused(insert_line(11, "senses:\n  sample_rate_hz: 0.5"), 12, "out of range");
+  const std::vector<std::tuple<const char*, const char*, const char*>> keys{
+      {"vps", "min_range_m", "10.5"},          {"vps", "max_range_m", "101"},
+      {"vps", "min_contrast", "1.1"},          {"vps", "noise_mps", "-0.1"},
+      {"vps", "bias_stddev_mps", "1.5"},       {"vps", "bias_time_constant_s", "0.05"},
+      {"height", "tof_max_range_m", "0.05"},   {"height", "tof_ground_m", "-0.1"},
+      {"height", "tof_noise_m", "1.5"},        {"height", "height_noise_m", "-1"},
+      {"height", "baro_noise_m", "6"},         {"height", "baro_drift_m_per_sqrt_s", "2"},
+      {"height_hold", "range_blend", "1.5"},   {"height_hold", "range_below_m", "-1"},
+      {"height_hold", "time_constant_s", "0"},
+  };
+  for (const auto& [section, key, value] : keys) {
+    expect_refused(insert_line(11, std::string("senses:\n  ") + section + ":\n    " + key + ": " + value), 13,
+                   "out of range");
+  }
+  for (const char* kind : {"floor", "box", "bar", "tag", "wall"}) {
+    expect_refused(insert_line(11, std::string("senses:\n  vps:\n    texture:\n      ") + kind + ": 1.01"), 14,
+                   "out of range");
+  }
+  expect_refused(insert_line(11, "senses:\n  vps:\n    min_range_m: 0.5\n    max_range_m: 0.4"), 14,
+                 "must not be below min_range_m");
+  // The defaults sense the truth; every key read back as written.
+  const Scenario s = parse_scenario(
+      insert_line(11, "senses: {vps: {min_range_m: 0.3, texture: {box: 0.2}}, height_hold: {range_blend: 0.5}}"),
+      "senses.yaml");
+  EXPECT_EQ(s.senses.vps.min_range_m, 0.3);
+  EXPECT_EQ(s.senses.vps.texture.box, 0.2);
+  EXPECT_EQ(s.senses.height_hold.range_blend, 0.5);
+  EXPECT_EQ(parse_scenario(kBase, "small.yaml").senses, plant::SensesParams{});
 }
 
 TEST(Scenario, RefusesBoxInNonExistentCell) {
