@@ -6,6 +6,9 @@
 // tick the autopilot reads the plant's state at t_k and sets rotor commands, which the plant
 // holds over [t_k, t_k+1). A command submitted at t is handed to the firmware at t; it acts
 // from the next tick on. Deferred replies are stamped with the tick that produced them.
+// At each tick, too, the ground and ceiling effect on each rotor (plant/surface_effects.hpp,
+// VehicleParams::surface_effects) are measured by ray casts in the senses' world and held over
+// the tick like the commands; with no world, or both coefficients 0, every rotor is in open air.
 
 #include <cstdint>
 #include <optional>
@@ -54,6 +57,7 @@ class SimulatedTello {
  private:
   Quadrotor plant_;
   Autopilot autopilot_;
+  const CollisionWorld* world_;  ///< the senses' world (null: none), for the surface effects
   std::int64_t rate_hz_;
   std::int64_t next_tick_ = 0;  // index of the next autopilot tick not yet run
   std::vector<SdkReply> replies_;

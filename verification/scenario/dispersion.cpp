@@ -119,6 +119,8 @@ RunSetup disperse(const Scenario& nominal, std::uint64_t run_seed, const DrawnVa
   if (has("vertical_time_constant_s")) ap.vertical_time_constant_s = value("vertical_time_constant_s");
   if (has("yaw_time_constant_s")) ap.yaw_time_constant_s = value("yaw_time_constant_s");
   if (has("mass_scale")) s->vehicle.mass_kg *= value("mass_scale");
+  if (has("ground_effect_coeff")) s->vehicle.surface_effects.ground_coeff = value("ground_effect_coeff");
+  if (has("ceiling_effect_coeff")) s->vehicle.surface_effects.ceiling_coeff = value("ceiling_effect_coeff");
   if (has("wind_speed_mps") || has("wind_direction_rad")) {
     const Eigen::Vector3d& w = s->wind.steady_W_mps;
     const double speed = has("wind_speed_mps") ? value("wind_speed_mps") : w.head<2>().norm();

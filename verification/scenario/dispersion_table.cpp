@@ -34,6 +34,8 @@ const std::vector<DispersionParameter>& dispersion_parameters() {
       {"vertical_time_constant_s", 0.05, 3.0},
       {"yaw_time_constant_s", 0.02, 3.0},
       {"mass_scale", 0.5, 2.0},
+      {"ground_effect_coeff", 0.0, 2.0},
+      {"ceiling_effect_coeff", 0.0, 2.0},
       {"wind_speed_mps", 0.0, 10.0},
       {"wind_direction_rad", -2.0 * kPi, 2.0 * kPi},
       {"gust_stddev_mps", 0.0, 5.0},

@@ -19,6 +19,8 @@
 //   vertical_time_constant_s  autopilot vertical time constant                  [0.05, 3]
 //   yaw_time_constant_s     autopilot yaw-rate time constant                     [0.02, 3]
 //   mass_scale              vehicle mass, times                                  [0.5, 2]
+//   ground_effect_coeff     vehicle.surface_effects.ground_coeff                 [0, 2]
+//   ceiling_effect_coeff    vehicle.surface_effects.ceiling_coeff                [0, 2]
 //   wind_speed_mps          steady wind speed                                    [0, 10]
 //   wind_direction_rad      steady wind direction, from +x_W toward +y_W         [-2pi, 2pi]
 //   gust_stddev_mps         gust intensity                                       [0, 5]

@@ -269,6 +269,14 @@ void visit_vehicle(V& v, plant::VehicleParams& p) {
     w.field("quadratic_drag", p.switches.quadratic_drag);
     w.field("wind", p.switches.wind);
   });
+  v.section("surface_effects", [&](auto& e) {
+    plant::SurfaceEffectParams& f = p.surface_effects;
+    e.field("rotor_radius_m", f.rotor_radius_m, above(0.0));
+    e.check("rotor_radius_m", f.rotor_radius_m <= 0.2, "a rotor radius above 0.2 m is not a Tello-class rotor");
+    e.field("ground_coeff", f.ground_coeff, between(0.0, 2.0));
+    e.field("ceiling_coeff", f.ceiling_coeff, between(0.0, 2.0));
+    e.field("ceiling_range_radii", f.ceiling_range_radii, between(0.25, 4.0));
+  });
 }
 
 template <class V>

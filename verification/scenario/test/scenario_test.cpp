@@ -90,7 +90,8 @@ TEST(Scenario, BaseIsValid) {
   EXPECT_TRUE(s.start.landed);
 }
 
-// The shipped decked warehouse is the default scenario but for its decks and its name.
+// The shipped decked warehouse is the default scenario but for its decks, its name and the air
+// near them.
 TEST(Scenario, DeckedWarehouseIsTheDefaultWithDecks) {
   Scenario decked = load_scenario(std::string(SHELFCROSS_SOURCE_DIR) + "/scenarios/warehouse_decked.yaml");
   const Scenario plain = load_scenario(kDefaultPath);
@@ -98,6 +99,12 @@ TEST(Scenario, DeckedWarehouseIsTheDefaultWithDecks) {
   EXPECT_EQ(decked.warehouse.shelves[0].deck_thickness_m, 0.018);
   EXPECT_NEAR(cell_clear_height_m(decked.warehouse.shelves[0], 2), 0.302, 1e-12);
   EXPECT_NEAR(cell_floor_z_S_m(decked.warehouse.shelves[0], 2), 0.668, 1e-12);
+  // And the air near the decks: ground and ceiling effect on, dispersed.
+  EXPECT_EQ(decked.vehicle.surface_effects.ground_coeff, 1.0);
+  EXPECT_EQ(decked.vehicle.surface_effects.ceiling_coeff, 1.0);
+  EXPECT_EQ(plain.vehicle.surface_effects, plant::SurfaceEffectParams{});
+  EXPECT_EQ(decked.dispersions.erase("ground_effect_coeff") + decked.dispersions.erase("ceiling_effect_coeff"), 2u);
+  decked.vehicle.surface_effects = plain.vehicle.surface_effects;
   decked.warehouse.shelves[0].deck_thickness_m = 0.0;
   decked.name = plain.name;
   EXPECT_EQ(decked, plain);
@@ -274,6 +281,13 @@ TEST(Scenario, RefusesOutOfRangeValues) {
   expect_refused(insert_line(11, "camera: {height_px: -720}"), 11, "out of range");
   expect_refused(insert_line(11, "camera: {frame_rate_hz: 241}"), 11, "out of range");
   expect_refused(insert_line(11, "camera: {frame_rate_hz: 0.5}"), 11, "out of range");
+  expect_refused(insert_line(11, "vehicle: {surface_effects: {ground_coeff: -0.1}}"), 11, "out of range");
+  expect_refused(insert_line(11, "vehicle: {surface_effects: {ground_coeff: 2.5}}"), 11, "out of range");
+  expect_refused(insert_line(11, "vehicle: {surface_effects: {ceiling_coeff: 3}}"), 11, "out of range");
+  expect_refused(insert_line(11, "vehicle: {surface_effects: {ceiling_range_radii: 0.1}}"), 11, "out of range");
+  expect_refused(insert_line(11, "vehicle: {surface_effects: {rotor_radius_m: 0}}"), 11, "out of range");
+  expect_refused(insert_line(11, "vehicle: {surface_effects: {rotor_radius_m: 0.5}}"), 11, "not a Tello-class rotor");
+  expect_refused(insert_line(11, "dispersions: {ground_effect_coeff: {uniform: {min: 0.5, max: 2.5}}}"), 11, "ground_effect_coeff");
   expect_refused(insert_line(11, "cosim: {near_miss_m: -0.01}"), 11, "out of range");
   expect_refused(insert_line(11, "cosim: {near_miss_m: 0.6}"), 11, "out of range");
   expect_refused(insert_line(11, "camera: {width_px: 960, cx_px: 961}"), 11, "principal point");
