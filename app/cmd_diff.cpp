@@ -59,6 +59,7 @@ int run_diff(const DiffCliOptions& o) {
             << "mission success: BASE " << base_successes << ", NEW " << new_successes << "\n"
             << p_line("  missions", diff.failures) << "\n"
             << p_line("  contacts", diff.contacts) << "\n"
+            << p_line("  near misses", diff.near_misses) << "\n"
             << diff.flips.size() << " runs flipped\n"
             << "wrote " << o.out << "/diff.md, diff.json and plots\n";
   if (o.fail_if_worse && new_is_worse(diff, *o.fail_if_worse)) {

@@ -163,7 +163,7 @@ void add_search_options(CLI::App& sub, SearchOptions& o) {
       ->check(CLI::Range(1, 1024));
   sub.add_option("--out", o.out, "output folder: results.sqlite, report.md, search_summary.json, margins.csv, PNGs")
       ->capture_default_str();
-  sub.add_option("--class", o.failure_class, "failure class searched for: contact, crossing or mission")
+  sub.add_option("--class", o.failure_class, "failure class searched for: contact, crossing, mission or near_miss")
       ->capture_default_str();
   sub.add_option("--round-runs", o.round_runs, "runs per adaptation round")
       ->capture_default_str()
@@ -207,7 +207,7 @@ void add_search_options(CLI::App& sub, SearchOptions& o) {
 // The search and its estimates, printed; 130 when interrupted (resumable).
 int run_search_command(const SearchOptions& o) {
   const auto target = verification::parse_failure_class(o.failure_class);
-  if (!target) throw UsageError("--class '" + o.failure_class + "': expected contact, crossing or mission");
+  if (!target) throw UsageError("--class '" + o.failure_class + "': expected contact, crossing, mission or near_miss");
   verification::SearchSettings settings;
   settings.seed = o.seed;
   settings.budget = o.budget;

@@ -91,6 +91,7 @@ const char* to_string(ElementKind kind) {
     case ElementKind::rail: return "rail";
     case ElementKind::tag: return "tag";
     case ElementKind::box: return "box";
+    case ElementKind::deck: return "deck";
   }
   return "?";
 }
@@ -111,6 +112,9 @@ struct CollisionWorld::Impl {
   std::unique_ptr<btBoxShape> vehicle_shape;
   std::vector<std::unique_ptr<btBoxShape>> shapes;                // by element id (null: half-space)
   std::vector<std::unique_ptr<btCollisionObject>> objects;        // by element id (null: half-space)
+  // By element id, for the ray cast: each box's pose X_WE and half extents (unused for half-spaces).
+  std::vector<Eigen::Isometry3d> box_poses;
+  std::vector<Eigen::Vector3d> box_halves;
   std::unique_ptr<btCollisionWorld> world;
 
   void add_half_space(ElementKind kind, const std::string& name, const Eigen::Vector3d& n, double c) {
@@ -120,6 +124,8 @@ struct CollisionWorld::Impl {
     half_space_ids.push_back(id);
     shapes.emplace_back();
     objects.emplace_back();
+    box_poses.emplace_back(Eigen::Isometry3d::Identity());
+    box_halves.emplace_back(Eigen::Vector3d::Zero());
   }
 
   void add_box(ElementKind kind, int shelf, const std::string& name, const Eigen::Isometry3d& X_WS,
@@ -139,6 +145,36 @@ struct CollisionWorld::Impl {
     world->addCollisionObject(object.get());
     shapes.push_back(std::move(shape));
     objects.push_back(std::move(object));
+    box_poses.push_back(X_WE);
+    box_halves.push_back(half_S_m);
+  }
+
+  /// Where the ray o + t u (t >= 0, u unit) first meets element `id`, or nullopt: the slab method
+  /// for a box, the plane for a half-space (header comment).
+  std::optional<double> ray_parameter(int id, const Eigen::Vector3d& o, const Eigen::Vector3d& u) const {
+    if (const auto& h = half_spaces[static_cast<size_t>(id)]) {
+      const double height = h->n.dot(o) - h->c;  // > 0 outside the solid
+      if (height <= 0.0) return 0.0;
+      const double closing = -h->n.dot(u);
+      if (!(closing > 0.0)) return std::nullopt;
+      return height / closing;
+    }
+    const Eigen::Isometry3d& X = box_poses[static_cast<size_t>(id)];
+    const Eigen::Vector3d& half = box_halves[static_cast<size_t>(id)];
+    const Eigen::Vector3d o_E = X.linear().transpose() * (o - X.translation());
+    const Eigen::Vector3d u_E = X.linear().transpose() * u;
+    double t_in = 0.0, t_out = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 3; ++k) {
+      if (u_E[k] == 0.0) {
+        if (std::abs(o_E[k]) > half[k]) return std::nullopt;  // parallel to the slab, outside it
+        continue;
+      }
+      const double t1 = (-half[k] - o_E[k]) / u_E[k], t2 = (half[k] - o_E[k]) / u_E[k];
+      t_in = std::max(t_in, std::min(t1, t2));
+      t_out = std::min(t_out, std::max(t1, t2));
+    }
+    if (t_in > t_out) return std::nullopt;
+    return t_in;
   }
 
   void add_shelf(int index, const ShelfSpec& s, const Warehouse& w) {
@@ -190,11 +226,19 @@ struct CollisionWorld::Impl {
     for (const BoxPlacement& b : s.boxes) {
       assert(b.level >= 1 && b.level <= nrows && b.column >= 1 && b.column <= ncols);
       const Eigen::Vector3d cell = cell_centre_S_m(s, b.level, b.column);
-      const double z_floor = beam_z_S_m(s, b.level - 1) + 0.5 * tb;
       add_box(ElementKind::box, index,
               shelf + "box marker " + std::to_string(b.marker_id) + " (level " +
                   std::to_string(b.level) + ", column " + std::to_string(b.column) + ")",
-              X_WS, {0.5 * depth, cell.y(), z_floor + 0.5 * w.box_size_m.z()}, 0.5 * w.box_size_m);
+              X_WS, {0.5 * depth, cell.y(), cell_floor_z_S_m(s, b.level) + 0.5 * w.box_size_m.z()},
+              0.5 * w.box_size_m);
+    }
+    if (s.deck_thickness_m > 0.0) {
+      const double t = s.deck_thickness_m;
+      for (int j = 0; j < nrows; ++j) {
+        add_box(ElementKind::deck, index, shelf + "deck " + boundary_level_name(j, nrows), X_WS,
+                {0.5 * depth, 0.5 * (y_left + y_right), beam_z_S_m(s, j) + 0.5 * tb + 0.5 * t},
+                {0.5 * depth, 0.5 * (y_left - y_right), 0.5 * t});
+      }
     }
   }
 
@@ -409,6 +453,27 @@ Clearance CollisionWorld::clearance_to_shelves(const Eigen::Isometry3d& X_WB) co
     }
     if (best.distance_m <= r || last) return best;
   }
+}
+
+std::optional<RayHit> CollisionWorld::ray_cast(const Eigen::Vector3d& origin_W_m,
+                                               const Eigen::Vector3d& direction_W,
+                                               double max_range_m) const {
+  assert(direction_W.norm() > 0.0 && max_range_m >= 0.0);
+  const Impl& w = *impl_;
+  const Eigen::Vector3d u = direction_W.normalized();
+  const Eigen::Vector3d end = origin_W_m + max_range_m * u;
+  thread_local std::vector<int> ids;
+  const Eigen::Vector3d pad = Eigen::Vector3d::Constant(kContactTolerance_m);
+  w.candidates(origin_W_m.cwiseMin(end) - pad, origin_W_m.cwiseMax(end) + pad, FloorContacts::report,
+               true, ids);
+  std::optional<RayHit> best;
+  for (int id : ids) {
+    const std::optional<double> t = w.ray_parameter(id, origin_W_m, u);
+    if (!t || *t > max_range_m) continue;
+    const bool closer = !best || *t < best->distance_m || (*t == best->distance_m && id < best->element.id);
+    if (closer) best = RayHit{*t, w.elements[static_cast<size_t>(id)], origin_W_m + *t * u};
+  }
+  return best;
 }
 
 double CollisionWorld::distance_to(const Eigen::Isometry3d& X_WB, int element_id) const {

@@ -16,8 +16,13 @@
 //   tag   (i, j, face):        a tag_size_m square card kTagThickness_m thick on the outer surface
 //                              of the intersection (x_S = -max(T_p, T_b) / 2 outward); a tag is
 //                              stuck to the shelf, so touching it is touching the shelf;
+//   deck  (boundary j < nrows): only where deck_thickness_m > 0: a board from the top of the
+//                              beams (z = beam_z(j) + T_b / 2) up by deck_thickness_m, x_S 0..D,
+//                              across the shelf between the outer posts' centre lines;
 //   box   (placement):         box_size_m, centred on its cell's (y, x_S = D / 2) and standing on
-//                              the top of the rails under it (z = beam_z(level - 1) + T_b / 2).
+//                              its cell's floor (cell_floor_z_S_m: the rails, or the deck).
+// Element ids follow this order per shelf (posts, beams, rails, tags, boxes, then decks), so a
+// shelf without decks has the ids it had before decks existed.
 // The floor is the half-space z < 0; the walls and the ceiling are the half-spaces outside the
 // arena box (arena_min_W_m, arena_max_W_m), exact for any distance (no thin slabs to tunnel).
 //
@@ -40,6 +45,13 @@
 // the speed, the step or the bar). A start pose already touching or overlapping is a contact at
 // the step's start time with its penetration depth.
 //
+// Ray cast (ray_cast): the first surface a ray meets, for the sensors that look at the world (the
+// downward range sensor and the vision positioning system). Candidates are the shelf parts whose
+// bounds meet the ray segment's bounds (the same broadphase); each box is met in closed form
+// (the slab method in the box's own frame: the ray's parameter interval inside each pair of
+// faces, intersected); the half-spaces by n . (o + t u) = c. An origin inside an element meets it
+// at distance 0.
+//
 // Thread safety: queries are const and use only thread-local scratch space, so one world may be
 // queried by several threads at once (the runs of a campaign can share it).
 
@@ -55,7 +67,11 @@
 
 namespace shelfcross::plant {
 
-enum class ElementKind { floor, wall, post, beam, rail, tag, box };
+enum class ElementKind { floor, wall, post, beam, rail, tag, box, deck };
+/// Every kind, in declaration order (readers of a stored kind name look it up here).
+inline constexpr ElementKind kElementKinds[] = {ElementKind::floor, ElementKind::wall, ElementKind::post,
+                                                ElementKind::beam,  ElementKind::rail, ElementKind::tag,
+                                                ElementKind::box,   ElementKind::deck};
 
 /// "floor", "wall", "post", ... for logs and reports.
 const char* to_string(ElementKind kind);
@@ -69,7 +85,7 @@ struct Element {
   bool operator==(const Element&) const = default;
 };
 
-/// True for the parts of a shelf (bars, tags, boxes); false for floor, walls and ceiling.
+/// True for the parts of a shelf (bars, tags, boxes, decks); false for floor, walls and ceiling.
 inline bool is_shelf_part(ElementKind kind) {
   return kind != ElementKind::floor && kind != ElementKind::wall;
 }
@@ -91,6 +107,13 @@ struct Clearance {
 /// Whether a query reports the floor. A landed vehicle always touches the floor, so the harness
 /// asks for the first contact that is not the floor while on the ground.
 enum class FloorContacts { report, ignore };
+
+/// The first surface met by a ray (CollisionWorld::ray_cast).
+struct RayHit {
+  double distance_m = 0.0;  ///< from the ray's origin along its direction, >= 0
+  Element element;          ///< what was met: its kind says floor, box top, beam, rail, ...
+  Eigen::Vector3d point_W_m = Eigen::Vector3d::Zero();
+};
 
 class CollisionWorld {
  public:
@@ -127,9 +150,15 @@ class CollisionWorld {
   std::vector<Contact> overlaps(const Eigen::Isometry3d& X_WB, TimeNs t_ns,
                                 FloorContacts floor = FloorContacts::report) const;
 
-  /// The nearest shelf part (post, beam, rail, tag or box; not floor, walls or ceiling) and the
+  /// The nearest shelf part (post, beam, rail, tag, box or deck; not floor, walls or ceiling) and the
   /// exact signed box-to-box distance to it.
   Clearance clearance_to_shelves(const Eigen::Isometry3d& X_WB) const;
+
+  /// The first element (shelf part, floor, wall or ceiling) met by the ray from origin_W_m along
+  /// direction_W (any length > 0; normalised here) within max_range_m, or nullopt. Ties between
+  /// elements at the same distance go to the lower element id.
+  std::optional<RayHit> ray_cast(const Eigen::Vector3d& origin_W_m, const Eigen::Vector3d& direction_W,
+                                 double max_range_m) const;
 
   /// Signed distance from the vehicle at X_WB to one element (see the header comment).
   double distance_to(const Eigen::Isometry3d& X_WB, int element_id) const;

@@ -33,7 +33,7 @@ RotorWrench rotor_wrench(const VehicleParams& vehicle, const Eigen::Vector4d& ro
 }
 
 void rigid_body_rhs(const VehicleParams& vh, const double* y, const Eigen::Vector4d& cmd,
-                    const Eigen::Vector3d& wind_W_mps, double* ydot) {
+                    const Eigen::Vector3d& wind_W_mps, double* ydot, const Eigen::Vector4d& thrust_factor) {
   const ModelSwitches& sw = vh.switches;
   const Eigen::Map<const Eigen::Vector3d> v(y + kIdxV);
   const Eigen::Quaterniond q_raw(y[kIdxQ], y[kIdxQ + 1], y[kIdxQ + 2], y[kIdxQ + 3]);
@@ -50,9 +50,12 @@ void rigid_body_rhs(const VehicleParams& vh, const double* y, const Eigen::Vecto
   // Thrust and torques of the mixer, expanded (no matrix build in the hot loop).
   const double b = vh.thrust_coeff_N_per_radps2, d = vh.torque_coeff_Nm_per_radps2;
   const Eigen::Vector4d o2 = om.cwiseAbs2();
-  const double thrust = b * o2.sum();
-  Eigen::Vector3d tau(b * vh.arm_y_m * (o2[0] - o2[1] - o2[2] + o2[3]),
-                      b * vh.arm_x_m * (-o2[0] - o2[1] + o2[2] + o2[3]),
+  // Each rotor's thrust with its surface-effect factor (x 1.0 leaves every bit as it was); the
+  // reaction torque is the open-air one.
+  const Eigen::Vector4d t2 = o2.cwiseProduct(thrust_factor);
+  const double thrust = b * t2.sum();
+  Eigen::Vector3d tau(b * vh.arm_y_m * (t2[0] - t2[1] - t2[2] + t2[3]),
+                      b * vh.arm_x_m * (-t2[0] - t2[1] + t2[2] + t2[3]),
                       d * (-o2[0] + o2[1] - o2[2] + o2[3]));
 
   if (sw.gyroscopic) {
@@ -121,10 +124,10 @@ RigidBodyState unpack_state(const double* y) {
 
 std::array<double, kStateSize> rigid_body_rhs(const VehicleParams& vehicle, const RigidBodyState& x,
                                               const Eigen::Vector4d& rotor_cmd_radps,
-                                              const Eigen::Vector3d& wind_W_mps) {
+                                              const Eigen::Vector3d& wind_W_mps, const Eigen::Vector4d& thrust_factor) {
   std::array<double, kStateSize> y{}, ydot{};
   pack_state(x, y.data());
-  rigid_body_rhs(vehicle, y.data(), rotor_cmd_radps, wind_W_mps, ydot.data());
+  rigid_body_rhs(vehicle, y.data(), rotor_cmd_radps, wind_W_mps, ydot.data(), thrust_factor);
   return ydot;
 }
 

@@ -75,13 +75,18 @@ double net_rotor_speed_radps(const Eigen::Vector4d& rotor_speed_radps);
 /// clamped to the motor's range) and the wind velocity in W. Allocation-free; uses the
 /// normalised quaternion for R_WB. Terms follow vehicle.switches. Requires `y` and `ydot` to
 /// point at kStateSize doubles each and a non-zero quaternion in y; does not throw.
+/// `thrust_factor` multiplies each rotor's thrust b Omega_i^2 (in the collective thrust and in
+/// the roll and pitch torques of the mixer): the surface effects of plant/surface_effects.hpp,
+/// held over the step; all 1 (exactly the open-air rotor) by default.
 void rigid_body_rhs(const VehicleParams& vehicle, const double* y, const Eigen::Vector4d& rotor_cmd_radps,
-                    const Eigen::Vector3d& wind_W_mps, double* ydot);
+                    const Eigen::Vector3d& wind_W_mps, double* ydot,
+                    const Eigen::Vector4d& thrust_factor = Eigen::Vector4d::Ones());
 
 /// The same on structured types; `ydot` in the flat layout.
 std::array<double, kStateSize> rigid_body_rhs(const VehicleParams& vehicle, const RigidBodyState& x,
                                               const Eigen::Vector4d& rotor_cmd_radps,
-                                              const Eigen::Vector3d& wind_W_mps);
+                                              const Eigen::Vector3d& wind_W_mps,
+                                              const Eigen::Vector4d& thrust_factor = Eigen::Vector4d::Ones());
 
 void pack_state(const RigidBodyState& x, double* y);
 RigidBodyState unpack_state(const double* y);

@@ -82,6 +82,19 @@ inline constexpr double kQuadDragXY = 0.004444;  // N s^2/m^2 (~ 0.5 rho Cd A wi
 inline constexpr double kQuadDragZ = kQuadDragXY * (kSizeX_m * kSizeY_m) / (kSizeY_m * kSizeZ_m);
 }  // namespace tello_derivation
 
+/// The air near a solid surface, per rotor (plant/surface_effects.hpp): ground effect below a
+/// rotor and ceiling effect above it, from the distance to the nearest surface along the rotor's
+/// axis. Each coefficient scales its model's excess thrust; 0 switches the effect off (the
+/// default: the open-air rotor of the rest of this file), 1 is the published model.
+struct SurfaceEffectParams {
+  double rotor_radius_m = tello_derivation::kPropRadius_m;  ///< R, 22.6 mm (tello_derivation)
+  double ground_coeff = 0.0;   ///< k_g: 1 is Cheeseman & Bennett's T_IGE / T_OGE = 1 / (1 - (R / 4z)^2)
+  double ceiling_coeff = 0.0;  ///< k_c: 1 is the ceiling model of surface_effects.hpp
+  double ceiling_range_radii = 1.0;  ///< the ceiling effect acts within this many radii of the rotor
+  bool operator==(const SurfaceEffectParams&) const = default;
+  bool any() const { return ground_coeff > 0.0 || ceiling_coeff > 0.0; }
+};
+
 struct VehicleParams {
   double mass_kg = tello_derivation::kMass_kg;                 ///< docs/method.md Table 4
   double gravity_mps2 = tello_derivation::kGravity_mps2;
@@ -103,6 +116,7 @@ struct VehicleParams {
   Eigen::Vector3d quadratic_drag_Ns2_per_m2 = Eigen::Vector3d(
       tello_derivation::kQuadDragXY, tello_derivation::kQuadDragXY, tello_derivation::kQuadDragZ);  ///< body-frame, per axis
   ModelSwitches switches;
+  SurfaceEffectParams surface_effects;
   /// Height of the floor (world z of the surface the vehicle starts on and lands on).
   double floor_z_m = 0.0;
   bool operator==(const VehicleParams&) const = default;

@@ -32,6 +32,7 @@ struct Quadrotor::Impl {
   RigidBodyState state;
   TimeNs t_ns = 0;
   Eigen::Vector4d cmd = Eigen::Vector4d::Zero();
+  Eigen::Vector4d thrust_factor = Eigen::Vector4d::Ones();
   Eigen::Vector3d wind_W = Eigen::Vector3d::Zero();
   bool on_floor = false;
   long rhs_count = 0;
@@ -56,7 +57,7 @@ struct Quadrotor::Impl {
   double liftoff_margin(const double* yv) const {
     const double b = vehicle.thrust_coeff_N_per_radps2;
     double o2 = 0.0;
-    for (int i = 0; i < 4; ++i) o2 += yv[kIdxRotor + i] * yv[kIdxRotor + i];
+    for (int i = 0; i < 4; ++i) o2 += yv[kIdxRotor + i] * yv[kIdxRotor + i] * thrust_factor[i];
     const Eigen::Quaterniond q(yv[kIdxQ], yv[kIdxQ + 1], yv[kIdxQ + 2], yv[kIdxQ + 3]);
     const double r33 = q.normalized().toRotationMatrix()(2, 2);
     return b * o2 * r33 - vehicle.mass_kg * vehicle.gravity_mps2;
@@ -69,7 +70,7 @@ struct Quadrotor::Impl {
     double* yd = N_VGetArrayPointer(ydotv);
     for (int i = 0; i < kStateSize; ++i)
       if (!std::isfinite(yp[i])) return -1;  // unrecoverable: CVode reports CV_RHSFUNC_FAIL
-    rigid_body_rhs(self->vehicle, yp, self->cmd, self->wind_W, yd);
+    rigid_body_rhs(self->vehicle, yp, self->cmd, self->wind_W, yd, self->thrust_factor);
     if (self->on_floor)  // held by the floor: only the rotors move
       for (int i = 0; i < kIdxRotor; ++i) yd[i] = 0.0;
     return 0;
@@ -248,6 +249,9 @@ void Quadrotor::set_rotor_commands(const Eigen::Vector4d& cmd_radps) {
     m.state.rotor_speed_radps = m.cmd;
   }
 }
+
+void Quadrotor::set_rotor_thrust_factors(const Eigen::Vector4d& factors) { impl_->thrust_factor = factors; }
+const Eigen::Vector4d& Quadrotor::rotor_thrust_factors() const { return impl_->thrust_factor; }
 
 void Quadrotor::advance_to(TimeNs t_ns) { impl_->advance_to(t_ns); }
 const RigidBodyState& Quadrotor::state() const { return impl_->state; }

@@ -85,6 +85,10 @@ class Quadrotor {
   /// Rotor speed commands (rad/s), clamped to [0, rotor_speed_max_radps], held until the next
   /// call. With motor dynamics off the rotor speeds take these values at once.
   void set_rotor_commands(const Eigen::Vector4d& cmd_radps);
+  /// Each rotor's thrust factor (plant/surface_effects.hpp; 1: open air, the default), held
+  /// like the commands until the next call.
+  void set_rotor_thrust_factors(const Eigen::Vector4d& factors);
+  const Eigen::Vector4d& rotor_thrust_factors() const;
   /// Integrates to t_ns >= time_ns(). Throws NumericalFailure.
   void advance_to(TimeNs t_ns);
 

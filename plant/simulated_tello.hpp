@@ -6,6 +6,9 @@
 // tick the autopilot reads the plant's state at t_k and sets rotor commands, which the plant
 // holds over [t_k, t_k+1). A command submitted at t is handed to the firmware at t; it acts
 // from the next tick on. Deferred replies are stamped with the tick that produced them.
+// At each tick, too, the ground and ceiling effect on each rotor (plant/surface_effects.hpp,
+// VehicleParams::surface_effects) are measured by ray casts in the senses' world and held over
+// the tick like the commands; with no world, or both coefficients 0, every rotor is in open air.
 
 #include <cstdint>
 #include <optional>
@@ -19,12 +22,22 @@
 
 namespace shelfcross::plant {
 
+/// The firmware's senses (plant/tello_senses.hpp): their parameters, the world they look at
+/// (null: the floor alone; it must outlive the Tello), the light level in [0, 1] and the seed
+/// of their random streams. The default senses the truth exactly.
+struct SensesSetup {
+  SensesParams params;
+  const CollisionWorld* world = nullptr;
+  double light_level = 1.0;
+  std::uint64_t seed = 0;
+};
+
 class SimulatedTello {
  public:
   /// Starts landed at (x, y) with the given yaw, at t = 0, motors off.
   SimulatedTello(const VehicleParams& vehicle, const AutopilotParams& autopilot, const WindParams& wind,
                  std::uint64_t wind_seed, IntegratorSettings settings = {}, double x_m = 0.0, double y_m = 0.0,
-                 double yaw_rad = 0.0);
+                 double yaw_rad = 0.0, const SensesSetup& senses = {});
 
   /// Advances to t_ns (>= time_ns()), then gives the command text to the firmware. Returns
   /// its immediate reply, if any. Throws NumericalFailure.
@@ -44,6 +57,7 @@ class SimulatedTello {
  private:
   Quadrotor plant_;
   Autopilot autopilot_;
+  const CollisionWorld* world_;  ///< the senses' world (null: none), for the surface effects
   std::int64_t rate_hz_;
   std::int64_t next_tick_ = 0;  // index of the next autopilot tick not yet run
   std::vector<SdkReply> replies_;

@@ -59,7 +59,7 @@ void add_boxes(const Warehouse& w, int si, const Eigen::Isometry3d& X_WS, int di
                       " is not in " + w.aruco_dictionary + " (0.." +
                       std::to_string(dictionary_size - 1) + ")");
     const double clear_w = s.column_pitch_m[static_cast<size_t>(b.column - 1)] - tp;
-    const double clear_h = s.row_pitch_m[static_cast<size_t>(b.level - 1)] - tb;
+    const double clear_h = cell_clear_height_m(s, b.level);
     if (w.box_size_m.y() > clear_w || w.box_size_m.z() > clear_h || w.box_size_m.x() > d - tp)
       fail(s, si, where.str() + ": the box does not fit in its cell");
     for (const BoxPlacement& other : s.boxes) {
@@ -67,8 +67,7 @@ void add_boxes(const Warehouse& w, int si, const Eigen::Isometry3d& X_WS, int di
         fail(s, si, where.str() + ": two boxes in one cell");
     }
     const Eigen::Vector3d c = cell_centre_S_m(s, b.level, b.column);
-    const Eigen::Vector3d centre_S(0.5 * d, c.y(),
-                                   beam_z_S_m(s, b.level - 1) + 0.5 * tb + 0.5 * w.box_size_m.z());
+    const Eigen::Vector3d centre_S(0.5 * d, c.y(), cell_floor_z_S_m(s, b.level) + 0.5 * w.box_size_m.z());
     out.cuboids.push_back({si, Cuboid::Kind::kBox, centre_S - 0.5 * w.box_size_m, centre_S + 0.5 * w.box_size_m});
     for (bool front : {true, false}) {
       const double x = front ? centre_S.x() - 0.5 * w.box_size_m.x() - kSurfaceOffset_m
@@ -153,6 +152,11 @@ SceneLayout build_scene_layout(const Warehouse& w) {
         add(Cuboid::Kind::kRail, {0.5 * tp, y - 0.5 * tb, z - 0.5 * tb},
             {d - 0.5 * tp, y + 0.5 * tb, z + 0.5 * tb});
       }
+    }
+    // Solid decks (warehouse.hpp) on every cell floor, drawn in the bars' colour (painted steel decking).
+    for (int j = 0; s.deck_thickness_m > 0.0 && j < nrows; ++j) {
+      const double z = beam_z_S_m(s, j) + 0.5 * tb;
+      add(Cuboid::Kind::kRail, {0.0, post_y_S_m(s, ncols), z}, {d, post_y_S_m(s, 0), z + s.deck_thickness_m});
     }
 
     const Eigen::Vector3d n_front_W = X_WS.linear() * Eigen::Vector3d(-1, 0, 0);

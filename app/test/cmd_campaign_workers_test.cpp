@@ -184,7 +184,7 @@ TEST(CampaignWorkers, WorkerProcessesStoreTheRecordsOfInProcessWorkers) {
     a[i].cpu_s = b[i].cpu_s = std::nullopt;
     EXPECT_EQ(a[i], b[i]) << "run " << i;
   }
-  EXPECT_EQ(v::summarize_campaign(a, 3).campaign_hash, campaign_hash(out));
+  EXPECT_EQ(v::summarize_campaign(a, 3, 0.02).campaign_hash, campaign_hash(out));
   const json cost = json::parse(read_text(out / "summary.json"))["cost"];
   EXPECT_EQ(cost["cpu_s_per_run"]["count"], 3);
   EXPECT_GT(cost["cpu_s_per_simulated_s"].get<double>(), 0.0);

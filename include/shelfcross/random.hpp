@@ -45,6 +45,8 @@ enum class StreamId : std::uint64_t {
   compute_latency = 10,///< the flight software's compute time
   link_faults = 11,    ///< emulator fault injection
   state_latency = 12,  ///< state records and replies
+  vps = 13,            ///< the vision positioning system's velocity errors
+  height_sensors = 14, ///< barometer, range sensor and height noise and drift
 };
 
 /// xoshiro256** (Blackman & Vigna 2018), state filled from SplitMix64 of the stream's seed.

@@ -19,8 +19,13 @@
 //   posts: vertical, at each of the ncols+1 column boundaries, on the front and back faces,
 //          from the floor to the top beam;
 //   beams: horizontal along y_S, at each of the nrows+1 level boundaries, on both faces;
-//   rails: horizontal along x_S, joining front and back at every post and level boundary.
-// Cells are open front to back; a box stands on the rails of its cell's floor.
+//   rails: horizontal along x_S, joining front and back at every post and level boundary;
+//   decks (only where deck_thickness_m > 0, as real racking often has decking): a solid board
+//          on every cell floor (level boundaries 0..nrows-1), resting on the beams and rails
+//          (from z = beam_z_S_m(j) + T_b / 2 up by deck_thickness_m), spanning the shelf's width
+//          between the outer posts' centre lines and its depth between the faces' centre lines.
+// Cells are open front to back; a box stands on its cell's floor: the rails, or the deck on
+// them (cell_floor_z_S_m).
 
 #include <string>
 #include <vector>
@@ -53,6 +58,9 @@ struct ShelfSpec {
   double depth_m = 0.34;               ///< front-face to back-face centre lines
   double post_thickness_m = 0.02;
   double beam_thickness_m = 0.02;
+  /// Solid decks: 0 none (open bars, the paper's shelf); > 0 a board this thick on every cell
+  /// floor (see the file comment). A deck narrows each cell's clear height by its thickness.
+  double deck_thickness_m = 0.0;
   std::vector<BoxPlacement> boxes;
   bool operator==(const ShelfSpec&) const = default;
 };
@@ -109,6 +117,17 @@ inline double beam_z_S_m(const ShelfSpec& s, int j) {
 inline Eigen::Vector3d cell_centre_S_m(const ShelfSpec& s, int level, int column) {
   return {0.0, 0.5 * (post_y_S_m(s, column - 1) + post_y_S_m(s, column)),
           0.5 * (beam_z_S_m(s, level - 1) + beam_z_S_m(s, level))};
+}
+
+/// Height z_S of the floor of a cell of `level` (from 1): the top of the rails, or of the deck
+/// on them. Requires 1 <= level <= nrows (not checked, as above).
+inline double cell_floor_z_S_m(const ShelfSpec& s, int level) {
+  return beam_z_S_m(s, level - 1) + 0.5 * s.beam_thickness_m + s.deck_thickness_m;
+}
+
+/// The clear height of a cell of `level` (from 1): its pitch less one beam and the deck.
+inline double cell_clear_height_m(const ShelfSpec& s, int level) {
+  return s.row_pitch_m[static_cast<size_t>(level - 1)] - s.beam_thickness_m - s.deck_thickness_m;
 }
 
 /// X_WS: shelf frame to world frame.

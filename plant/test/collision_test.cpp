@@ -266,6 +266,36 @@ TEST(CollisionWorld, BoxesAndWallsAreHitAndNamed) {
   EXPECT_EQ(all.back().element.name, "wall x+");
 }
 
+// Solid decks (warehouse.hpp): one board on every cell floor, after every other element of the
+// shelf (a shelf without decks keeps its ids); a vehicle sinking into an empty cell touches the
+// deck's top where the open shelf has nothing; boxes stand on the deck.
+TEST(CollisionWorld, SolidDecksAreTouchedAndCarryTheBoxes) {
+  Warehouse w = test_warehouse();
+  w.shelves[0].deck_thickness_m = 0.018;
+  const CollisionWorld decked(w, kTello, kMargin);
+  const CollisionWorld open(test_warehouse(), kTello, kMargin);
+  ASSERT_EQ(decked.elements().size(), open.elements().size() + 4u);  // under levels 1 to 4
+  for (size_t i = 0; i < open.elements().size(); ++i) EXPECT_EQ(decked.elements()[i], open.elements()[i]);
+  const Element& deck = element_named(decked, "shelf 0 deck under level 2");
+  EXPECT_EQ(deck.kind, ElementKind::deck);
+  EXPECT_TRUE(is_shelf_part(deck.kind));
+  EXPECT_STREQ(to_string(ElementKind::deck), "deck");
+  // Level 2, column 2 (wide, empty): centre y = 0.24; its floor: beam 0.64 + 0.01 + 0.018 = 0.668.
+  const auto c = fly(decked, {3.17, 0.24, 0.81}, {3.17, 0.24, 0.5}, 0.5);
+  ASSERT_TRUE(c);
+  EXPECT_EQ(c->element.name, "shelf 0 deck under level 2");
+  EXPECT_NEAR(c->point_W_m.z(), 0.668, 1e-9);
+  // Without the deck the open cell floor (rails at its sides only, beams at its faces) lets the
+  // vehicle sink through into the cell below.
+  EXPECT_FALSE(fly(open, {3.17, 0.24, 0.81}, {3.17, 0.24, 0.5}, 0.5));
+  // Clearance at the cell centre: to the deck 0.81 - 0.668 - 0.0205 - 0.01 below.
+  EXPECT_NEAR(decked.clearance_to_shelves(pose({3.17, 0.24, 0.81})).distance_m, 0.81 - 0.668 - 0.0305, 1e-9);
+  // The box with marker 7 (level 2, column 3) stands on the deck: its top at 0.668 + 0.22.
+  const Element& box = element_named(decked, "shelf 0 box marker 7 (level 2, column 3)");
+  const double above_m = decked.distance_to(pose({3.17, -0.17, 0.668 + 0.22 + 0.0305 + 0.05}), box.id);
+  EXPECT_NEAR(above_m, 0.05, 1e-9);
+}
+
 TEST(CollisionWorld, RotatedShelfIsPlacedByItsPose) {
   Warehouse w = test_warehouse();
   // The shelf turned to face +y from y = 2: its front face is the plane y = 2, and its column 1
@@ -289,6 +319,59 @@ TEST(CollisionWorld, NoShelvesGivesInfiniteClearance) {
   const Clearance c = world.clearance_to_shelves(pose({0.0, 0.0, 1.0}));
   EXPECT_TRUE(std::isinf(c.distance_m));
   EXPECT_EQ(c.element.id, -1);
+}
+
+// The downward ray from above a cell: the paper's shelf has open bars, so a ray down the middle
+// of a cell passes through the empty cells below and reads the first box top; over a beam or a
+// rail it reads that bar's top; clear of the shelf, the floor.
+TEST(CollisionWorld, RayDownReadsTheBoxTopTheBeamTheRailOrTheFloor) {
+  const Warehouse w = test_warehouse();
+  const CollisionWorld world(w, kTello, kMargin);
+  const ShelfSpec& s = w.shelves.front();
+  const double bar_top_level3 = beam_z_S_m(s, 2) + 0.5 * s.beam_thickness_m;  // 0.99
+  const Eigen::Vector3d down(0.0, 0.0, -1.0);
+  // Over cell (level 3, column 1): levels 3 and 2 are empty, the box of level 1 is below.
+  const double box1_top = beam_z_S_m(s, 0) + 0.5 * s.beam_thickness_m + w.box_size_m.z();  // 0.53
+  const auto box = world.ray_cast({3.17, 0.65, 1.2}, down, 8.0);
+  ASSERT_TRUE(box);
+  EXPECT_EQ(box->element.kind, ElementKind::box);
+  EXPECT_EQ(box->element.name, "shelf 0 box marker 3 (level 1, column 1)");
+  EXPECT_NEAR(box->distance_m, 1.2 - box1_top, 1e-12);
+  EXPECT_NEAR(box->point_W_m.z(), box1_top, 1e-12);
+  // Over the front beam under level 3.
+  const auto beam = world.ray_cast({3.0, 0.2, 1.2}, down, 8.0);
+  ASSERT_TRUE(beam);
+  EXPECT_EQ(beam->element.kind, ElementKind::beam);
+  EXPECT_NEAR(beam->distance_m, 1.2 - bar_top_level3, 1e-12);
+  // Over the rail under level 3 at the post between columns 1 and 2 (y_S = 0.48).
+  const auto rail = world.ray_cast({3.17, 0.48, 1.2}, down, 8.0);
+  ASSERT_TRUE(rail);
+  EXPECT_EQ(rail->element.kind, ElementKind::rail);
+  EXPECT_NEAR(rail->distance_m, 1.2 - bar_top_level3, 1e-12);
+  // In front of the shelf: the floor; a range shorter than the floor's distance: nothing.
+  const auto floor = world.ray_cast({1.0, 0.0, 1.0}, down, 8.0);
+  ASSERT_TRUE(floor);
+  EXPECT_EQ(floor->element.kind, ElementKind::floor);
+  EXPECT_NEAR(floor->distance_m, 1.0, 1e-12);
+  EXPECT_FALSE(world.ray_cast({1.0, 0.0, 1.0}, down, 0.9));
+  // Tilted 30 deg about y_W, in front of the shelf and leaning away from it: the slant distance
+  // to the floor.
+  const Eigen::Vector3d slant(-std::sin(std::numbers::pi / 6), 0.0, -std::cos(std::numbers::pi / 6));
+  const auto tilted = world.ray_cast({2.5, 0.65, 0.5}, slant, 8.0);
+  ASSERT_TRUE(tilted);
+  EXPECT_EQ(tilted->element.kind, ElementKind::floor);
+  EXPECT_NEAR(tilted->distance_m, 0.5 / std::cos(std::numbers::pi / 6), 1e-12);
+  // Upward from inside cell (3, 1): the middle of every cell above is open, so the ray reaches
+  // the ceiling of the arena.
+  const auto up = world.ray_cast({3.17, 0.65, 1.2}, -down, 100.0);
+  ASSERT_TRUE(up);
+  EXPECT_EQ(up->element.name, "ceiling");
+  EXPECT_NEAR(up->distance_m, w.arena_max_W_m.z() - 1.2, 1e-12);
+  // An origin inside a box meets it at once.
+  const auto inside = world.ray_cast({3.17, 0.65, box1_top - 0.05}, down, 8.0);
+  ASSERT_TRUE(inside);
+  EXPECT_EQ(inside->element.kind, ElementKind::box);
+  EXPECT_EQ(inside->distance_m, 0.0);
 }
 
 }  // namespace

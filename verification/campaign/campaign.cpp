@@ -149,9 +149,10 @@ std::vector<std::optional<double>> summary_metric_values(const RunMetrics& m) {
   return values;
 }
 
-CampaignSummary summarize_campaign(const std::vector<RunRecord>& runs, std::int64_t runs_requested) {
+CampaignSummary summarize_campaign(const std::vector<RunRecord>& runs, std::int64_t runs_requested, double near_miss_m) {
   CampaignSummary summary;
   summary.runs_requested = runs_requested;
+  summary.near_misses.near_miss_m = near_miss_m;
   const std::vector<std::string>& names = summary_metric_names();
   std::vector<std::vector<double>> values(names.size());
   std::vector<std::string> hashes, outcomes;
@@ -167,6 +168,10 @@ CampaignSummary summarize_campaign(const std::vector<RunRecord>& runs, std::int6
     if (r.cpu_s) cpu_s.push_back(*r.cpu_s);
     const StoredMetrics stored = stored_metrics(r);
     if (!stored.run) continue;  // a crashed, hung or failed worker measured nothing
+    if (is_near_miss(r.outcome, stored.run, near_miss_m)) {
+      ++summary.near_misses.runs;
+      summary.near_misses.successes += r.outcome == "success";
+    }
     if (r.cpu_s) {
       cpu_s_simulated += *r.cpu_s;
       simulated_s += stored.run->mission_time_s;
@@ -179,6 +184,7 @@ CampaignSummary summarize_campaign(const std::vector<RunRecord>& runs, std::int6
   if (summary.runs > 0) {
     summary.success_rate = static_cast<double>(summary.successes) / static_cast<double>(summary.runs);
     summary.success_lower_95 = clopper_pearson_lower(summary.successes, summary.runs, 0.95);
+    summary.near_misses.rate = static_cast<double>(summary.near_misses.runs) / static_cast<double>(summary.runs);
   }
   summary.safety = summarize_safety(outcomes);
   for (size_t i = 0; i < names.size(); ++i) {
@@ -233,6 +239,9 @@ void to_json(nlohmann::json& j, const CampaignSummary& s) {
              {"contact_rate", f.contact_rate}, {"contact_upper_95", f.contact_upper_95},
              {"safe_aborts", f.safe_aborts}, {"inventory_errors", f.inventory_errors},
              {"other_failures", f.other_failures}}},
+           {"near_misses",
+            {{"near_miss_m", s.near_misses.near_miss_m}, {"runs", s.near_misses.runs},
+             {"successes", s.near_misses.successes}, {"rate", s.near_misses.rate}}},
            {"metrics", metrics},
            {"cost", cost},
            {"campaign_hash", s.campaign_hash}};
@@ -263,6 +272,12 @@ void from_json(const nlohmann::json& j, CampaignSummary& s) {
   s.safety.inventory_errors = f.integer("inventory_errors");
   s.safety.other_failures = f.integer("other_failures");
   f.finish();
+  StrictObject n = o.object("near_misses");
+  s.near_misses.near_miss_m = n.number("near_miss_m");
+  s.near_misses.runs = n.integer("runs");
+  s.near_misses.successes = n.integer("successes");
+  s.near_misses.rate = n.number("rate");
+  n.finish();
   StrictObject metrics = o.object("metrics");
   const std::vector<std::string>& names = summary_metric_names();
   for (const std::string& name : metrics.keys()) {

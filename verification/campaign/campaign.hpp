@@ -73,6 +73,15 @@ struct CostSummary {
   std::optional<double> cpu_s_per_simulated_s;  ///< sum cpu_s / sum mission_time_s, runs with both
 };
 
+/// The near misses (is_near_miss, stored_run.hpp): runs that touched nothing but came closer
+/// to a shelf than the scenario's cosim.near_miss_m, counted apart from contacts and success.
+struct NearMissSummary {
+  double near_miss_m = 0.0;        ///< the threshold they were judged at
+  std::int64_t runs = 0;           ///< near misses
+  std::int64_t successes = 0;      ///< of which the mission succeeded
+  double rate = 0.0;               ///< runs / the campaign's stored runs
+};
+
 /// A campaign's summary (summary.json), over the stored runs 0..runs_requested-1.
 struct CampaignSummary {
   std::int64_t runs = 0;            ///< stored runs counted
@@ -82,6 +91,7 @@ struct CampaignSummary {
   double success_lower_95 = 0.0;    ///< one-sided Clopper-Pearson
   std::map<std::string, std::int64_t> outcomes;  ///< keys among known_run_outcomes()
   SafetySummary safety;             ///< contacts apart from safe aborts
+  NearMissSummary near_misses;      ///< summary.json's "near_misses"
   std::map<std::string, Summary> metrics;        ///< keys among summary_metric_names()
   CostSummary cost;                 ///< summary.json's "cost"
   std::string campaign_hash;        ///< over the run hashes in run order; empty while runs are missing
@@ -91,8 +101,9 @@ void to_json(nlohmann::json& j, const CampaignSummary& s);
 /// throw std::invalid_argument naming the key.
 void from_json(const nlohmann::json& j, CampaignSummary& s);
 
-/// Campaign statistics over the stored runs 0..runs_requested-1 (throws std::invalid_argument
-/// on a stored run whose metrics do not read back).
-CampaignSummary summarize_campaign(const std::vector<RunRecord>& runs, std::int64_t runs_requested);
+/// Campaign statistics over the stored runs 0..runs_requested-1, near misses judged at
+/// `near_miss_m` (the scenario's cosim.near_miss_m). Throws std::invalid_argument on a stored
+/// run whose metrics do not read back.
+CampaignSummary summarize_campaign(const std::vector<RunRecord>& runs, std::int64_t runs_requested, double near_miss_m);
 
 }  // namespace shelfcross::verification

@@ -6,7 +6,14 @@
 
 #include <nlohmann/json.hpp>
 
+#include "verification/statistics/statistics.hpp"
+
 namespace shelfcross::verification {
+
+bool is_near_miss(const std::string& outcome, const std::optional<RunMetrics>& run, double near_miss_m) {
+  if (!run || classify_outcome(outcome) == RunSafetyClass::contact || run->truth.contact) return false;
+  return run->truth.min_clearance_m && *run->truth.min_clearance_m < near_miss_m;
+}
 
 StoredMetrics stored_metrics(const RunRecord& record) {
   try {

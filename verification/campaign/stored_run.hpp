@@ -4,6 +4,7 @@
 // by hand.
 
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "verification/campaign/results_store.hpp"
@@ -26,5 +27,12 @@ struct StoredTrace {
 /// Empty for a run that stored none (a worker that crashed measured nothing); throws
 /// std::invalid_argument naming the run when the trace does not read back.
 StoredTrace stored_trace(const RunRecord& record);
+
+/// A near miss: a run whose outcome is not a contact (statistics.hpp's classes), that touched
+/// nothing (no WorldTruth::contact), and whose least clearance to a shelf (min_clearance_m)
+/// was below `near_miss_m` (the scenario's cosim.near_miss_m). A class apart from contacts
+/// and from success: a successful run may be a near miss, a contact never is. A run with no
+/// metrics (lost with its worker) or no clearance measured (never near a shelf) is not one.
+bool is_near_miss(const std::string& outcome, const std::optional<RunMetrics>& run, double near_miss_m);
 
 }  // namespace shelfcross::verification

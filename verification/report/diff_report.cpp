@@ -153,6 +153,8 @@ json diff_json(const PairedDiff& diff, const DiffReportOptions& options) {
                      {"new_detail", f.new_detail},
                      {"success_changed", f.success_changed},
                      {"contact_changed", f.contact_changed},
+                     {"near_miss_changed", f.near_miss_changed},
+                     {"new_near_miss", f.new_near_miss},
                      {"base_draws", draws_json(f.base_draws)},
                      {"new_draws", draws_json(f.new_draws)},
                      {"replay", {replay_command(diff.base, f.base_run), replay_command(diff.next, f.new_run)}}});
@@ -184,6 +186,8 @@ json diff_json(const PairedDiff& diff, const DiffReportOptions& options) {
           {"identical_runs", diff.identical},
           {"mission_success", success_json(diff.failures)},
           {"contacts", contact_json(diff.contacts)},
+          {"near_misses", contact_json(diff.near_misses)},
+          {"near_miss_m", {{"base", diff.base.scenario.cosim.near_miss_m}, {"new", diff.next.scenario.cosim.near_miss_m}}},
           {"metrics", metrics},
           {"flips", flips},
           {"scenario_differences", scenario},
@@ -240,6 +244,12 @@ std::string verdict_section(const PairedDiff& d, const DiffReportOptions& o) {
      << signed_percent(c.difference.lower, 2) << " to " << signed_percent(c.difference.upper, 2)
      << "); one-sided p (NEW worse) = " << p_text(c.mcnemar.p_new_worse) << ", two-sided p = "
      << p_text(c.mcnemar.p_two_sided) << ".\n";
+  const EventComparison& n = d.near_misses;
+  md << "- **Near misses** (no contact, least clearance below " << fixed(100.0 * d.base.scenario.cosim.near_miss_m, 1)
+     << " cm in BASE, " << fixed(100.0 * d.next.scenario.cosim.near_miss_m, 1) << " cm in NEW): BASE "
+     << n.table.both + n.table.base_only << ", NEW " << n.table.both + n.table.new_only << "; " << n.table.new_only
+     << " new in NEW, " << n.table.base_only << " gone; one-sided p (NEW worse) = " << p_text(n.mcnemar.p_new_worse)
+     << ", two-sided p = " << p_text(n.mcnemar.p_two_sided) << " (reported, not gated).\n";
   if (o.fail_if_worse_alpha) {
     const double a = *o.fail_if_worse_alpha;
     md << "- **Gate** (`--fail-if-worse " << a << "`): "
@@ -252,7 +262,7 @@ std::string verdict_section(const PairedDiff& d, const DiffReportOptions& o) {
 }
 
 std::string table_section(const PairedDiff& d) {
-  const PairedTable &f = d.failures.table, &c = d.contacts.table;
+  const PairedTable &f = d.failures.table, &c = d.contacts.table, &n = d.near_misses.table;
   std::ostringstream md;
   md << "## Outcomes, paired\n\n"
      << "| mission success | NEW succeeds | NEW fails |\n|---|---|---|\n"
@@ -261,6 +271,9 @@ std::string table_section(const PairedDiff& d) {
      << "| contacts | NEW: contact | NEW: none |\n|---|---|---|\n"
      << "| BASE: contact | " << c.both << " | " << c.base_only << " |\n"
      << "| BASE: none | " << c.new_only << " | " << c.neither << " |\n\n"
+     << "| near misses | NEW: near miss | NEW: none |\n|---|---|---|\n"
+     << "| BASE: near miss | " << n.both << " | " << n.base_only << " |\n"
+     << "| BASE: none | " << n.new_only << " | " << n.neither << " |\n\n"
      << "Only the discordant pairs (one side one way, the other the other) carry information about a "
         "difference. The exact McNemar test takes them as " << d.failures.mcnemar.discordant << " (mission) and "
      << d.contacts.mcnemar.discordant
@@ -350,10 +363,11 @@ std::string flips_section(const PairedDiff& d) {
   std::ostringstream md;
   md << "## Flipped runs (" << d.flips.size() << ")\n\n";
   if (d.flips.empty()) {
-    md << "None: every paired run has the same outcome on both sides.\n\n";
+    md << "None: every paired run has the same outcome and near-miss class on both sides.\n\n";
     return md.str();
   }
-  md << "| BASE run | NEW run | BASE outcome | NEW outcome | mission | contact |\n|---|---|---|---|---|---|\n";
+  md << "| BASE run | NEW run | BASE outcome | NEW outcome | mission | contact | near miss |\n"
+        "|---|---|---|---|---|---|---|\n";
   for (const Flip& f : d.flips) {
     const bool new_ok = f.new_outcome == "success";
     md << "| " << f.base_run << " | " << f.new_run << " | " << f.base_outcome
@@ -362,7 +376,7 @@ std::string flips_section(const PairedDiff& d) {
        << (f.success_changed ? (new_ok ? "gained" : "**lost**") : "") << " | "
        << (f.contact_changed ? (classify_outcome(f.new_outcome) == RunSafetyClass::contact ? "**new contact**" : "contact gone")
                              : "")
-       << " |\n";
+       << " | " << (f.near_miss_changed ? (f.new_near_miss ? "**new near miss**" : "near miss gone") : "") << " |\n";
   }
   md << "\n";
   for (const Flip& f : d.flips) {

@@ -216,7 +216,7 @@ PairedDiff pair_campaigns(DiffSide base, DiffSide next, const DiffOptions& optio
                          std::to_string(next.runs.size()) + (diff.paired_by_seed ? ", paired by run seed" : "") + ")");
   }
   diff.pairs = static_cast<std::int64_t>(pairs.size());
-  PairedTable failures, contacts;
+  PairedTable failures, contacts, near_misses;
   DrawTally draws;
   std::vector<std::string> names = summary_metric_names();
   names.emplace_back("crossing_push_m");
@@ -249,9 +249,12 @@ PairedDiff pair_campaigns(DiffSide base, DiffSide next, const DiffOptions& optio
     add_to_table(failures, !base_ok, !new_ok);
     add_to_table(contacts, base_contact, new_contact);
     const StoredMetrics bs = stored_metrics(b), ns = stored_metrics(n);
-    if (b.outcome != n.outcome) {
+    const bool base_near = is_near_miss(b.outcome, bs.run, base.scenario.cosim.near_miss_m);
+    const bool new_near = is_near_miss(n.outcome, ns.run, next.scenario.cosim.near_miss_m);
+    add_to_table(near_misses, base_near, new_near);
+    if (b.outcome != n.outcome || base_near != new_near) {
       diff.flips.push_back({b.index, n.index, b.seed, b.outcome, n.outcome, bs.detail, ns.detail, base_ok != new_ok,
-                            base_contact != new_contact, bd, nd});
+                            base_contact != new_contact, base_near != new_near, new_near, bd, nd});
     }
     const auto bv = metric_row(base.scenario, bs, b), nv = metric_row(next.scenario, ns, n);
     for (std::size_t k = 0; k < names.size(); ++k) {
@@ -264,6 +267,7 @@ PairedDiff pair_campaigns(DiffSide base, DiffSide next, const DiffOptions& optio
   }
   diff.failures = compare_event(failures, options.confidence);
   diff.contacts = compare_event(contacts, options.confidence);
+  diff.near_misses = compare_event(near_misses, options.confidence);
   for (MetricComparison& m : diff.metrics) {
     m.pairs = static_cast<std::int64_t>(m.base.size());
     if (m.pairs == 0) continue;

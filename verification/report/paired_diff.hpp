@@ -94,12 +94,15 @@ struct MetricComparison {
   std::vector<std::pair<std::int64_t, double>> base_each, new_each;
 };
 
-/// A paired run whose outcome differs.
+/// A paired run whose outcome differs, or whose near-miss class (is_near_miss, stored_run.hpp,
+/// each side at its own scenario's cosim.near_miss_m) does.
 struct Flip {
   std::int64_t base_run = 0, new_run = 0;
   std::uint64_t seed = 0;
   std::string base_outcome, new_outcome, base_detail, new_detail;
   bool success_changed = false, contact_changed = false;
+  bool near_miss_changed = false;
+  bool new_near_miss = false;  ///< NEW's run is a near miss (meaningful where near_miss_changed)
   DrawnValues base_draws, new_draws;
 };
 
@@ -114,6 +117,7 @@ struct PairedDiff {
   std::int64_t pairs_with_other_draws = 0;  ///< pairs with any draw differing
   EventComparison failures;           ///< the event: the mission did not succeed
   EventComparison contacts;           ///< the event: a contact (shelf or wall)
+  EventComparison near_misses;        ///< the event: a near miss (no contact, closer than cosim.near_miss_m)
   std::vector<MetricComparison> metrics;  ///< summary_metric_names(), crossing_push_m, cpu_s
   std::vector<Flip> flips;            ///< in BASE's run order
 };
@@ -129,7 +133,7 @@ PairedDiff pair_campaigns(DiffSide base, DiffSide next, const DiffOptions& optio
 double metric_tolerance(const std::string& metric_name);
 
 /// The gate: NEW is worse than BASE at level alpha, for mission success or for contacts (the
-/// one-sided exact McNemar p-value at most alpha).
+/// one-sided exact McNemar p-value at most alpha). Near misses are reported, not gated.
 bool new_is_worse(const PairedDiff& diff, double alpha);
 
 /// The differing keys of two resolved scenarios (write_scenario's YAML), flattened to paths;

@@ -87,7 +87,7 @@ std::string latency_sweep_section(const Scenario& scenario, const std::vector<Ru
 
 }  // namespace
 
-std::string safety_section(const SafetySummary& s) {
+std::string safety_section(const SafetySummary& s, const NearMissSummary& n) {
   const auto percent = [](double v, int decimals) { return fixed(100.0 * v, decimals) + " %"; };
   std::ostringstream md;
   md << "## Safety apart from mission success\n\n"
@@ -98,9 +98,13 @@ std::string safety_section(const SafetySummary& s) {
      << "| safe aborts (gave up, landed without contact) | " << s.safe_aborts << " | "
      << percent(s.runs ? static_cast<double>(s.safe_aborts) / static_cast<double>(s.runs) : 0.0, 2) << " | |\n"
      << "| inventory errors (flown safely, wrong inventory) | " << s.inventory_errors << " | | |\n"
-     << "| other failures (timeout, software fault) | " << s.other_failures << " | | |\n\n"
+     << "| other failures (timeout, software fault) | " << s.other_failures << " | | |\n"
+     << "| near misses (no contact, least clearance below " << fixed(100.0 * n.near_miss_m, 1) << " cm) | " << n.runs
+     << " (" << n.successes << " succeeded) | " << percent(n.rate, 2) << " | |\n\n"
      << "A contact is the safety failure; an abort is only a lost mission. The contact bound is the "
-        "largest contact probability consistent with these runs at 95 % confidence.\n\n";
+        "largest contact probability consistent with these runs at 95 % confidence. A near miss is "
+        "counted apart from both: a run that touched nothing but passed closer to a shelf than "
+        "cosim.near_miss_m, whether or not its mission succeeded.\n\n";
   return md.str();
 }
 
@@ -132,6 +136,8 @@ namespace {
 struct RunsDrawn {
   int failures = 0;
   std::ostringstream failed_rows;
+  int near_misses = 0;
+  std::ostringstream near_miss_rows;
 };
 
 /// Every run's trajectory over the shelves (top and side views), its approach responses, and
@@ -204,6 +210,12 @@ RunsDrawn draw_runs(const std::filesystem::path& dir, const Scenario& scenario, 
       settle_yaw.push_back(m.heading && m.heading->settling_time_s ? *m.heading->settling_time_s : NAN);
       if (m.truth.entry_offset_y_m) offset_y.push_back(*m.truth.entry_offset_y_m);
       if (m.truth.entry_offset_z_m) offset_z.push_back(*m.truth.entry_offset_z_m);
+    }
+    if (is_near_miss(r.outcome, stored.run, scenario.cosim.near_miss_m)) {
+      ++drawn.near_misses;
+      drawn.near_miss_rows << "| " << r.index << " | " << r.outcome << " | "
+                           << fixed(100.0 * *stored.run->truth.min_clearance_m, 1) << " | `shelfcross replay "
+                           << dir.string() << " --run " << r.index << "` |\n";
     }
     if (!ok) {
       ++drawn.failures;
@@ -278,7 +290,7 @@ CampaignSummary write_campaign_report(const std::filesystem::path& dir) {
   ResultsStore store = ResultsStore::open_existing(dir / "results.sqlite");
   const Scenario scenario = parse_scenario(store.meta().scenario_yaml, (dir / "results.sqlite").string() + " (scenario)");
   const std::vector<RunRecord> runs = store.runs();
-  const CampaignSummary summary = summarize_campaign(runs, store.meta().runs_requested);
+  const CampaignSummary summary = summarize_campaign(runs, store.meta().runs_requested, scenario.cosim.near_miss_m);
   std::ofstream(dir / "summary.json") << json(summary).dump(2) << "\n";
 
   const RunsDrawn drawn = draw_runs(dir, scenario, runs);
@@ -294,7 +306,7 @@ CampaignSummary write_campaign_report(const std::filesystem::path& dir) {
   md << "| successes | " << summary.successes << " |\n";
   md << "| success rate | " << fixed(summary.success_rate, 4) << " |\n";
   md << "| one-sided 95 % lower bound (Clopper-Pearson) | " << fixed(summary.success_lower_95, 4) << " |\n\n";
-  md << safety_section(summary.safety);
+  md << safety_section(summary.safety, summary.near_misses);
   md << "## Outcomes\n\n| outcome | runs |\n|---|---|\n";
   for (const auto& [name, n] : summary.outcomes) md << "| " << name << " | " << n << " |\n";
   md << "\n## Metrics\n\n| metric | runs | mean | p50 | p95 | p99 | max |\n|---|---|---|---|---|---|---|\n";
@@ -320,6 +332,12 @@ CampaignSummary write_campaign_report(const std::filesystem::path& dir) {
     md << "| run | outcome | detail | replay |\n|---|---|---|---|\n" << drawn.failed_rows.str();
   } else {
     md << "None.\n";
+  }
+  md << "\n## Near misses (" << drawn.near_misses << ")\n\n";
+  if (drawn.near_misses) {
+    md << "| run | outcome | least clearance (cm) | replay |\n|---|---|---|---|\n" << drawn.near_miss_rows.str();
+  } else {
+    md << "None closer than " << fixed(100.0 * scenario.cosim.near_miss_m, 1) << " cm.\n";
   }
   return summary;
 }

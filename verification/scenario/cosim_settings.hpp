@@ -87,6 +87,10 @@ struct CosimSettings {
   double settling_floor_z_m = 0.01;   ///< ... never tighter than 1 cm ...
   double settling_floor_yaw_rad = 0.5 * std::numbers::pi / 180.0;  ///< ... or 0.5 deg
   double settling_floor_y_m = 0.01;   ///< lateral response band floor
+  /// A run that touched nothing but whose least clearance to a shelf (WorldTruth::min_clearance_m)
+  /// fell below this is a near miss: counted apart from contacts and from success
+  /// (is_near_miss, stored_run.hpp). Judged when runs are summarized, never stored in a run.
+  double near_miss_m = 0.02;
   /// compute_latency_s defaults to the measured median step time (kMeasuredStepLatencyP50_s);
   /// the dispersion compute_latency_quantile draws it from the measured distribution.
   LinkSettings link = default_link_settings();

@@ -9,6 +9,30 @@
 
 namespace shelfcross::verification {
 
+namespace {
+
+/// The senses' dispersed keys (dispersion_table.hpp), each replacing its key.
+void apply_senses_draws(const DrawnValues& drawn, plant::SensesParams& senses) {
+  const auto set = [&](const char* name, double& field) {
+    if (const auto it = drawn.find(name); it != drawn.end()) field = it->second;
+  };
+  set("vps_noise_mps", senses.vps.noise_mps);
+  set("vps_bias_stddev_mps", senses.vps.bias_stddev_mps);
+  set("vps_min_range_m", senses.vps.min_range_m);
+  set("vps_floor_texture", senses.vps.texture.floor);
+  set("vps_box_texture", senses.vps.texture.box);
+  set("vps_bar_texture", senses.vps.texture.bar);
+  set("tof_noise_m", senses.height.tof_noise_m);
+  set("height_noise_m", senses.height.height_noise_m);
+  set("baro_noise_m", senses.height.baro_noise_m);
+  set("baro_drift_m_per_sqrt_s", senses.height.baro_drift_m_per_sqrt_s);
+  set("height_hold_range_blend", senses.height_hold.range_blend);
+  set("height_hold_range_below_m", senses.height_hold.range_below_m);
+  set("height_hold_time_constant_s", senses.height_hold.time_constant_s);
+}
+
+}  // namespace
+
 RunSetup disperse(const Scenario& nominal, std::uint64_t run_seed) {
   return disperse(nominal, run_seed, draw_dispersions(nominal.dispersions, run_seed));
 }
@@ -96,6 +120,8 @@ RunSetup disperse(const Scenario& nominal, std::uint64_t run_seed, const DrawnVa
   if (has("vertical_time_constant_s")) ap.vertical_time_constant_s = value("vertical_time_constant_s");
   if (has("yaw_time_constant_s")) ap.yaw_time_constant_s = value("yaw_time_constant_s");
   if (has("mass_scale")) s->vehicle.mass_kg *= value("mass_scale");
+  if (has("ground_effect_coeff")) s->vehicle.surface_effects.ground_coeff = value("ground_effect_coeff");
+  if (has("ceiling_effect_coeff")) s->vehicle.surface_effects.ceiling_coeff = value("ceiling_effect_coeff");
   if (has("wind_speed_mps") || has("wind_direction_rad")) {
     const Eigen::Vector3d& w = s->wind.steady_W_mps;
     const double speed = has("wind_speed_mps") ? value("wind_speed_mps") : w.head<2>().norm();
@@ -116,6 +142,7 @@ RunSetup disperse(const Scenario& nominal, std::uint64_t run_seed, const DrawnVa
   if (has("not_joystick_probability")) link.not_joystick_probability = value("not_joystick_probability");
   if (has("video_stall_start_s")) link.video_stall_start_s = value("video_stall_start_s");
   if (has("video_stall_duration_s")) link.video_stall_duration_s = value("video_stall_duration_s");
+  apply_senses_draws(setup.drawn, s->senses);
   setup.scenario = std::move(s);
   return setup;
 }

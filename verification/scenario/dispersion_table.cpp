@@ -34,6 +34,8 @@ const std::vector<DispersionParameter>& dispersion_parameters() {
       {"vertical_time_constant_s", 0.05, 3.0},
       {"yaw_time_constant_s", 0.02, 3.0},
       {"mass_scale", 0.5, 2.0},
+      {"ground_effect_coeff", 0.0, 2.0},
+      {"ceiling_effect_coeff", 0.0, 2.0},
       {"wind_speed_mps", 0.0, 10.0},
       {"wind_direction_rad", -2.0 * kPi, 2.0 * kPi},
       {"gust_stddev_mps", 0.0, 5.0},
@@ -54,6 +56,19 @@ const std::vector<DispersionParameter>& dispersion_parameters() {
       {"ambient_scale", 0.0, 3.0},
       {"light_azimuth_rad", -2.0 * kPi, 2.0 * kPi},
       {"camera_readout_s", 0.0, 0.1},
+      {"vps_noise_mps", 0.0, 1.0},
+      {"vps_bias_stddev_mps", 0.0, 1.0},
+      {"vps_min_range_m", 0.0, 10.0},
+      {"vps_floor_texture", 0.0, 1.0},
+      {"vps_box_texture", 0.0, 1.0},
+      {"vps_bar_texture", 0.0, 1.0},
+      {"tof_noise_m", 0.0, 1.0},
+      {"height_noise_m", 0.0, 1.0},
+      {"baro_noise_m", 0.0, 5.0},
+      {"baro_drift_m_per_sqrt_s", 0.0, 1.0},
+      {"height_hold_range_blend", 0.0, 1.0},
+      {"height_hold_range_below_m", 0.0, 100.0},
+      {"height_hold_time_constant_s", 0.01, 60.0},
   };
   return table;
 }

@@ -19,6 +19,8 @@
 //   vertical_time_constant_s  autopilot vertical time constant                  [0.05, 3]
 //   yaw_time_constant_s     autopilot yaw-rate time constant                     [0.02, 3]
 //   mass_scale              vehicle mass, times                                  [0.5, 2]
+//   ground_effect_coeff     vehicle.surface_effects.ground_coeff                 [0, 2]
+//   ceiling_effect_coeff    vehicle.surface_effects.ceiling_coeff                [0, 2]
 //   wind_speed_mps          steady wind speed                                    [0, 10]
 //   wind_direction_rad      steady wind direction, from +x_W toward +y_W         [-2pi, 2pi]
 //   gust_stddev_mps         gust intensity                                       [0, 5]
@@ -39,6 +41,18 @@
 //                           shading); capped at 1
 //   light_azimuth_rad       the directional light's azimuth (direction in x_W y_W [-2pi, 2pi]
 //                           turned to it, elevation kept)
+//   The Tello's senses (senses: section, plant/tello_senses.hpp), each replacing its key:
+//   vps_noise_mps           senses.vps.noise_mps                                 [0, 1]
+//   vps_bias_stddev_mps     senses.vps.bias_stddev_mps                           [0, 1]
+//   vps_min_range_m         senses.vps.min_range_m                               [0, 10]
+//   vps_floor_texture       senses.vps.texture.floor (box, bar: likewise)        [0, 1]
+//   tof_noise_m             senses.height.tof_noise_m                            [0, 1]
+//   height_noise_m          senses.height.height_noise_m                         [0, 1]
+//   baro_noise_m            senses.height.baro_noise_m                           [0, 5]
+//   baro_drift_m_per_sqrt_s senses.height.baro_drift_m_per_sqrt_s                [0, 1]
+//   height_hold_range_blend senses.height_hold.range_blend                       [0, 1]
+//   height_hold_range_below_m  senses.height_hold.range_below_m                  [0, 100]
+//   height_hold_time_constant_s  senses.height_hold.time_constant_s              [0.01, 60]
 // Values outside a distribution's support cannot be drawn; a distribution whose support
 // leaves the allowed range (a normal on a bounded parameter, say) is refused at load time.
 

@@ -22,6 +22,7 @@
 #include "shelfcross/aruco_dictionaries.hpp"
 #include "verification/scenario/dispersion_table.hpp"
 #include "verification/scenario/scenario_yaml.hpp"
+#include "verification/scenario/senses_yaml.hpp"
 
 namespace shelfcross::verification {
 namespace {
@@ -77,7 +78,7 @@ void visit_box(V& v, BoxPlacement& b, const ShelfSpec& s, std::set<std::pair<int
           "marker ID " + std::to_string(b.marker_id) + " is used by another box");
   if (b.level < 1 || b.column < 1 || b.level > nrows || b.column > ncols) return;  // refused above
   const double clear_width = s.column_pitch_m[static_cast<size_t>(b.column - 1)] - s.post_thickness_m;
-  const double clear_height = s.row_pitch_m[static_cast<size_t>(b.level - 1)] - s.beam_thickness_m;
+  const double clear_height = cell_clear_height_m(s, b.level);
   v.check("column", w.box_size_m.y() <= clear_width,
           "a box " + metres(w.box_size_m.y()) + " wide does not fit the clear width " +
               metres(clear_width) + " of column " + std::to_string(b.column));
@@ -97,16 +98,18 @@ void visit_shelf(V& v, ShelfSpec& s, Context& ctx) {
   v.field("yaw_rad", s.yaw_rad, kYaw);
   v.field("post_thickness_m", s.post_thickness_m, kPositive);
   v.field("beam_thickness_m", s.beam_thickness_m, kPositive);
+  v.field("deck_thickness_m", s.deck_thickness_m, between(0.0, 0.1));
   v.list("column_pitch_m", s.column_pitch_m, kPositive, Need::required);
   v.list("row_pitch_m", s.row_pitch_m, kPositive, Need::required);
   for (const char* key : {"column_pitch_m", "row_pitch_m"}) {
     const std::vector<double>& pitches =
         std::string(key) == "column_pitch_m" ? s.column_pitch_m : s.row_pitch_m;
-    const double bar = std::string(key) == "column_pitch_m" ? s.post_thickness_m : s.beam_thickness_m;
+    const double bar = std::string(key) == "column_pitch_m" ? s.post_thickness_m : s.beam_thickness_m + s.deck_thickness_m;
     v.check(key, !pitches.empty() && pitches.size() <= 64, "a shelf has 1 to 64 columns and rows");
     for (double p : pitches) {
       v.check(key, p > bar, "pitch " + metres(p) + " leaves no opening between bars " +
-                                metres(bar) + " thick");
+                                metres(bar) + " thick" + (s.deck_thickness_m > 0.0 && std::string(key) == "row_pitch_m"
+                                                              ? " (beam and deck)" : ""));
       v.check(key, w.tag_size_m < p,
               "tags of " + metres(w.tag_size_m) + " are larger than the cell pitch " + metres(p) +
                   " (adjacent tags would overlap)");
@@ -268,6 +271,14 @@ void visit_vehicle(V& v, plant::VehicleParams& p) {
     w.field("quadratic_drag", p.switches.quadratic_drag);
     w.field("wind", p.switches.wind);
   });
+  v.section("surface_effects", [&](auto& e) {
+    plant::SurfaceEffectParams& f = p.surface_effects;
+    e.field("rotor_radius_m", f.rotor_radius_m, above(0.0));
+    e.check("rotor_radius_m", f.rotor_radius_m <= 0.2, "a rotor radius above 0.2 m is not a Tello-class rotor");
+    e.field("ground_coeff", f.ground_coeff, between(0.0, 2.0));
+    e.field("ceiling_coeff", f.ceiling_coeff, between(0.0, 2.0));
+    e.field("ceiling_range_radii", f.ceiling_range_radii, between(0.25, 4.0));
+  });
 }
 
 template <class V>
@@ -369,6 +380,7 @@ void visit_cosim(V& v, CosimSettings& c) {
   v.field("settling_floor_z_m", c.settling_floor_z_m, kNonNegative);
   v.field("settling_floor_yaw_rad", c.settling_floor_yaw_rad, kNonNegative);
   v.field("settling_floor_y_m", c.settling_floor_y_m, kNonNegative);
+  v.field("near_miss_m", c.near_miss_m, between(0.0, 0.5));
   v.section("link", [&](auto& l) { visit_link(l, c.link); });
   v.section("pilot", [&](auto& p) { p.field("stop_rc_repeats", c.pilot.stop_rc_repeats, between(0, 10));
     p.field("level_check", c.pilot.level_check);
@@ -402,6 +414,7 @@ void visit_scenario(V& v, Scenario& s, Context& ctx) {
   v.section("vehicle", [&](auto& p) { visit_vehicle(p, s.vehicle); });
   v.section("wind", [&](auto& p) { visit_wind(p, s.wind); });
   v.section("autopilot", [&](auto& p) { visit_autopilot(p, s.autopilot); });
+  v.section("senses", [&](auto& p) { visit_senses(p, s.senses); });
   // The start is checked against the vehicle and the warehouse, so it comes last.
   v.section("start", [&](auto& p) { visit_start(p, s); }, Need::required);
   v.section("cosim", [&](auto& c) { visit_cosim(c, s.cosim); });
@@ -430,7 +443,7 @@ std::vector<BoxPlacement> place_random_boxes(const Warehouse& w, const ShelfSpec
   for (int level = 1; level <= static_cast<int>(s.row_pitch_m.size()); ++level) {
     for (int column = 1; column <= static_cast<int>(s.column_pitch_m.size()); ++column) {
       const bool fits = w.box_size_m.y() <= s.column_pitch_m[static_cast<size_t>(column - 1)] - s.post_thickness_m &&
-                        w.box_size_m.z() <= s.row_pitch_m[static_cast<size_t>(level - 1)] - s.beam_thickness_m;
+                        w.box_size_m.z() <= cell_clear_height_m(s, level);
       if (fits) cells.emplace_back(level, column);
     }
   }

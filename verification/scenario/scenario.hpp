@@ -13,7 +13,7 @@
 // Random box placement ("random_boxes: {fill_ratio, seed}") is resolved at load time from a
 // seeded stream, so a loaded Scenario holds explicit placements only and its written form lists
 // them; the same file always gives the same boxes, on every machine.
-// Top-level sections: version, name, warehouse, camera, vehicle, wind, autopilot, start,
+// Top-level sections: version, name, warehouse, camera, vehicle, wind, autopilot, senses, start,
 // cosim (co-simulation and link settings, cosim_settings.hpp) and dispersions (campaign
 // distributions over the named parameters of dispersion.hpp).
 
@@ -25,6 +25,7 @@
 #include <Eigen/Core>
 
 #include "plant/params.hpp"
+#include "plant/tello_senses.hpp"
 #include "shelfcross/camera.hpp"
 #include "shelfcross/random.hpp"
 #include "shelfcross/warehouse.hpp"
@@ -56,6 +57,7 @@ struct Scenario {
   plant::VehicleParams vehicle;
   plant::WindParams wind;
   plant::AutopilotParams autopilot;
+  plant::SensesParams senses;  ///< the Tello's own senses (plant/tello_senses.hpp)
   StartState start;
   CosimSettings cosim;
   std::map<std::string, Distribution> dispersions;  ///< by parameter name (dispersion.hpp)

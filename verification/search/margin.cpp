@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "verification/campaign/stored_run.hpp"
+
 namespace shelfcross::verification {
 namespace {
 
@@ -16,6 +18,7 @@ const char* failure_class_name(FailureClass c) {
     case FailureClass::contact: return "contact";
     case FailureClass::crossing: return "crossing";
     case FailureClass::mission: return "mission";
+    case FailureClass::near_miss: return "near_miss";
   }
   return "?";
 }
@@ -32,6 +35,7 @@ double RunMargins::of(FailureClass c) const {
     case FailureClass::contact: return contact_m;
     case FailureClass::crossing: return crossing_m;
     case FailureClass::mission: return mission;
+    case FailureClass::near_miss: return near_miss_m;
   }
   return kNaN;
 }
@@ -47,6 +51,9 @@ RunMargins run_margins(const Scenario& nominal, const std::string& outcome, cons
   } else {
     m.contact_m = metrics ? metrics->truth.min_clearance_m.value_or(kNaN) : kNaN;
   }
+  // Near miss: the clearance below the scenario's threshold (contacts lower it too).
+  m.near_miss_m = m.contact_m - nominal.cosim.near_miss_m;
+  m.near_miss_run = is_near_miss(outcome, metrics, nominal.cosim.near_miss_m);
   // Crossing: the room at the entered cell's front face.
   m.crossing_m = kNaN;
   if (metrics && metrics->truth.entry_offset_y_m && metrics->truth.entry_offset_z_m && !nominal.warehouse.shelves.empty()) {
@@ -66,7 +73,10 @@ RunMargins run_margins(const Scenario& nominal, const std::string& outcome, cons
     const double s_y = 0.5 * nominal.vehicle.size_m.y() + nominal.cosim.vehicle_margin_m;
     const double s_z = 0.5 * nominal.vehicle.size_m.z() + nominal.cosim.vehicle_margin_m;
     const double room_y = 0.5 * (pitch_y - shelf.post_thickness_m) - s_y - std::abs(e_y);
-    const double room_z = 0.5 * (pitch_z - shelf.beam_thickness_m) - s_z - std::abs(e_z);
+    // A deck (warehouse.hpp) raises the opening's floor: its clear height loses the deck's
+    // thickness t and its centre rises t / 2 above the cell centre.
+    const double t = shelf.deck_thickness_m;
+    const double room_z = 0.5 * (pitch_z - shelf.beam_thickness_m - t) - s_z - std::abs(e_z - 0.5 * t);
     m.crossing_m = std::min(room_y, room_z);
   }
   // Mission: a success by the share of the timeout left (0 for one that landed in the grace

@@ -10,12 +10,19 @@
 //             a wall, the ceiling) minus its penetration depth, and at most -1e-6 m, so every
 //             contact is negative; NaN when the run never came near a shelf and touched nothing.
 //             A near miss of a wall does not lower it (clearance is to shelves only).
+//   near_miss m: the contact margin less the scenario's cosim.near_miss_m: below zero when the
+//             least clearance fell below the near-miss threshold. The class counts as failed
+//             only for a near miss proper (is_near_miss, stored_run.hpp: no contact), so its
+//             estimate is of near misses apart from contacts; a contact's margin is below zero
+//             too, so the search is drawn toward contacts as it is toward near misses (a run
+//             that touched passed closer than any near miss).
 //   crossing  m: the room left at the front face of the cell the vehicle entered: with e_y, e_z
 //             the body origin's offsets from the cell centre at the front face (entry_offset_*),
 //             the cell's clear half-opening h_y = (column pitch - post thickness) / 2,
-//             h_z = (row pitch - beam thickness) / 2, and the vehicle box's half-extents s_y, s_z
+//             h_z = (row pitch - beam thickness - t) / 2 with t the shelf's deck thickness (0
+//             without decks), and the vehicle box's half-extents s_y, s_z
 //             (size_m / 2 + cosim.vehicle_margin_m),
-//                 min(h_y - s_y - |e_y|, h_z - s_z - |e_z|)
+//                 min(h_y - s_y - |e_y|, h_z - s_z - |e_z - t / 2|)
 //             (the box taken level and square to the shelf): negative when the box overlapped
 //             the opening's edge as it entered. The cell is the one crossed, else the target,
 //             else (neither known) the shelf's narrowest column and lowest row pitch. NaN when
@@ -43,20 +50,23 @@
 
 namespace shelfcross::verification {
 
-enum class FailureClass { contact, crossing, mission };
+enum class FailureClass { contact, crossing, mission, near_miss };
 const char* failure_class_name(FailureClass c);
-/// "contact", "crossing", "mission"; nullopt for anything else.
+/// "contact", "crossing", "mission", "near_miss"; nullopt for anything else.
 std::optional<FailureClass> parse_failure_class(const std::string& name);
 inline constexpr FailureClass kFailureClasses[] = {FailureClass::contact, FailureClass::crossing,
-                                                   FailureClass::mission};
+                                                   FailureClass::mission, FailureClass::near_miss};
 
 struct RunMargins {
   double contact_m = 0.0;
   double crossing_m = 0.0;
   double mission = 0.0;
+  double near_miss_m = 0.0;
+  bool near_miss_run = false;  ///< is_near_miss (stored_run.hpp) at the scenario's threshold
   double of(FailureClass c) const;
-  /// The margin of class c is a number below zero.
-  bool failed(FailureClass c) const { return of(c) < 0.0; }
+  /// The margin of class c is a number below zero; a near miss is the run being one (a contact,
+  /// whose near-miss margin is below zero too, is not).
+  bool failed(FailureClass c) const { return c == FailureClass::near_miss ? near_miss_run : of(c) < 0.0; }
 };
 
 /// The margins of a run of `nominal` from its stored outcome and metrics (none for a run lost

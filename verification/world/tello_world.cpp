@@ -34,7 +34,8 @@ TelloWorld::TelloWorld(const RunSetup& setup, int monitored_shelves)
       sc_(landed_scenario(setup)),
       world_(sc_.warehouse, sc_.vehicle.size_m, sc_.cosim.vehicle_margin_m),
       tello_(sc_.vehicle, autopilot_params_for(sc_), sc_.wind, RandomStream(setup.seed, StreamId::wind).next_u64(), {},
-             sc_.start.p_WB_m.x(), sc_.start.p_WB_m.y(), sc_.start.yaw_rad),
+             sc_.start.p_WB_m.x(), sc_.start.p_WB_m.y(), sc_.start.yaw_rad,
+             plant::SensesSetup{sc_.senses, &world_, light_level(sc_.warehouse.lighting), setup.seed}),
       ground_z_m_(tello_.state().p_WB_m.z()),
       half_length_m_(0.5 * sc_.vehicle.size_m.x() + sc_.cosim.vehicle_margin_m),
       last_{0, body_pose(tello_.state()), tello_.state().v_WB_W_mps},
@@ -119,7 +120,8 @@ void TelloWorld::observe(TimeNs t, TickReport& r) {
 
 StateRecord TelloWorld::state_record(TimeNs t) const {
   const plant::Autopilot& firmware = tello_.autopilot();
-  return state_from_truth(tello_.state(), last_.a_W_mps2, ground_z_m_, firmware.battery_pct(), firmware.motor_on_time_s(), t);
+  return state_from_senses(tello_.state(), firmware.senses().readings(tello_.state()), last_.a_W_mps2, ground_z_m_,
+                           firmware.battery_pct(), firmware.motor_on_time_s(), t);
 }
 
 namespace {

@@ -35,8 +35,9 @@ std::optional<CellIndex> cell_at(const ShelfSpec& s, double y_S, double z_S) {
   return std::nullopt;
 }
 
-StateRecord state_from_truth(const plant::RigidBodyState& s, const Eigen::Vector3d& a_W_mps2, double ground_z_m,
-                             double battery_pct, double motor_time_s, TimeNs t_ns) {
+StateRecord state_from_senses(const plant::RigidBodyState& s, const plant::SensedReadings& sensed,
+                              const Eigen::Vector3d& a_W_mps2, double ground_z_m, double battery_pct,
+                              double motor_time_s, TimeNs t_ns) {
   StateRecord r;
   r.t_ns = t_ns;
   const Eigen::Matrix3d R = s.q_WB.toRotationMatrix();
@@ -44,7 +45,7 @@ StateRecord state_from_truth(const plant::RigidBodyState& s, const Eigen::Vector
   r.roll_rad = rpy.x();
   r.pitch_rad = rpy.y();
   r.yaw_rad = rpy.z();
-  const Eigen::Vector3d v_H = Eigen::AngleAxisd(rpy.z(), Eigen::Vector3d::UnitZ()).inverse() * s.v_WB_W_mps;
+  const Eigen::Vector3d v_H = Eigen::AngleAxisd(rpy.z(), Eigen::Vector3d::UnitZ()).inverse() * sensed.v_W_mps;
   r.vx_H_mps = v_H.x();
   r.vy_H_mps = v_H.y();
   r.vz_H_mps = v_H.z();
@@ -53,19 +54,17 @@ StateRecord state_from_truth(const plant::RigidBodyState& s, const Eigen::Vector
   r.ax_B_mps2 = f_B.x();
   r.ay_B_mps2 = f_B.y();
   r.az_B_mps2 = f_B.z();
-  const double above_floor_m = s.p_WB_m.z() - ground_z_m;
-  r.height_m = above_floor_m;
-  // The ToF looks down the body z axis; it reads 0.1 m on the ground and nothing past 8 m
-  // or beyond 60 deg of tilt.
-  const double cos_tilt = R(2, 2);
-  if (cos_tilt > 0.5 && above_floor_m / cos_tilt < 8.0) r.tof_m = std::max(0.1, 0.1 + above_floor_m / cos_tilt);
-  r.baro_m = 100.0 + s.p_WB_m.z();
+  r.height_m = sensed.height_W_m - ground_z_m;
+  r.tof_m = sensed.tof_m;
+  r.baro_m = 100.0 + sensed.baro_m;
   r.battery_pct = static_cast<int>(std::clamp(std::floor(battery_pct), 0.0, 100.0));
   r.motor_time_s = motor_time_s;
   r.temp_low_c = 55;
   r.temp_high_c = 57;
   return r;
 }
+
+double light_level(const Lighting& lighting) { return std::min(1.0, lighting.ambient + lighting.directional); }
 
 ShelfCrossingMonitor::ShelfCrossingMonitor(const ShelfSpec& shelf, const Eigen::Vector3d& p_WB_m)
     : shelf_(shelf), X_SW_(shelf_pose_W(shelf).inverse()), p_S_m_(X_SW_ * p_WB_m) {}

@@ -10,6 +10,7 @@
 
 #include "plant/dynamics.hpp"
 #include "plant/params.hpp"
+#include "plant/tello_senses.hpp"
 #include "shelfcross/cell_index.hpp"
 #include "shelfcross/rotation.hpp"
 #include "shelfcross/sdk_messages.hpp"
@@ -30,12 +31,18 @@ Eigen::Isometry3d body_pose(const plant::RigidBodyState& s);
 /// nothing outside the grid or for NaN coordinates. Does not throw.
 std::optional<CellIndex> cell_at(const ShelfSpec& s, double y_S, double z_S);
 
-/// The Tello's state record from the plant's truth, before the SDK's quantisation (which
-/// format_state_record applies, tello_state_format.hpp): attitude from R_WB, velocity in the heading frame,
-/// specific force f_B = R^T (a_W - g_W), height above the floor, a ToF down the body z axis
-/// (0.1 m on the ground, nothing past 8 m or 60 deg of tilt), baro 100 m + z, battery floored.
-StateRecord state_from_truth(const plant::RigidBodyState& s, const Eigen::Vector3d& a_W_mps2, double ground_z_m,
-                             double battery_pct, double motor_time_s, TimeNs t_ns);
+/// The Tello's state record from the plant's truth and what the drone senses
+/// (plant/tello_senses.hpp), before the SDK's quantisation (which format_state_record applies,
+/// tello_state_format.hpp): attitude from R_WB, the sensed velocity in the heading frame, specific
+/// force f_B = R^T (a_W - g_W), h = the sensed height above ground_z_m (the take-off height), the
+/// sensed tof (to the first surface below), baro 100 m + the sensed barometric altitude, battery
+/// floored.
+StateRecord state_from_senses(const plant::RigidBodyState& s, const plant::SensedReadings& sensed,
+                              const Eigen::Vector3d& a_W_mps2, double ground_z_m, double battery_pct,
+                              double motor_time_s, TimeNs t_ns);
+
+/// The light level the vision positioning system sees: ambient + directional, at most 1.
+double light_level(const Lighting& lighting);
 
 /// The crossing of one shelf, judged on the body origin in the shelf frame S: the front face
 /// (x_S = 0) crossed forward inside a cell's opening, then the back face (x_S = depth) crossed

@@ -10,8 +10,7 @@ using nlohmann::json;
 namespace {
 
 plant::ElementKind element_kind(const StrictObject& contact, const std::string& name) {
-  using K = plant::ElementKind;
-  for (K k : {K::floor, K::wall, K::post, K::beam, K::rail, K::tag, K::box}) {
+  for (plant::ElementKind k : plant::kElementKinds) {
     if (name == plant::to_string(k)) return k;
   }
   contact.fail_at(contact.path_of("kind"), "unknown element kind \"" + name + "\"");

@@ -124,7 +124,7 @@ TEST(CampaignPool, ShardsMergeIntoTheWholeCampaign) {
     ResultsStore shard = ResultsStore::open_or_create(shard_dbs.back(), meta);
     EXPECT_EQ(run_pending(shard, 9, 23, factory, {.jobs = 2, .shard = {k, 3}}), k < 2 ? 8 : 7);
     for (std::int64_t index : shard.finished_indices()) EXPECT_EQ(index % 3, k);
-    EXPECT_EQ(summarize_campaign(shard.runs(), 23).campaign_hash, "");
+    EXPECT_EQ(summarize_campaign(shard.runs(), 23, 0.02).campaign_hash, "");
   }
   const auto target = fresh_db("shard_merged");
   const MergeCounts counts = merge_campaigns(shard_dbs, target);
@@ -133,9 +133,9 @@ TEST(CampaignPool, ShardsMergeIntoTheWholeCampaign) {
   ResultsStore merged = ResultsStore::open_existing(target);
   EXPECT_EQ(merged.meta(), meta);
   EXPECT_EQ(without_timings(merged.runs()), without_timings(whole.runs()));
-  const auto hash = summarize_campaign(whole.runs(), 23).campaign_hash;
+  const auto hash = summarize_campaign(whole.runs(), 23, 0.02).campaign_hash;
   EXPECT_EQ(hash.size(), 32u);
-  EXPECT_EQ(summarize_campaign(merged.runs(), 23).campaign_hash, hash);
+  EXPECT_EQ(summarize_campaign(merged.runs(), 23, 0.02).campaign_hash, hash);
   // Merging a shard again adds nothing.
   EXPECT_EQ(merge_campaigns({shard_dbs[1]}, target).duplicates, 8);
 

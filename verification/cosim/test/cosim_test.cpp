@@ -90,7 +90,7 @@ TEST(Campaign, OneOrTwoWorkersGiveTheSameRunsAndCampaignHash) {
     EXPECT_EQ(link["model"], "sdk");
     EXPECT_GT(link["video_datagrams"].get<int>(), 0);
   }
-  const auto sa = summarize_campaign(a, 3), sb = summarize_campaign(b, 3);
+  const auto sa = summarize_campaign(a, 3, 0.02), sb = summarize_campaign(b, 3, 0.02);
   EXPECT_EQ(sa.campaign_hash, sb.campaign_hash);
   EXPECT_EQ(sa.campaign_hash.size(), 32u);
 }

@@ -264,5 +264,59 @@ TEST(PairedDiff, ReportStatesTheVerdictFlipsAndReplayCommands) {
   EXPECT_NE(md.find("| largest crossing push | 2.0 cm | 0 | 3.0 cm | 0 |"), std::string::npos);
 }
 
+// Near misses (no contact, clearance below cosim.near_miss_m, 2 cm) are a class of their own in
+// the comparison: BASE's run 3 passes at 1.5 cm; in NEW it passes at 3 cm (gone), runs 6 and 7
+// pass at 1 cm (new, both still successes) and run 8 touches the shelf (a contact, not a near
+// miss). Every change of class is a flip, with its replay commands.
+TEST(PairedDiff, NearMissesAreComparedApartFromContacts) {
+  const fs::path dir = fresh_dir("near_misses");
+  const Scenario s = test::fixture_scenario();
+  const auto base = [](std::int64_t k) {
+    PlannedRun p;
+    p.min_clearance_m = k == 3 ? 0.015 : 0.05;
+    return p;
+  };
+  const auto next = [&base](std::int64_t k) {
+    PlannedRun p = base(k);
+    if (k == 3) p.min_clearance_m = 0.03;
+    if (k == 6 || k == 7) p.min_clearance_m = 0.01;
+    if (k == 8) p.outcome = "collision";
+    if (k == 3 || k >= 6) p.run_hash = "dddddddddddddddddddddddddddd" + std::to_string(1000 + k);
+    return p;
+  };
+  test::write_planned_campaign(dir / "base" / "results.sqlite", s, 1, 10, base);
+  test::write_planned_campaign(dir / "new" / "results.sqlite", s, 1, 10, next);
+  const PairedDiff d = pair_campaigns(load_diff_side(dir / "base"), load_diff_side(dir / "new"), {});
+  EXPECT_EQ(d.near_misses.table.both, 0);
+  EXPECT_EQ(d.near_misses.table.base_only, 1);
+  EXPECT_EQ(d.near_misses.table.new_only, 2);
+  EXPECT_EQ(d.near_misses.table.neither, 7);
+  EXPECT_EQ(d.contacts.table.new_only, 1);
+  ASSERT_EQ(d.flips.size(), 4u);
+  EXPECT_EQ(d.flips[0].base_run, 3);
+  EXPECT_TRUE(d.flips[0].near_miss_changed);
+  EXPECT_FALSE(d.flips[0].new_near_miss);
+  EXPECT_FALSE(d.flips[0].success_changed);
+  EXPECT_TRUE(d.flips[1].near_miss_changed && d.flips[1].new_near_miss);
+  EXPECT_EQ(d.flips[3].base_run, 8);
+  EXPECT_TRUE(d.flips[3].contact_changed);
+  EXPECT_FALSE(d.flips[3].near_miss_changed);
+  EXPECT_FALSE(new_is_worse(d, 0.05));  // reported, not gated
+  const nlohmann::json j = write_diff_report(d, dir / "diff", {});
+  EXPECT_EQ(j["near_misses"]["new_only"], 2);
+  EXPECT_EQ(j["near_miss_m"]["base"], 0.02);
+  EXPECT_EQ(j["flips"][1]["new_near_miss"], true);
+  std::ifstream in(dir / "diff" / "diff.md");
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string md = text.str();
+  EXPECT_NE(md.find("| 6 | 6 | success | success |  |  | **new near miss** |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| 3 | 3 | success | success |  |  | near miss gone |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| BASE: near miss | 0 | 1 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("- **Near misses** (no contact, least clearance below 2.0 cm in BASE, 2.0 cm in NEW): BASE 1, NEW 2"),
+            std::string::npos)
+      << md;
+}
+
 }  // namespace
 }  // namespace shelfcross::verification

@@ -181,7 +181,7 @@ TEST(CampaignSummary, EveryMetricIsSummarizedAndTheSummaryReadsBack) {
   const std::vector<RunRecord> runs{record(0, "success", {full_metrics(), "", std::nullopt}),
                                     record(1, "collision", {slower, "shelf 0 beam 2", std::nullopt}),
                                     record(2, "crashed", {std::nullopt, "signal 11", 11})};
-  const CampaignSummary s = summarize_campaign(runs, 3);
+  const CampaignSummary s = summarize_campaign(runs, 3, 0.02);
   EXPECT_EQ(s.runs, 3);
   EXPECT_EQ(s.successes, 1);
   EXPECT_EQ(s.outcomes, (std::map<std::string, std::int64_t>{{"collision", 1}, {"crashed", 1}, {"success", 1}}));
@@ -223,7 +223,7 @@ TEST(CampaignSummary, CostOfTheRunsWithACpuFigure) {
                               record(2, "crashed", {std::nullopt, "signal 11", 11})};
   runs[0].cpu_s = 2.0;
   runs[1].cpu_s = 4.0;
-  const CampaignSummary s = summarize_campaign(runs, 3);
+  const CampaignSummary s = summarize_campaign(runs, 3, 0.02);
   EXPECT_EQ(s.cost.cpu_s_per_run.count, 2);
   EXPECT_DOUBLE_EQ(s.cost.cpu_s_per_run.mean, 3.0);
   EXPECT_DOUBLE_EQ(s.cost.cpu_s_per_run.max, 4.0);
@@ -242,7 +242,7 @@ TEST(CampaignSummary, CostOfTheRunsWithACpuFigure) {
   EXPECT_NE(md.find("| runs per core-hour | 1200 |"), std::string::npos) << md;
 
   for (RunRecord& r : runs) r.cpu_s.reset();
-  const CampaignSummary none = summarize_campaign(runs, 3);
+  const CampaignSummary none = summarize_campaign(runs, 3, 0.02);
   EXPECT_EQ(none.cost.cpu_s_per_run.count, 0);
   EXPECT_EQ(none.cost.cpu_s_per_simulated_s, std::nullopt);
   const json k = none;
@@ -251,13 +251,68 @@ TEST(CampaignSummary, CostOfTheRunsWithACpuFigure) {
   EXPECT_NE(cost_section(none.cost, none.runs).find("CPU time not recorded"), std::string::npos);
 }
 
+// A near miss is a run that touched nothing but passed closer to a shelf than the threshold,
+// counted apart from contacts (a contact, however close, is not one) and from success (a
+// successful run may be one); a run that never came near a shelf, or measured nothing, is not.
+TEST(CampaignSummary, NearMissesAreCountedApartFromContactsAndSuccess) {
+  RunMetrics close = full_metrics();
+  close.truth.contact.reset();
+  close.truth.min_clearance_m = 0.015;
+  RunMetrics closer_abort = close;
+  closer_abort.truth.min_clearance_m = 0.004;
+  RunMetrics clear = close;
+  clear.truth.min_clearance_m = 0.025;
+  RunMetrics never_near = close;
+  never_near.truth.min_clearance_m.reset();
+  RunMetrics touched = full_metrics();  // a contact, its clearance 0 at the touch
+  touched.truth.min_clearance_m = 0.0;
+  const std::vector<RunRecord> runs{record(0, "success", {close, "", std::nullopt}),
+                                    record(1, "mission_aborted", {closer_abort, "target lost", std::nullopt}),
+                                    record(2, "success", {clear, "", std::nullopt}),
+                                    record(3, "no_crossing", {never_near, "", std::nullopt}),
+                                    record(4, "collision", {touched, "shelf 0 beam 2", std::nullopt}),
+                                    record(5, "crashed", {std::nullopt, "signal 11", 11})};
+  EXPECT_TRUE(is_near_miss("success", close, 0.02));
+  EXPECT_FALSE(is_near_miss("success", clear, 0.02));
+  EXPECT_FALSE(is_near_miss("collision", touched, 0.02));
+  EXPECT_FALSE(is_near_miss("left_arena", close, 0.02));  // a contact outcome is never a near miss
+  EXPECT_FALSE(is_near_miss("no_crossing", never_near, 0.02));
+  EXPECT_FALSE(is_near_miss("crashed", std::nullopt, 0.02));
+
+  const CampaignSummary s = summarize_campaign(runs, 6, 0.02);
+  EXPECT_EQ(s.near_misses.near_miss_m, 0.02);
+  EXPECT_EQ(s.near_misses.runs, 2);
+  EXPECT_EQ(s.near_misses.successes, 1);
+  EXPECT_DOUBLE_EQ(s.near_misses.rate, 2.0 / 6.0);
+  EXPECT_EQ(s.safety.contacts, 1);
+  EXPECT_EQ(s.successes, 2);
+  // The threshold is the scenario's: at 3 cm the run that cleared by 2.5 cm is one too.
+  EXPECT_EQ(summarize_campaign(runs, 6, 0.03).near_misses.runs, 3);
+  EXPECT_EQ(summarize_campaign(runs, 6, 0.003).near_misses.runs, 0);
+
+  const json j = s;
+  EXPECT_EQ(j["near_misses"], json::parse(R"({"near_miss_m": 0.02, "runs": 2, "successes": 1, "rate": 0.3333333333333333})"));
+  EXPECT_EQ(json(j.get<CampaignSummary>()), j);
+  json missing = j;
+  missing.erase("near_misses");
+  EXPECT_EQ(error_of([&] { missing.get<CampaignSummary>(); }), "campaign summary: 'near_misses': missing");
+  json misspelt = j;
+  misspelt["near_misses"]["count"] = 2;
+  EXPECT_EQ(error_of([&] { misspelt.get<CampaignSummary>(); }), "campaign summary: 'near_misses.count': unknown key");
+
+  const std::string md = safety_section(s.safety, s.near_misses);
+  EXPECT_NE(md.find("| near misses (no contact, least clearance below 2.0 cm) | 2 (1 succeeded) | 33.33 % | |"),
+            std::string::npos)
+      << md;
+}
+
 TEST(CampaignSummary, AStoredRunThatDoesNotReadBackStopsTheSummary) {
   std::vector<RunRecord> runs{record(0, "success", {full_metrics(), "", std::nullopt})};
   json bad = full_metrics();
   bad["detail"] = "";
   bad["inventory"]["recal"] = 1.0;
   runs[0].metrics_json = bad.dump();
-  EXPECT_EQ(error_of([&] { summarize_campaign(runs, 1); }), "stored run 0: run metrics: 'inventory.recal': unknown key");
+  EXPECT_EQ(error_of([&] { summarize_campaign(runs, 1, 0.02); }), "stored run 0: run metrics: 'inventory.recal': unknown key");
 }
 
 }  // namespace

@@ -159,5 +159,39 @@ TEST(Dispersion, BeyondEnvelopeScenariosWidenTheirFamilyOnly) {
   }
 }
 
+// The senses scenario (scenarios/senses/) is the default scenario with the `senses` section and
+// its dispersions added, nothing else; each senses draw lands in its key.
+TEST(Dispersion, TheSensesScenarioAddsTheSensesAndTheirDispersionsOnly) {
+  const std::string dir = std::string(SHELFCROSS_SOURCE_DIR) + "/scenarios/";
+  const Scenario nominal = load_scenario(dir + "paper_test_shelf.yaml");
+  const Scenario s = load_scenario(dir + "senses/paper_test_shelf_senses.yaml");
+  EXPECT_NE(s.senses, plant::SensesParams{});
+  const std::vector<std::string> senses_keys{
+      "vps_noise_mps",  "vps_bias_stddev_mps", "vps_min_range_m", "vps_floor_texture",       "vps_box_texture",
+      "vps_bar_texture", "tof_noise_m",        "height_noise_m",  "baro_noise_m",            "baro_drift_m_per_sqrt_s",
+      "height_hold_range_blend", "height_hold_range_below_m", "height_hold_time_constant_s"};
+  Scenario without = s;
+  without.senses = nominal.senses;
+  for (const std::string& key : senses_keys) EXPECT_EQ(without.dispersions.erase(key), 1u) << key;
+  EXPECT_EQ(without, nominal);
+  const RunSetup r = disperse(s, 7);
+  const plant::SensesParams& p = r.scenario->senses;
+  const std::vector<std::pair<std::string, double>> applied{
+      {"vps_noise_mps", p.vps.noise_mps},
+      {"vps_bias_stddev_mps", p.vps.bias_stddev_mps},
+      {"vps_min_range_m", p.vps.min_range_m},
+      {"vps_floor_texture", p.vps.texture.floor},
+      {"vps_box_texture", p.vps.texture.box},
+      {"vps_bar_texture", p.vps.texture.bar},
+      {"tof_noise_m", p.height.tof_noise_m},
+      {"height_noise_m", p.height.height_noise_m},
+      {"baro_noise_m", p.height.baro_noise_m},
+      {"baro_drift_m_per_sqrt_s", p.height.baro_drift_m_per_sqrt_s},
+      {"height_hold_range_blend", p.height_hold.range_blend},
+      {"height_hold_range_below_m", p.height_hold.range_below_m},
+      {"height_hold_time_constant_s", p.height_hold.time_constant_s}};
+  for (const auto& [key, value] : applied) EXPECT_EQ(value, r.drawn.at(key)) << key;
+}
+
 }  // namespace
 }  // namespace shelfcross::verification

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -87,6 +88,26 @@ TEST(Scenario, BaseIsValid) {
   EXPECT_EQ(s.warehouse.tag_size_m, Warehouse{}.tag_size_m);
   EXPECT_EQ(s.warehouse.shelves[0].base_height_m, ShelfSpec{}.base_height_m);
   EXPECT_TRUE(s.start.landed);
+}
+
+// The shipped decked warehouse is the default scenario but for its decks, its name and the air
+// near them.
+TEST(Scenario, DeckedWarehouseIsTheDefaultWithDecks) {
+  Scenario decked = load_scenario(std::string(SHELFCROSS_SOURCE_DIR) + "/scenarios/warehouse_decked.yaml");
+  const Scenario plain = load_scenario(kDefaultPath);
+  EXPECT_EQ(plain.warehouse.shelves[0].deck_thickness_m, 0.0);
+  EXPECT_EQ(decked.warehouse.shelves[0].deck_thickness_m, 0.018);
+  EXPECT_NEAR(cell_clear_height_m(decked.warehouse.shelves[0], 2), 0.302, 1e-12);
+  EXPECT_NEAR(cell_floor_z_S_m(decked.warehouse.shelves[0], 2), 0.668, 1e-12);
+  // And the air near the decks: ground and ceiling effect on, dispersed.
+  EXPECT_EQ(decked.vehicle.surface_effects.ground_coeff, 1.0);
+  EXPECT_EQ(decked.vehicle.surface_effects.ceiling_coeff, 1.0);
+  EXPECT_EQ(plain.vehicle.surface_effects, plant::SurfaceEffectParams{});
+  EXPECT_EQ(decked.dispersions.erase("ground_effect_coeff") + decked.dispersions.erase("ceiling_effect_coeff"), 2u);
+  decked.vehicle.surface_effects = plain.vehicle.surface_effects;
+  decked.warehouse.shelves[0].deck_thickness_m = 0.0;
+  decked.name = plain.name;
+  EXPECT_EQ(decked, plain);
 }
 
 TEST(Scenario, DefaultScenarioIsThePaperTestShelf) {
@@ -260,9 +281,22 @@ TEST(Scenario, RefusesOutOfRangeValues) {
   expect_refused(insert_line(11, "camera: {height_px: -720}"), 11, "out of range");
   expect_refused(insert_line(11, "camera: {frame_rate_hz: 241}"), 11, "out of range");
   expect_refused(insert_line(11, "camera: {frame_rate_hz: 0.5}"), 11, "out of range");
+  expect_refused(insert_line(11, "vehicle: {surface_effects: {ground_coeff: -0.1}}"), 11, "out of range");
+  expect_refused(insert_line(11, "vehicle: {surface_effects: {ground_coeff: 2.5}}"), 11, "out of range");
+  expect_refused(insert_line(11, "vehicle: {surface_effects: {ceiling_coeff: 3}}"), 11, "out of range");
+  expect_refused(insert_line(11, "vehicle: {surface_effects: {ceiling_range_radii: 0.1}}"), 11, "out of range");
+  expect_refused(insert_line(11, "vehicle: {surface_effects: {rotor_radius_m: 0}}"), 11, "out of range");
+  expect_refused(insert_line(11, "vehicle: {surface_effects: {rotor_radius_m: 0.5}}"), 11, "not a Tello-class rotor");
+  expect_refused(insert_line(11, "dispersions: {ground_effect_coeff: {uniform: {min: 0.5, max: 2.5}}}"), 11, "ground_effect_coeff");
+  expect_refused(insert_line(11, "cosim: {near_miss_m: -0.01}"), 11, "out of range");
+  expect_refused(insert_line(11, "cosim: {near_miss_m: 0.6}"), 11, "out of range");
   expect_refused(insert_line(11, "camera: {width_px: 960, cx_px: 961}"), 11, "principal point");
   expect_refused(replace_line(6, "      column_pitch_m: [0.34, -0.48]"), 6, "out of range");
   expect_refused(insert_line(6, "      depth_m: -0.34"), 6, "out of range");
+  expect_refused(insert_line(6, "      deck_thickness_m: -0.01"), 6, "out of range");
+  expect_refused(insert_line(6, "      deck_thickness_m: 0.2"), 6, "out of range");
+  // A 9 cm deck leaves 0.34 - 0.02 - 0.09 = 0.23 m: the 0.24 m boxes no longer fit.
+  expect_refused(insert_line(6, "      deck_thickness_m: 0.09"), 10, "does not fit the clear height");
   expect_refused(insert_line(6, "      post_thickness_m: 0"), 6, "out of range");
   expect_refused(insert_line(11, "autopilot: {tilt_limit_slow_rad: 0.5, tilt_limit_fast_rad: 0.4}"),
                  11, "tilt_limit_slow_rad");
@@ -278,6 +312,39 @@ TEST(Scenario, CameraReadoutTimeInRange) {
   expect_refused(insert_line(11, "camera: {readout_s: 0.2}"), 11, "out of range");
   expect_refused(insert_line(11, "camera: {readout_s: 0.05}"), 11, "one frame period");
   expect_refused(insert_line(11, "camera: {readout_s: soon}"), 11, "expected a number");
+}
+
+TEST(Scenario, RefusesEachSensesKeyOutOfRange) {
+  // Every key of the senses section, just outside its range, on its own line.
+  expect_refused(insert_line(11, "senses:\n  sample_rate_hz: 0.5"), 12, "out of range");
+  const std::vector<std::tuple<const char*, const char*, const char*>> keys{
+      {"vps", "min_range_m", "10.5"},          {"vps", "max_range_m", "101"},
+      {"vps", "min_contrast", "1.1"},          {"vps", "noise_mps", "-0.1"},
+      {"vps", "bias_stddev_mps", "1.5"},       {"vps", "bias_time_constant_s", "0.05"},
+      {"height", "tof_max_range_m", "0.05"},   {"height", "tof_ground_m", "-0.1"},
+      {"height", "tof_noise_m", "1.5"},        {"height", "height_noise_m", "-1"},
+      {"height", "baro_noise_m", "6"},         {"height", "baro_drift_m_per_sqrt_s", "2"},
+      {"height_hold", "range_blend", "1.5"},   {"height_hold", "range_below_m", "-1"},
+      {"height_hold", "time_constant_s", "0"},
+  };
+  for (const auto& [section, key, value] : keys) {
+    expect_refused(insert_line(11, std::string("senses:\n  ") + section + ":\n    " + key + ": " + value), 13,
+                   "out of range");
+  }
+  for (const char* kind : {"floor", "box", "bar", "tag", "wall"}) {
+    expect_refused(insert_line(11, std::string("senses:\n  vps:\n    texture:\n      ") + kind + ": 1.01"), 14,
+                   "out of range");
+  }
+  expect_refused(insert_line(11, "senses:\n  vps:\n    min_range_m: 0.5\n    max_range_m: 0.4"), 14,
+                 "must not be below min_range_m");
+  // The defaults sense the truth; every key read back as written.
+  const Scenario s = parse_scenario(
+      insert_line(11, "senses: {vps: {min_range_m: 0.3, texture: {box: 0.2}}, height_hold: {range_blend: 0.5}}"),
+      "senses.yaml");
+  EXPECT_EQ(s.senses.vps.min_range_m, 0.3);
+  EXPECT_EQ(s.senses.vps.texture.box, 0.2);
+  EXPECT_EQ(s.senses.height_hold.range_blend, 0.5);
+  EXPECT_EQ(parse_scenario(kBase, "small.yaml").senses, plant::SensesParams{});
 }
 
 TEST(Scenario, RefusesBoxInNonExistentCell) {

@@ -104,6 +104,35 @@ TEST(SearchPieces, MarginsFromStoredMetrics) {
   EXPECT_FALSE(parse_failure_class("speed"));
 }
 
+// The near-miss margin is the clearance less the scenario's cosim.near_miss_m (2 cm); a run
+// below it is a near miss only where it touched nothing, so the class is apart from contacts,
+// while a contact's margin still lies below zero (the search is drawn toward both).
+TEST(SearchPieces, NearMissMarginAndClass) {
+  const Scenario s = load_scenario(kDefault);
+  ASSERT_EQ(s.cosim.near_miss_m, 0.02);
+  RunMetrics m;
+  m.mission_time_s = 24.0;
+  m.truth.min_clearance_m = 0.015;
+  RunMargins r = run_margins(s, "success", m);
+  EXPECT_NEAR(r.near_miss_m, -0.005, 1e-15);
+  EXPECT_TRUE(r.failed(FailureClass::near_miss));
+  EXPECT_FALSE(r.failed(FailureClass::contact) || r.failed(FailureClass::mission));
+  m.truth.min_clearance_m = 0.05;
+  r = run_margins(s, "success", m);
+  EXPECT_NEAR(r.of(FailureClass::near_miss), 0.03, 1e-15);
+  EXPECT_FALSE(r.failed(FailureClass::near_miss));
+  RunMetrics hit = m;
+  hit.truth.contact = plant::Contact{};
+  hit.truth.contact->depth_m = 0.004;
+  r = run_margins(s, "collision", hit);
+  EXPECT_NEAR(r.near_miss_m, -0.024, 1e-15);
+  EXPECT_TRUE(r.failed(FailureClass::contact));
+  EXPECT_FALSE(r.failed(FailureClass::near_miss));
+  EXPECT_FALSE(run_margins(s, "crashed", std::nullopt).failed(FailureClass::near_miss));
+  EXPECT_EQ(parse_failure_class("near_miss"), FailureClass::near_miss);
+  EXPECT_STREQ(failure_class_name(FailureClass::near_miss), "near_miss");
+}
+
 TEST(SearchPieces, DistributionsRoundTripThroughJson) {
   const Scenario s = load_scenario(kDefault);
   for (const auto& [name, d] : s.dispersions) EXPECT_EQ(distribution_from_json(distribution_json(d)), d) << name;
