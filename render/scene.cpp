@@ -46,7 +46,7 @@ void add_boxes(const Warehouse& w, int si, const Eigen::Isometry3d& X_WS, int di
   const ShelfSpec& s = w.shelves[static_cast<size_t>(si)];
   const int ncols = static_cast<int>(s.column_pitch_m.size());
   const int nrows = static_cast<int>(s.row_pitch_m.size());
-  const double tp = s.post_thickness_m, tb = s.beam_thickness_m, d = s.depth_m;
+  const double tp = s.post_thickness_m, d = s.depth_m;
   const Eigen::Vector3d n_front_W = X_WS.linear() * Eigen::Vector3d(-1, 0, 0);
   for (const BoxPlacement& b : s.boxes) {
     std::ostringstream where;
