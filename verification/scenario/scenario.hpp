@@ -24,6 +24,7 @@
 
 #include <Eigen/Core>
 
+#include "config/config_error.hpp"
 #include "plant/params.hpp"
 #include "shelfcross/camera.hpp"
 #include "shelfcross/random.hpp"
