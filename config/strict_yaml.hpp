@@ -16,26 +16,14 @@
 #include <memory>
 #include <optional>
 #include <set>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include <yaml-cpp/yaml.h>
 
+#include "config/config_error.hpp"
+
 namespace shelfcross::config {
-
-class ConfigError : public std::runtime_error {
- public:
-  ConfigError(std::string file, int line, std::string reason);
-  const std::string& file() const { return file_; }
-  int line() const { return line_; }  ///< 1-based; 0 when the problem has no line
-  const std::string& reason() const { return reason_; }
-
- private:
-  std::string file_;
-  int line_;
-  std::string reason_;
-};
 
 /// Inclusive bounds unless marked exclusive. Empty bounds accept everything.
 template <class T>

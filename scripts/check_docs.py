@@ -17,16 +17,21 @@ documentation check").
         (`docs/results.md`, `scenarios/stress/grid_2x2.yaml`) that do not exist;
       - README.md longer than README_MAX_LINES, or without the two commands in its first
         README_COMMANDS_WITHIN lines.
-  scripts/check_docs.py --root DIR --run-blocks --build-dir BUILD [--only FILE]
+  scripts/check_docs.py --root DIR --run-blocks --build-dir BUILD [--only FILE] [--jobs N]
       Runs every command block of the Markdown files marked runnable (a line `<!-- runnable -->`
       right before a fenced block) with bash -euo pipefail, in a scratch folder that mirrors the
       repository (its top-level entries linked) with `build/release` pointing at BUILD, so the
       guide's commands run as a user runs them from the repository root and their outputs stay
-      out of the tree. Exit 1 when a block fails; its output is printed.
+      out of the tree. Exit 1 when a block fails; its output is printed. A marker may name the
+      cheap form the check runs instead, `<!-- runnable: --runs 2 => --runs 1 -->` (pairs
+      separated by `;`, each left side replaced wherever it appears in the block; one that does
+      not appear is refused, so the cheap form cannot go stale). Pages run side by side, --jobs
+      at a time (default 2), the blocks of a page one after the other.
 
 Python 3 standard library only.
 """
 import argparse
+import concurrent.futures
 import os
 import re
 import subprocess
@@ -37,6 +42,8 @@ README_MAX_LINES = 120
 README_COMMANDS_WITHIN = 40
 README_COMMANDS = ("bash scripts/run-main-job.sh", "bash scripts/run-tests.sh")
 RUNNABLE_MARKER = "<!-- runnable -->"
+# The marker with the cheap form of the block's commands: "<!-- runnable: OLD => NEW; ... -->".
+RUNNABLE_CHEAP = re.compile(r"^<!-- runnable:(.*)-->$")
 
 # Development history has no place in the product's files. The patterns are spelled so that
 # this file does not match them itself ("[/]", "[ ]").
@@ -205,44 +212,75 @@ def static_checks(root):
     return findings
 
 
+def cheap_form(name, number, script, pairs):
+    """The block's script with each "OLD => NEW" of the marker's pairs applied."""
+    for pair in filter(None, (p.strip() for p in pairs.split(";"))):
+        if "=>" not in pair:
+            raise ValueError(f"{name}:{number}: runnable marker's pair {pair!r} is not OLD => NEW")
+        old, new = (side.strip() for side in pair.split("=>", 1))
+        if not old or old not in script:
+            raise ValueError(f"{name}:{number}: runnable marker's {old!r} is not in its block")
+        script = script.replace(old, new)
+    return script
+
+
 def runnable_blocks(root, name):
-    """(line number, script) of each fenced block preceded by the runnable marker."""
+    """(line number, script) of each fenced block preceded by the runnable marker, in the cheap
+    form the marker names, if any."""
     lines = read_text(os.path.join(root, name)) or []
     blocks, i = [], 0
     while i < len(lines):
-        if lines[i].strip() == RUNNABLE_MARKER:
+        marker = lines[i].strip()
+        cheap = RUNNABLE_CHEAP.match(marker)
+        if marker == RUNNABLE_MARKER or cheap:
             j = i + 1
             if j >= len(lines) or not FENCE.match(lines[j]):
                 raise ValueError(f"{name}:{i + 1}: {RUNNABLE_MARKER} not followed by a fenced block")
             k = j + 1
             while k < len(lines) and not FENCE.match(lines[k]):
                 k += 1
-            blocks.append((j + 1, "\n".join(lines[j + 1:k]) + "\n"))
+            script = "\n".join(lines[j + 1:k]) + "\n"
+            if cheap:
+                script = cheap_form(name, i + 1, script, cheap.group(1))
+            blocks.append((j + 1, script))
             i = k
         i += 1
     return blocks
 
 
-def run_blocks(root, build_dir, only):
+def run_page(scratch, page, blocks):
+    """Runs a page's blocks in order; (what to print, blocks failed)."""
+    out, failures = [], 0
+    for number, script in blocks:
+        out.append(f"== {page}:{number}")
+        result = subprocess.run(["bash", "-euo", "pipefail", "-c", script], cwd=scratch,
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        if result.returncode != 0:
+            failures += 1
+            out.append(result.stdout[-6000:])
+            out.append(f"{page}:{number}: runnable block failed (exit {result.returncode})")
+    return "\n".join(out), failures
+
+
+def run_blocks(root, build_dir, only, jobs=2):
     repo = Repository(root)
     pages = [only] if only else [f for f in repo.files if f.endswith(".md")]
-    failures, count = 0, 0
+    work = [(page, runnable_blocks(root, page)) for page in pages]  # every marker checked first
+    work = [(page, blocks) for page, blocks in work if blocks]
+    count = sum(len(blocks) for _, blocks in work)
+    failures = 0
     with tempfile.TemporaryDirectory(prefix="shelfcross-docs-") as scratch:
         for entry in sorted(repo.top_level):  # the repository's top level, linked
             if entry != "build":
                 os.symlink(os.path.join(os.path.abspath(root), entry), os.path.join(scratch, entry))
         os.makedirs(os.path.join(scratch, "build"))
         os.symlink(os.path.abspath(build_dir), os.path.join(scratch, "build", "release"))
-        for page in pages:
-            for number, script in runnable_blocks(root, page):
-                count += 1
-                print(f"== {page}:{number}", flush=True)
-                result = subprocess.run(["bash", "-euo", "pipefail", "-c", script], cwd=scratch,
-                                        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-                if result.returncode != 0:
-                    failures += 1
-                    print(result.stdout[-6000:])
-                    print(f"{page}:{number}: runnable block failed (exit {result.returncode})")
+        with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
+            runs = [pool.submit(run_page, scratch, page, blocks) for page, blocks in work]
+            for run in runs:  # printed in page order, each page's output together
+                text, failed = run.result()
+                failures += failed
+                print(text, flush=True)
     print(f"check_docs: {count} runnable blocks, {failures} failed")
     return 1 if failures or count == 0 else 0
 
@@ -253,12 +291,13 @@ def main():
     parser.add_argument("--run-blocks", action="store_true", help="run the runnable blocks")
     parser.add_argument("--build-dir", help="the release build folder (with --run-blocks)")
     parser.add_argument("--only", help="run the blocks of this page only (relative to the root)")
+    parser.add_argument("--jobs", type=int, default=2, help="pages run side by side (with --run-blocks)")
     args = parser.parse_args()
     if args.run_blocks:
         if not args.build_dir:
             parser.error("--run-blocks needs --build-dir")
         try:
-            return run_blocks(args.root, args.build_dir, args.only)
+            return run_blocks(args.root, args.build_dir, args.only, args.jobs)
         except ValueError as e:
             print(f"check_docs: {e}")
             return 2

@@ -1,8 +1,19 @@
 #!/usr/bin/env bash
-# Installs what is missing, builds (release preset), and runs every test with CTest.
+# Installs what is missing, builds (release preset), and runs every test with CTest, then the
+# sanitized tests and the fuzz targets. It ends with the ten slowest tests of each CTest stage
+# (CTest's own timing, scripts/slowest_tests.py), so that a test growing slower shows; what
+# each stage costs on a 2-core machine is in docs/getting-started.md.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 bash scripts/install-deps.sh
+slowest() {
+  echo
+  for junit in build/release/ctest-junit.xml build/debug/ctest-junit.xml; do
+    if [ -f "$junit" ]; then python3 scripts/slowest_tests.py "$junit"; fi
+  done
+}
+rm -f build/release/ctest-junit.xml build/debug/ctest-junit.xml
+trap slowest EXIT
 cmake --preset release
 cmake --build --preset release
 ctest --preset release -j "$(nproc)"

@@ -1,7 +1,8 @@
 // End to end on loopback: the real `tello_pilot` flies `shelfcross tello-sim` (the default
 // scenario, nominal world), in real time, as it would fly a Tello. Each flight takes half a
-// minute to a minute of wall time; there are two (clean link, 5 % datagram loss on every
-// channel; the second may fly twice, see there). Ports are
+// minute to a minute of wall time, so each case flies once: the calibration manoeuvre, a clean
+// link, 5 % datagram loss on every channel (its second seed is flown by the co-simulation over
+// the same pilot loop, SdkLink.FivePercentLossOnEveryChannelNeverTouchesAndListsNothingWrong). Ports are
 // ephemeral ones found free, so these tests may run beside others. Wall-clock waits are
 // failure guards only; every assertion is about what happened.
 
@@ -234,8 +235,10 @@ TEST_F(TelloEndToEnd, PilotFliesTheEmulatorTakesInventoryCrossesAndLands) {
 // on were damaged ones for the most part.
 //
 // Under heavy damage the flight software may also give up safely ("target lost", "approach
-// timed out": it lands without touching anything). Such a flight is flown once more with the
-// next seed; a contact, a wrong inventory or a flight that did not land fails at once.
+// timed out": it lands without touching anything); a contact, a wrong inventory or a flight
+// that did not land fails. One real-time flight, seed 11; seed 12 at the same losses is flown
+// by the co-simulation over tello_pilot's own loop (verification/campaign/test/sdk_link_test.cpp),
+// not paced by the wall clock.
 // (Measured 2026-11-21 on this 2-core machine under load: of 12 flights of seed 11, 11
 // crossed without contact and 1 gave up safely ("could not centre on the target cell"); before
 // the level check 2 of 4 touched the box above the target. One CI flight then lost its `land`
@@ -251,27 +254,26 @@ TEST_F(TelloEndToEnd, PilotFliesTheEmulatorTakesInventoryCrossesAndLands) {
 TEST_F(TelloEndToEnd, SameWithFivePercentLossOnEveryChannel) {
   const std::vector<std::string> faults{"--loss-commands", "0.05", "--loss-replies", "0.05", "--loss-state", "0.05",
                                         "--loss-video", "0.05"};
-  for (const char* seed : {"11", "12"}) {
-    SCOPED_TRACE(std::string("seed ") + seed);
-    const json report = fly(faults, seed);
-    EXPECT_TRUE(report.at("contact").is_null()) << report.dump(2);
-    EXPECT_TRUE(report.at("flew").get<bool>());
-    EXPECT_TRUE(report.at("landed").get<bool>());
-    EXPECT_TRUE(pilot_exit_ == 0 || pilot_exit_ == 1) << read_file(dir_ / "pilot.txt");  // crossed, or gave up
-    if (!report.at("crossed").is_null()) expect_crossed_without_contact(report);
-    std::cout << "--- seed " << seed << (report.at("crossed").is_null() ? ": gave up safely" : ": crossed") << "\n";
-    ASSERT_TRUE(fs::exists(dir_ / "inventory.json"));
-    const json inventory = json::parse(read_file(dir_ / "inventory.json"));
-    const std::set<Entry> truth = boxes(report.at("inventory_truth")), found = boxes(inventory.at("boxes"));
-    for (const Entry& b : found) EXPECT_TRUE(truth.count(b)) << "box listed but not there: id " << std::get<0>(b);
-    const json& c = report.at("counters");
-    EXPECT_GT(c.at("state_dropped").get<int>(), 0);
-    EXPECT_GT(c.at("video_datagrams_dropped").get<int>(), 0);
-    const json end = last_log_line("end");
-    ASSERT_TRUE(end.is_object());
-    const std::string video = end.at("video").get<std::string>();
-    EXPECT_EQ(video.find("handed_damaged=0 "), std::string::npos) << video;  // concealed frames were used
-  }
+  const std::string seed = "11";
+  SCOPED_TRACE("seed " + seed);
+  const json report = fly(faults, seed);
+  EXPECT_TRUE(report.at("contact").is_null()) << report.dump(2);
+  EXPECT_TRUE(report.at("flew").get<bool>());
+  EXPECT_TRUE(report.at("landed").get<bool>());
+  EXPECT_TRUE(pilot_exit_ == 0 || pilot_exit_ == 1) << read_file(dir_ / "pilot.txt");  // crossed, or gave up
+  if (!report.at("crossed").is_null()) expect_crossed_without_contact(report);
+  std::cout << "--- seed " << seed << (report.at("crossed").is_null() ? ": gave up safely" : ": crossed") << "\n";
+  ASSERT_TRUE(fs::exists(dir_ / "inventory.json"));
+  const json inventory = json::parse(read_file(dir_ / "inventory.json"));
+  const std::set<Entry> truth = boxes(report.at("inventory_truth")), found = boxes(inventory.at("boxes"));
+  for (const Entry& b : found) EXPECT_TRUE(truth.count(b)) << "box listed but not there: id " << std::get<0>(b);
+  const json& c = report.at("counters");
+  EXPECT_GT(c.at("state_dropped").get<int>(), 0);
+  EXPECT_GT(c.at("video_datagrams_dropped").get<int>(), 0);
+  const json end = last_log_line("end");
+  ASSERT_TRUE(end.is_object());
+  const std::string video = end.at("video").get<std::string>();
+  EXPECT_EQ(video.find("handed_damaged=0 "), std::string::npos) << video;  // concealed frames were used
 }
 
 #endif  // SHELFCROSS_TELLO_PILOT

@@ -156,6 +156,18 @@ class RunnableBlocks(unittest.TestCase):
         self.assertNotEqual(code, 0, out)
         self.assertIn("not followed by a fenced block", out)
 
+    def test_a_block_runs_in_the_cheap_form_its_marker_names(self):
+        code, out = self.run_blocks("<!-- runnable: --no-such-flag 3 => --help -->\n```bash\n"
+                                    "build/release/app/shelfcross campaign --no-such-flag 3\n```\n")
+        self.assertEqual(code, 0, out)
+        self.assertIn("1 runnable blocks, 0 failed", out)
+
+    def test_a_cheap_form_that_is_not_in_its_block_is_refused(self):
+        code, out = self.run_blocks("<!-- runnable: --runs 2 => --runs 1 -->\n```bash\n"
+                                    "build/release/app/shelfcross campaign --help\n```\n")
+        self.assertEqual(code, 2, out)
+        self.assertIn("docs/guide.md:1: runnable marker's '--runs 2' is not in its block", out)
+
     def test_a_page_without_runnable_blocks_does_not_pass_silently(self):
         code, out = self.run_blocks("no blocks\n")
         self.assertEqual(code, 1, out)

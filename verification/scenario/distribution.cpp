@@ -9,6 +9,8 @@
 
 #include <boost/math/distributions/normal.hpp>
 
+#include "config/strict_yaml.hpp"
+
 namespace shelfcross::verification {
 
 double Distribution::sample(RandomStream& stream) const {

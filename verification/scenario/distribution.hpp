@@ -27,8 +27,11 @@
 #include <string>
 #include <vector>
 
-#include "config/strict_yaml.hpp"
 #include "shelfcross/random.hpp"
+
+namespace shelfcross::config {
+class Map;  // config/strict_yaml.hpp: read only where a scenario is parsed
+}  // namespace shelfcross::config
 
 namespace shelfcross::verification {
 

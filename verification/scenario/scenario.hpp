@@ -24,6 +24,7 @@
 
 #include <Eigen/Core>
 
+#include "config/config_error.hpp"
 #include "plant/params.hpp"
 #include "plant/tello_senses.hpp"
 #include "shelfcross/camera.hpp"

@@ -1,5 +1,8 @@
 #include "verification/world/world_truth.hpp"
 
+#include <nlohmann/json.hpp>
+
+#include "config/strict_json.hpp"
 #include "shelfcross/time.hpp"
 
 namespace shelfcross::verification {

@@ -6,12 +6,16 @@
 // written and read here, so a stored run and the emulator's report spell each fact alike.
 
 #include <optional>
+#include <string>
 
-#include <nlohmann/json.hpp>
+#include <nlohmann/json_fwd.hpp>  // the JSON functions are declared here, defined in the .cpp
 
-#include "config/strict_json.hpp"
 #include "plant/collision.hpp"
 #include "shelfcross/cell_index.hpp"
+
+namespace shelfcross::config {
+class StrictObject;  // config/strict_json.hpp
+}  // namespace shelfcross::config
 
 namespace shelfcross::verification {
 

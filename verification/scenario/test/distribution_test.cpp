@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include "config/strict_yaml.hpp"
+
 namespace shelfcross::verification {
 namespace {
 

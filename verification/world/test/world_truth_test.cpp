@@ -4,7 +4,9 @@
 #include "verification/world/world_truth.hpp"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
+#include "config/strict_json.hpp"
 #include "verification/world/tello_emulator_settings.hpp"
 
 namespace shelfcross::verification {
