@@ -65,10 +65,11 @@
 #include <Eigen/Geometry>
 
 #include "render/lens_stats.hpp"
-#include "render/rolling_shutter.hpp"
 #include "shelfcross/camera.hpp"
 
 namespace shelfcross::render {
+
+class ReadoutPoses;  // rolling_shutter.hpp
 
 /// A lens grid over the part of the normalised plane that the image sees: a k-d tree of
 /// cells over the region.

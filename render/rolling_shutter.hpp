@@ -28,14 +28,10 @@
 // between the middle pose and the readout's ends.
 
 #include <array>
-#include <vector>
 
 #include <Eigen/Geometry>
 
 namespace shelfcross::render {
-
-class LensMesher;
-struct GpuVertex;
 
 /// X0 at s = 0, X1 at s = 1: translation linear, rotation by slerp.
 Eigen::Isometry3d interpolate_pose(const Eigen::Isometry3d& X0, const Eigen::Isometry3d& X1, double s);
@@ -54,13 +50,6 @@ class ReadoutPoses {
   /// by |p| dtheta^2 / 8 for a table step of dtheta radians; beyond the readout, extrapolated
   /// linearly from the table's first or last step.
   Eigen::Vector3d point_C(const Eigen::Vector3d& p_W, double tau) const;
-  /// Moves the mesher's vertices (built at middle_pose()) to their rows' poses: clip
-  /// coordinates and camera-frame points; texture coordinates stay (they belong to the face
-  /// point). A vertex whose point would come nearer than half the near plane at its row's pose
-  /// keeps the middle pose's projection (the clip there was made for the middle pose).
-  void move_vertices(const LensMesher& mesher, std::vector<GpuVertex>& vertices,
-                     std::vector<Eigen::Vector3d>& points_C) const;
-
   static constexpr int kSteps = 32;
   static constexpr double kBeyond = 0.5;
 
