@@ -99,7 +99,7 @@ class Autopilot {
   SensedState sensed_;  ///< at the last tick
   std::optional<TimeNs> last_update_ns_;
   RigidBodyState last_state_;
-  Eigen::Vector3d specific_force_B_ = Eigen::Vector3d(0.0, 0.0, 9.80665);
+  Eigen::Vector3d specific_force_B_ = Eigen::Vector3d(0.0, 0.0, kStandardGravity_mps2);
   TimeNs last_command_ns_ = 0;
   TimeNs motor_on_ns_ = 0;
 };

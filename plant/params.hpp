@@ -22,6 +22,8 @@
 
 #include <Eigen/Core>
 
+#include "shelfcross/gravity.hpp"
+
 namespace shelfcross::plant {
 
 /// Which terms of the right-hand side are on. With all of these off, the right-hand side is
@@ -40,7 +42,6 @@ struct ModelSwitches {
 /// visible and checked by the compiler rather than copied as opaque numbers.
 namespace tello_derivation {
 inline constexpr double kMass_kg = 0.080;          // docs/method.md Table 4 (Tello with battery)
-inline constexpr double kGravity_mps2 = 9.80665;   // standard gravity
 inline constexpr double kSizeX_m = 0.098, kSizeY_m = 0.0925, kSizeZ_m = 0.041;  // Table 4
 // Propellers inside the 98 x 92.5 mm outline: tips reach the outline and the two props of a
 // side clear each other by 2 mm, so r_p + a_y = 92.5/2 and a_y = r_p + 1 mm:
@@ -97,7 +98,7 @@ struct SurfaceEffectParams {
 
 struct VehicleParams {
   double mass_kg = tello_derivation::kMass_kg;                 ///< docs/method.md Table 4
-  double gravity_mps2 = tello_derivation::kGravity_mps2;
+  double gravity_mps2 = kStandardGravity_mps2;
   Eigen::Vector3d size_m = Eigen::Vector3d(0.098, 0.0925, 0.041);  ///< x, y, z incl. propellers
   /// Ixx Iyy Izz: central box + four rotor point masses (tello_derivation)
   Eigen::Vector3d inertia_kgm2 = Eigen::Vector3d(tello_derivation::kIxx, tello_derivation::kIyy,

@@ -13,6 +13,7 @@
 #include "plant/flight_modes.hpp"
 #include "plant/tello_senses.hpp"
 #include "sdk/command.hpp"
+#include "shelfcross/gravity.hpp"
 #include "shelfcross/time.hpp"
 
 namespace shelfcross::plant {
@@ -28,7 +29,7 @@ struct DroneReadout {
   std::optional<double> tof_m;
   double baro_m = 0.0;
   Eigen::Vector3d specific_force_B_mps2 = Eigen::Vector3d::Zero();
-  double gravity_mps2 = 9.80665;
+  double gravity_mps2 = kStandardGravity_mps2;
 };
 
 class SdkInterpreter {
