@@ -69,7 +69,7 @@ Eigen::Vector4d Autopilot::update(TimeNs t_ns, const RigidBodyState& s) {
   const bool on_ground = s.p_WB_m.z() <= vehicle_.floor_z_m + vehicle_.rest_height_m() + kOnGroundTolerance_m;
   const FlightMode mode = modes_.mode();
   const bool motors_on = mode == FlightMode::taking_off || mode == FlightMode::flying || mode == FlightMode::landing;
-  if (motors_on) motor_on_ns_ += static_cast<TimeNs>(std::llround(dt * 1e9));
+  if (motors_on) motor_on_ns_ += seconds_to_ns(dt);
 
   // Watchdog: no command at all for watchdog_s while flying -> land by itself.
   if ((mode == FlightMode::taking_off || mode == FlightMode::flying) &&

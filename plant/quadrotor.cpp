@@ -177,7 +177,7 @@ struct Quadrotor::Impl {
                                   yp[kIdxQ + 2] * yp[kIdxQ + 2] + yp[kIdxQ + 3] * yp[kIdxQ + 3]);
       for (int i = 0; i < 4; ++i) yp[kIdxQ + i] /= qn;
       if (flag == CV_ROOT_RETURN) {
-        const TimeNs t_event = t_ns + std::min<TimeNs>(t_target - t_ns, std::llround(t_reached * 1e9));
+        const TimeNs t_event = t_ns + std::min<TimeNs>(t_target - t_ns, seconds_to_ns(t_reached));
         events_here = t_event == t_ns ? events_here + 1 : 0;
         if (events_here > 4) fail(0, "contact chattering");
         t_ns = t_event;

@@ -197,7 +197,7 @@ RunsDrawn draw_runs(const std::filesystem::path& dir, const Scenario& scenario, 
           tt.push_back(t[i] - t0);
           ez.push_back(p_S.z() - c.z());
           ey.push_back(p_S.y() - c.y());
-          eyaw.push_back(wrap_pi(yaw[i] - shelf.yaw_rad) * 180.0 / M_PI);
+          eyaw.push_back(rad_to_deg(wrap_pi(yaw[i] - shelf.yaw_rad)));
         }
         altitude.add_line(tt, ez, colour);
         heading.add_line(tt, eyaw, colour);
@@ -316,7 +316,7 @@ CampaignSummary write_campaign_report(const std::filesystem::path& dir) {
   }
   md << "\nSettling: from the start of the approach until the error stays inside max(" << scenario.cosim.settling_fraction * 100
      << " % of its initial value, " << scenario.cosim.settling_floor_z_m * 100 << " cm / "
-     << fixed(scenario.cosim.settling_floor_yaw_rad * 180 / M_PI, 2) << " deg) for good.\n\n";
+     << fixed(rad_to_deg(scenario.cosim.settling_floor_yaw_rad), 2) << " deg) for good.\n\n";
   md << cost_section(summary.cost, summary.runs);
   md << "## Trajectories\n\n![top view](top_view.png)\n\n![side view](side_view.png)\n\n";
   md << "## Approach responses" << (scenario.warehouse.shelves.size() > 1 ? " (first shelf)" : "")

@@ -10,6 +10,7 @@
 #include "flight_sw/perception/inventory.hpp"
 #include "flight_sw/perception/shelf_view.hpp"
 #include "render/ground_truth.hpp"
+#include "shelfcross/rotation.hpp"
 #include "verification/campaign/campaign.hpp"
 #include "verification/cosim/cosim.hpp"
 
@@ -180,7 +181,7 @@ TEST(RenderedFrames, PnPPoseWithinTwoCentimetresAndOneDegreeAtOnePointFiveMetres
   for (const Case& k : {Case{0.0, 0.0, 0.0}, Case{0.06, -0.04, 3.0}, Case{-0.08, 0.05, -5.0}}) {
     // Body 1.5 m in front of the cell centre, offset and turned.
     Eigen::Isometry3d X_SB = Eigen::Isometry3d::Identity();
-    X_SB.linear() = Eigen::AngleAxisd(k.yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    X_SB.linear() = Eigen::AngleAxisd(deg_to_rad(k.yaw_deg), Eigen::Vector3d::UnitZ()).toRotationMatrix();
     X_SB.translation() = c_S + Eigen::Vector3d(-1.5, k.dy, k.dz);
     const Eigen::Isometry3d X_WB = shelf_pose_W(shelf) * X_SB;
     const Eigen::Isometry3d X_WC = render::camera_pose_W(X_WB, s.camera_mount);
@@ -213,8 +214,8 @@ TEST(RenderedFrames, PnPPoseWithinTwoCentimetresAndOneDegreeAtOnePointFiveMetres
     const Eigen::Vector3d p_KB_true = X_SB.translation() - c_S;
     EXPECT_LT((pose->p_FB_m() - p_KB_true).norm(), 0.02) << "case dy " << k.dy << " dz " << k.dz << " yaw " << k.yaw_deg
                                                            << ": estimate " << pose->p_FB_m().transpose() << ", truth " << p_KB_true.transpose()
-                                                           << ", yaw " << pose->yaw_rad * 180.0 / M_PI;
-    EXPECT_LT(std::abs(pose->yaw_rad * 180.0 / M_PI - k.yaw_deg), 1.0);
+                                                           << ", yaw " << rad_to_deg(pose->yaw_rad);
+    EXPECT_LT(std::abs(rad_to_deg(pose->yaw_rad) - k.yaw_deg), 1.0);
   }
 }
 

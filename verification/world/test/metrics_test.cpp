@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include "shelfcross/rotation.hpp"
+
 namespace shelfcross::verification {
 namespace {
 
@@ -45,7 +47,7 @@ TEST(Metrics, FloorOfTheBandAndOvershootOfAnUnderdampedResponse) {
 TEST(Metrics, NoOvershootRatioWithoutAStepOnlyTheExcursion) {
   // Heading during an approach: starts on the normal (inside the band), swings to -5 deg while
   // the vehicle turns toward its cell, comes back. No step, so no ratio; the excursion is kept.
-  const double band_rad = 0.5 * M_PI / 180.0;
+  const double band_rad = deg_to_rad(0.5);
   std::vector<double> t, e;
   for (int i = 0; i <= 100; ++i) {
     t.push_back(0.1 * i);

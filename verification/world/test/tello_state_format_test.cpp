@@ -7,11 +7,12 @@
 #include <gtest/gtest.h>
 
 #include "sdk/state_record.hpp"
+#include "shelfcross/rotation.hpp"
 
 namespace shelfcross::verification {
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
+constexpr double kDeg = deg_to_rad(1.0);  // one degree
 
 TEST(TelloStateFormat, FormatThenParseKeepsTheDronesResolution) {
   StateRecord truth;
