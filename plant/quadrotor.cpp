@@ -16,11 +16,8 @@
 
 namespace shelfcross::plant {
 
-struct Quadrotor::Impl {
-  VehicleParams vehicle;
-  IntegratorSettings settings;
-  WindModel wind;
-
+// The CVODE integrator's handles, freed together; the state vector y is the integrator's own.
+struct CvodeSolver {
   SUNContext ctx = nullptr;
   N_Vector y = nullptr;
   N_Vector abstol = nullptr;
@@ -28,20 +25,12 @@ struct Quadrotor::Impl {
   SUNNonlinearSolver nls = nullptr;
   SUNMatrix jac = nullptr;
   SUNLinearSolver ls = nullptr;
+  std::string last_error;  // CVODE's last message, for the failure report
 
-  RigidBodyState state;
-  TimeNs t_ns = 0;
-  Eigen::Vector4d cmd = Eigen::Vector4d::Zero();
-  Eigen::Vector4d thrust_factor = Eigen::Vector4d::Ones();
-  Eigen::Vector3d wind_W = Eigen::Vector3d::Zero();
-  bool on_floor = false;
-  long rhs_count = 0;
-  std::string last_error;
-
-  Impl(const VehicleParams& v, const WindParams& w, std::uint64_t seed, IntegratorSettings s)
-      : vehicle(v), settings(s), wind(w, seed) {}
-
-  ~Impl() {
+  CvodeSolver() = default;
+  CvodeSolver(const CvodeSolver&) = delete;
+  CvodeSolver& operator=(const CvodeSolver&) = delete;
+  ~CvodeSolver() {
     if (cvode) CVodeFree(&cvode);
     if (nls) SUNNonlinSolFree(nls);
     if (ls) SUNLinSolFree(ls);
@@ -50,6 +39,65 @@ struct Quadrotor::Impl {
     if (y) N_VDestroy(y);
     if (ctx) SUNContext_Free(&ctx);
   }
+
+  static void error_handler(int /*code*/, const char* module, const char* function, char* msg, void* user) {
+    auto* self = static_cast<CvodeSolver*>(user);
+    self->last_error = std::string(module) + "::" + function + ": " + msg;
+  }
+
+  static void check(int flag, const char* what) {
+    if (flag < 0) throw std::runtime_error(std::string("plant: CVODE setup failed in ") + what);
+  }
+
+  // The integrator from state y0 with the given right-hand side and one root function, both
+  // called with `user`.
+  void create(const IntegratorSettings& settings, const RigidBodyState& y0, CVRhsFn rhs, CVRootFn root,
+              void* user) {
+    check(SUNContext_Create(nullptr, &ctx), "SUNContext_Create");
+    y = N_VNew_Serial(kStateSize, ctx);
+    abstol = N_VNew_Serial(kStateSize, ctx);
+    if (!y || !abstol) throw std::runtime_error("plant: N_VNew_Serial failed");
+    N_VEnableFusedOps_Serial(y, SUNTRUE);  // fewer passes over the 17 components per step
+    double* a = N_VGetArrayPointer(abstol);
+    for (int i = 0; i < kStateSize; ++i) a[i] = i >= kIdxRotor ? settings.abs_tol_rotor_radps : settings.abs_tol;
+    pack_state(y0, N_VGetArrayPointer(y));
+    const bool adams = settings.method == IntegratorSettings::Method::adams_fixed_point;
+    cvode = CVodeCreate(adams ? CV_ADAMS : CV_BDF, ctx);
+    if (!cvode) throw std::runtime_error("plant: CVodeCreate failed");
+    check(CVodeSetErrHandlerFn(cvode, &CvodeSolver::error_handler, this), "CVodeSetErrHandlerFn");
+    check(CVodeInit(cvode, rhs, 0.0, y), "CVodeInit");
+    check(CVodeSVtolerances(cvode, settings.rel_tol, abstol), "CVodeSVtolerances");
+    check(CVodeSetUserData(cvode, user), "CVodeSetUserData");
+    check(CVodeSetMaxNumSteps(cvode, settings.max_steps_per_segment), "CVodeSetMaxNumSteps");
+    if (adams) {
+      nls = SUNNonlinSol_FixedPoint(y, 0, ctx);
+      check(CVodeSetNonlinearSolver(cvode, nls), "CVodeSetNonlinearSolver");
+    } else {
+      jac = SUNDenseMatrix(kStateSize, kStateSize, ctx);
+      ls = SUNLinSol_Dense(y, jac, ctx);
+      check(CVodeSetLinearSolver(cvode, ls, jac), "CVodeSetLinearSolver");
+    }
+    check(CVodeRootInit(cvode, 1, root), "CVodeRootInit");
+    check(CVodeSetNoInactiveRootWarn(cvode), "CVodeSetNoInactiveRootWarn");
+  }
+};
+
+struct Quadrotor::Impl {
+  VehicleParams vehicle;
+  IntegratorSettings settings;
+  WindModel wind;
+  CvodeSolver solver;
+
+  RigidBodyState state;
+  TimeNs t_ns = 0;
+  Eigen::Vector4d cmd = Eigen::Vector4d::Zero();
+  Eigen::Vector4d thrust_factor = Eigen::Vector4d::Ones();
+  Eigen::Vector3d wind_W = Eigen::Vector3d::Zero();
+  bool on_floor = false;
+  long rhs_count = 0;
+
+  Impl(const VehicleParams& v, const WindParams& w, std::uint64_t seed, IntegratorSettings s)
+      : vehicle(v), settings(s), wind(w, seed) {}
 
   double rest_z() const { return vehicle.floor_z_m + vehicle.rest_height_m(); }
 
@@ -83,43 +131,7 @@ struct Quadrotor::Impl {
     return 0;
   }
 
-  static void error_handler(int /*code*/, const char* module, const char* function, char* msg, void* user) {
-    auto* self = static_cast<Impl*>(user);
-    self->last_error = std::string(module) + "::" + function + ": " + msg;
-  }
-
-  void check(int flag, const char* what) {
-    if (flag < 0) throw std::runtime_error(std::string("plant: CVODE setup failed in ") + what);
-  }
-
-  void create() {
-    check(SUNContext_Create(nullptr, &ctx), "SUNContext_Create");
-    y = N_VNew_Serial(kStateSize, ctx);
-    abstol = N_VNew_Serial(kStateSize, ctx);
-    if (!y || !abstol) throw std::runtime_error("plant: N_VNew_Serial failed");
-    N_VEnableFusedOps_Serial(y, SUNTRUE);  // fewer passes over the 17 components per step
-    double* a = N_VGetArrayPointer(abstol);
-    for (int i = 0; i < kStateSize; ++i) a[i] = i >= kIdxRotor ? settings.abs_tol_rotor_radps : settings.abs_tol;
-    pack_state(state, N_VGetArrayPointer(y));
-    const bool adams = settings.method == IntegratorSettings::Method::adams_fixed_point;
-    cvode = CVodeCreate(adams ? CV_ADAMS : CV_BDF, ctx);
-    if (!cvode) throw std::runtime_error("plant: CVodeCreate failed");
-    check(CVodeSetErrHandlerFn(cvode, &Impl::error_handler, this), "CVodeSetErrHandlerFn");
-    check(CVodeInit(cvode, &Impl::rhs, 0.0, y), "CVodeInit");
-    check(CVodeSVtolerances(cvode, settings.rel_tol, abstol), "CVodeSVtolerances");
-    check(CVodeSetUserData(cvode, this), "CVodeSetUserData");
-    check(CVodeSetMaxNumSteps(cvode, settings.max_steps_per_segment), "CVodeSetMaxNumSteps");
-    if (adams) {
-      nls = SUNNonlinSol_FixedPoint(y, 0, ctx);
-      check(CVodeSetNonlinearSolver(cvode, nls), "CVodeSetNonlinearSolver");
-    } else {
-      jac = SUNDenseMatrix(kStateSize, kStateSize, ctx);
-      ls = SUNLinSol_Dense(y, jac, ctx);
-      check(CVodeSetLinearSolver(cvode, ls, jac), "CVodeSetLinearSolver");
-    }
-    check(CVodeRootInit(cvode, 1, &Impl::root), "CVodeRootInit");
-    check(CVodeSetNoInactiveRootWarn(cvode), "CVodeSetNoInactiveRootWarn");
-  }
+  void create() { solver.create(settings, state, &Impl::rhs, &Impl::root, this); }
 
   // Plastic touchdown: rest on the floor, level, keeping yaw; rotors unchanged.
   void settle_on_floor(double* yp) {
@@ -147,28 +159,28 @@ struct Quadrotor::Impl {
   void fail(int flag, const std::string& why) {
     std::ostringstream os;
     os << "plant: numerical failure at t = " << ns_to_seconds(t_ns) << " s: " << why;
-    if (!last_error.empty()) os << " (" << last_error << ")";
+    if (!solver.last_error.empty()) os << " (" << solver.last_error << ")";
     throw NumericalFailure(t_ns, flag, os.str());
   }
 
   void advance_to(TimeNs t_target) {
     assert(t_target >= t_ns);
-    double* yp = N_VGetArrayPointer(y);
+    double* yp = N_VGetArrayPointer(solver.y);
     int events_here = 0;
     while (t_ns < t_target) {
       update_contact(yp);
       wind_W = wind.wind_W_mps(t_ns);
       // Segment time runs from 0 so that CVODE's real time keeps full resolution.
       const double dt = ns_to_seconds(t_target - t_ns);
-      int flag = CVodeReInit(cvode, 0.0, y);
-      if (flag >= 0) flag = CVodeSetStopTime(cvode, dt);
+      int flag = CVodeReInit(solver.cvode, 0.0, solver.y);
+      if (flag >= 0) flag = CVodeSetStopTime(solver.cvode, dt);
       int direction = on_floor ? +1 : -1;  // lift-off: margin rising; touchdown: z falling
-      if (flag >= 0) flag = CVodeSetRootDirection(cvode, &direction);
+      if (flag >= 0) flag = CVodeSetRootDirection(solver.cvode, &direction);
       if (flag >= 0 && settings.initial_step_s >= 0.0)
-        flag = CVodeSetInitStep(cvode, settings.initial_step_s > 0.0 ? std::min(settings.initial_step_s, dt) : dt);
+        flag = CVodeSetInitStep(solver.cvode, settings.initial_step_s > 0.0 ? std::min(settings.initial_step_s, dt) : dt);
       if (flag < 0) fail(flag, "re-initialisation");
       realtype t_reached = 0.0;
-      flag = CVode(cvode, dt, y, &t_reached, CV_NORMAL);
+      flag = CVode(solver.cvode, dt, solver.y, &t_reached, CV_NORMAL);
       if (flag < 0) fail(flag, "CVode returned " + std::to_string(flag));
       for (int i = 0; i < kStateSize; ++i)
         if (!std::isfinite(yp[i])) fail(0, "non-finite state");
@@ -230,7 +242,7 @@ void Quadrotor::reset(const RigidBodyState& state, TimeNs t_ns) {
   m.state.q_WB.normalize();
   m.t_ns = t_ns;
   m.cmd = state.rotor_speed_radps;
-  double* yp = N_VGetArrayPointer(m.y);
+  double* yp = N_VGetArrayPointer(m.solver.y);
   pack_state(m.state, yp);
   m.on_floor = false;
   if (yp[kIdxP + 2] <= m.rest_z()) m.settle_on_floor(yp);
@@ -244,7 +256,7 @@ void Quadrotor::set_rotor_commands(const Eigen::Vector4d& cmd_radps) {
     m.cmd[i] = std::isfinite(c) ? std::clamp(c, 0.0, m.vehicle.rotor_speed_max_radps) : 0.0;
   }
   if (!m.vehicle.switches.motor_dynamics) {
-    double* yp = N_VGetArrayPointer(m.y);
+    double* yp = N_VGetArrayPointer(m.solver.y);
     for (int i = 0; i < 4; ++i) yp[kIdxRotor + i] = m.cmd[i];
     m.state.rotor_speed_radps = m.cmd;
   }

@@ -332,30 +332,33 @@ void split_by_grid(const LensGrid& grid, const std::vector<Vec2>& poly, std::vec
   descend(grid, 0, s.b, 0, s, pieces, sizes);
 }
 
-LensMesher::LensMesher(const CameraIntrinsics& K, int supersample, double near_m, double far_m,
-                       double tolerance_px, double margin_px)
+LensProjection::LensProjection(const CameraIntrinsics& K, int supersample, double near_m, double far_m)
     : K_(K),
       s_(supersample),
       near_m_(near_m),
       far_m_(far_m),
-      tolerance_px_(tolerance_px),
-      grids_(make_lens_grids(K, tolerance_px, margin_px)),
-      region_(LensGrid::one_cell(grids_.edges.x_min, grids_.edges.x_max, grids_.edges.y_min, grids_.edges.y_max)) {
-  const int s = supersample;
-  clip_from_camera_ = gl_clip_from_camera(s * K.fx_px, s * K.fy_px, s * K.cx_px + 0.5 * (s - 1),
-                                          s * K.cy_px + 0.5 * (s - 1), s * K.width_px,
-                                          s * K.height_px, near_m, far_m);
-}
+      clip_from_camera_(gl_clip_from_camera(supersample * K.fx_px, supersample * K.fy_px,
+                                            supersample * K.cx_px + 0.5 * (supersample - 1),
+                                            supersample * K.cy_px + 0.5 * (supersample - 1),
+                                            supersample * K.width_px, supersample * K.height_px,
+                                            near_m, far_m)) {}
 
-Eigen::Vector2d LensMesher::pixel_of(const Vec2& xy) const {
+Eigen::Vector2d LensProjection::pixel_of(const Vec2& xy) const {
   return s_ * pixel_of_normalized(K_, xy) + Vec2::Constant(0.5 * (s_ - 1));
 }
 
-Eigen::Vector4d LensMesher::clip_of(const Vec2& px, double Z) const {
+Eigen::Vector4d LensProjection::clip_of(const Vec2& px, double Z) const {
   const double fx_s = s_ * K_.fx_px, fy_s = s_ * K_.fy_px;
   const double cx_s = s_ * K_.cx_px + 0.5 * (s_ - 1), cy_s = s_ * K_.cy_px + 0.5 * (s_ - 1);
   return clip_from_camera_ * Eigen::Vector4d((px.x() - cx_s) / fx_s * Z, (px.y() - cy_s) / fy_s * Z, Z, 1.0);
 }
+
+LensMesher::LensMesher(const CameraIntrinsics& K, int supersample, double near_m, double far_m,
+                       double tolerance_px, double margin_px)
+    : projection_(K, supersample, near_m, far_m),
+      tolerance_px_(tolerance_px),
+      grids_(make_lens_grids(K, tolerance_px, margin_px)),
+      region_(LensGrid::one_cell(grids_.edges.x_min, grids_.edges.x_max, grids_.edges.y_min, grids_.edges.y_max)) {}
 
 void LensMesher::set_faces(FaceGroup group, std::vector<MeshFace> faces) {
   std::vector<Face>& out = faces_[static_cast<std::size_t>(group)];
@@ -384,15 +387,15 @@ void LensMesher::set_depth_tested(FaceGroup group, bool depth_tested) {
 }
 
 void LensMesher::build(const Eigen::Isometry3d& X_WC) {
-  vertices_.clear();
-  indices_.clear();
-  points_C_.clear();
-  room_spans_.clear();
-  grid_solids_ = 0;
+  frame_.vertices.clear();
+  frame_.indices.clear();
+  frame_.points_C.clear();
+  frame_.room_spans.clear();
+  frame_.grid_solids = 0;
   const Eigen::Isometry3d X_CW = X_WC.inverse(Eigen::Isometry);
   const Vec3 p_WC = X_WC.translation();
   for (int g = 0; g < kFaceGroups; ++g) {
-    group_start_[static_cast<std::size_t>(g)] = indices_.size();
+    frame_.group_start[static_cast<std::size_t>(g)] = frame_.indices.size();
     const std::vector<Face>& faces = faces_[static_cast<std::size_t>(g)];
     // Room and flat faces along their own edges, with the interior bound of the edges grid
     // where depth-tested (so decals' depth offset and the depth order of faces that meet hold
@@ -405,49 +408,49 @@ void LensMesher::build(const Eigen::Isometry3d& X_WC) {
     for (std::size_t k = 0; k < faces.size();) {
       std::size_t end = k + 1;
       while (end < faces.size() && faces[k].face.solid >= 0 && faces[end].face.solid == faces[k].face.solid) ++end;
-      const std::size_t v0 = vertices_.size(), i0 = indices_.size();
+      const std::size_t v0 = frame_.vertices.size(), i0 = frame_.indices.size();
       auto mesh_solid = [&](Mesh mesh) {
-        spans_.clear();
+        scratch_.spans.clear();
         for (std::size_t j = k; j < end; ++j) {
-          const std::size_t first = indices_.size();
+          const std::size_t first = frame_.indices.size();
           if (!add_face(faces[j], X_CW, p_WC, mesh, interior_px)) return false;
-          spans_.emplace_back(first, indices_.size());
+          scratch_.spans.emplace_back(first, frame_.indices.size());
         }
         return true;
       };
       if (!outline || !mesh_solid(Mesh::kOutline)) {
-        if (outline) ++grid_solids_;
-        vertices_.resize(v0), points_C_.resize(v0), indices_.resize(i0);
+        if (outline) ++frame_.grid_solids;
+        frame_.vertices.resize(v0), frame_.points_C.resize(v0), frame_.indices.resize(i0);
         mesh_solid(grid_mesh);
       }
       if (g == kRoomFaces) {
         for (std::size_t j = k; j < end; ++j) {
-          const auto [first, last] = spans_[j - k];
+          const auto [first, last] = scratch_.spans[j - k];
           if (last == first) continue;
           // Its area: the triangles' areas in window coordinates (x_ndc, y_ndc scaled).
           FaceSpan span{first, last, 0.0, faces[j].face.rgb};
           for (std::size_t i = first; i < last; i += 3) {
             Vec2 p[3];
             for (int c = 0; c < 3; ++c) {
-              const GpuVertex& v = vertices_[indices_[i + static_cast<std::size_t>(c)]];
-              p[c] = Vec2(v.clip[0] / v.clip[3] * 0.5 * s_ * K_.width_px, v.clip[1] / v.clip[3] * 0.5 * s_ * K_.height_px);
+              const GpuVertex& v = frame_.vertices[frame_.indices[i + static_cast<std::size_t>(c)]];
+              p[c] = Vec2(v.clip[0] / v.clip[3] * 0.5 * projection_.supersample() * projection_.intrinsics().width_px, v.clip[1] / v.clip[3] * 0.5 * projection_.supersample() * projection_.intrinsics().height_px);
             }
             const Vec2 a = p[1] - p[0], b = p[2] - p[0];
             span.area_px2 += 0.5 * std::abs(a.x() * b.y() - a.y() * b.x());
           }
-          room_spans_.push_back(span);
+          frame_.room_spans.push_back(span);
         }
       }
       k = end;
     }
   }
-  group_start_[kFaceGroups] = indices_.size();
+  frame_.group_start[kFaceGroups] = frame_.indices.size();
 }
 
 bool LensMesher::clip_face(const MeshFace& m, const Eigen::Isometry3d& X_CW, const LensGrid& grid) {
   const Eigen::Matrix3d& R_CW = X_CW.linear();
   const Vec3 t_CW = X_CW.translation();
-  poly_C_.clear();
+  scratch_.poly_C.clear();
   // Outcodes against the frustum that holds the lens region: a face entirely beyond one plane
   // is dropped before any clipping.
   const double xl = grid.x_min, xh = grid.x_max;
@@ -456,10 +459,10 @@ bool LensMesher::clip_face(const MeshFace& m, const Eigen::Isometry3d& X_CW, con
   bool needs_z_clip = false;
   for (const Vec3& c : m.corners_W_m) {
     const Vec3 p = R_CW * c + t_CW;
-    poly_C_.push_back(p);
+    scratch_.poly_C.push_back(p);
     unsigned out = 0;
-    if (p.z() < near_m_) out |= 1u;
-    if (p.z() > far_m_) out |= 2u;
+    if (p.z() < projection_.near_m()) out |= 1u;
+    if (p.z() > projection_.far_m()) out |= 2u;
     if (p.x() < xl * p.z()) out |= 4u;
     if (p.x() > xh * p.z()) out |= 8u;
     if (p.y() < yl * p.z()) out |= 16u;
@@ -471,30 +474,30 @@ bool LensMesher::clip_face(const MeshFace& m, const Eigen::Isometry3d& X_CW, con
   if (needs_z_clip) {
     // Near and far planes in 3-D (Z = near, Z = far), crossings in canonical order.
     for (int side = 0; side < 2; ++side) {
-      const double plane = side == 0 ? near_m_ : far_m_;
+      const double plane = side == 0 ? projection_.near_m() : projection_.far_m();
       const double sign = side == 0 ? 1.0 : -1.0;  // inside: sign (Z - plane) >= 0
-      clipped_C_.clear();
-      const std::size_t n = poly_C_.size();
+      scratch_.clipped_C.clear();
+      const std::size_t n = scratch_.poly_C.size();
       for (std::size_t i = 0; i < n; ++i) {
-        const Vec3& a = poly_C_[i];
-        const Vec3& b = poly_C_[(i + 1) % n];
+        const Vec3& a = scratch_.poly_C[i];
+        const Vec3& b = scratch_.poly_C[(i + 1) % n];
         const double da = sign * (a.z() - plane), db = sign * (b.z() - plane);
-        if (da >= 0.0) clipped_C_.push_back(a);
+        if (da >= 0.0) scratch_.clipped_C.push_back(a);
         if ((da < 0.0 && db > 0.0) || (da > 0.0 && db < 0.0)) {
           const bool swap = b.x() < a.x() || (b.x() == a.x() && (b.y() < a.y() || (b.y() == a.y() && b.z() < a.z())));
           const Vec3& p = swap ? b : a;
           const Vec3& q = swap ? a : b;
           Vec3 x = p + (plane - p.z()) / (q.z() - p.z()) * (q - p);
           x.z() = plane;
-          clipped_C_.push_back(x);
+          scratch_.clipped_C.push_back(x);
         }
       }
-      poly_C_.swap(clipped_C_);
-      if (poly_C_.size() < 3) return false;
+      scratch_.poly_C.swap(scratch_.clipped_C);
+      if (scratch_.poly_C.size() < 3) return false;
     }
   }
-  poly_n_.clear();
-  for (const Vec3& p : poly_C_) poly_n_.emplace_back(p.x() / p.z(), p.y() / p.z());
+  scratch_.poly_n.clear();
+  for (const Vec3& p : scratch_.poly_C) scratch_.poly_n.emplace_back(p.x() / p.z(), p.y() / p.z());
   return true;
 }
 
@@ -508,28 +511,28 @@ bool LensMesher::add_face(const Face& f, const Eigen::Isometry3d& X_CW, const Ve
   if (!clip_face(m, X_CW, grid)) return true;
   const Eigen::Matrix3d& R_CW = X_CW.linear();
   const Vec3 t_CW = X_CW.translation();
-  pieces_.clear();
-  sizes_.clear();
+  scratch_.pieces.clear();
+  scratch_.sizes.clear();
   if (mesh == Mesh::kOutline) {
     // The region clip alone (one cell), then the outline's edges bisected.
-    split_by_grid(region_, poly_n_, pieces_, sizes_);
-    if (sizes_.empty()) return true;
-    poly_n_.swap(pieces_);
-    pieces_.clear();
-    bisect_outline(grids_.stats, tolerance_px_, poly_n_, pieces_);
-    outline_px_.clear();
-    for (const Vec2& xy : pieces_) outline_px_.push_back(pixel_of(xy));
-    triangles_.clear();
-    triangulate_polygon(outline_px_, triangles_);
-    for (std::size_t t = 0; t < triangles_.size(); t += 3) {
-      const Vec2& a = pieces_[static_cast<std::size_t>(triangles_[t])];
-      const Vec2& b = pieces_[static_cast<std::size_t>(triangles_[t + 1])];
-      const Vec2& c = pieces_[static_cast<std::size_t>(triangles_[t + 2])];
+    split_by_grid(region_, scratch_.poly_n, scratch_.pieces, scratch_.sizes);
+    if (scratch_.sizes.empty()) return true;
+    scratch_.poly_n.swap(scratch_.pieces);
+    scratch_.pieces.clear();
+    bisect_outline(grids_.stats, tolerance_px_, scratch_.poly_n, scratch_.pieces);
+    scratch_.outline_px.clear();
+    for (const Vec2& xy : scratch_.pieces) scratch_.outline_px.push_back(projection_.pixel_of(xy));
+    scratch_.triangles.clear();
+    triangulate_polygon(scratch_.outline_px, scratch_.triangles);
+    for (std::size_t t = 0; t < scratch_.triangles.size(); t += 3) {
+      const Vec2& a = scratch_.pieces[static_cast<std::size_t>(scratch_.triangles[t])];
+      const Vec2& b = scratch_.pieces[static_cast<std::size_t>(scratch_.triangles[t + 1])];
+      const Vec2& c = scratch_.pieces[static_cast<std::size_t>(scratch_.triangles[t + 2])];
       if (grids_.stats.interior_px(a, b, c) > interior_px) return false;
     }
   } else {
-    split_by_grid(grid, poly_n_, pieces_, sizes_);
-    if (sizes_.empty()) return true;
+    split_by_grid(grid, scratch_.poly_n, scratch_.pieces, scratch_.sizes);
+    if (scratch_.sizes.empty()) return true;
   }
 
   // The face's plane in C: n_C . p = d_C (< 0: the camera is on the normal side), so the point
@@ -543,7 +546,7 @@ bool LensMesher::add_face(const Face& f, const Eigen::Isometry3d& X_CW, const Ve
   // Clip coordinates from the vertex's (distorted) pixel and its true depth Z (clip_of).
   auto add_vertex = [&](const Vec2& xy, const Vec2& px) {
     const double Z = d_C / n_C.dot(Vec3(xy.x(), xy.y(), 1.0));
-    const Eigen::Vector4d clip = clip_of(px, Z);
+    const Eigen::Vector4d clip = projection_.clip_of(px, Z);
     GpuVertex gv;
     for (int c = 0; c < 4; ++c) gv.clip[c] = static_cast<float>(clip[c]);
     for (int c = 0; c < 3; ++c) gv.rgb[c] = m.rgb[c];
@@ -555,23 +558,23 @@ bool LensMesher::add_face(const Face& f, const Eigen::Isometry3d& X_CW, const Ve
     } else {
       gv.uv[0] = gv.uv[1] = 0.0f;
     }
-    vertices_.push_back(gv);
-    points_C_.push_back(Z * Vec3(xy.x(), xy.y(), 1.0));
+    frame_.vertices.push_back(gv);
+    frame_.points_C.push_back(Z * Vec3(xy.x(), xy.y(), 1.0));
   };
-  const auto base = static_cast<std::uint32_t>(vertices_.size());
+  const auto base = static_cast<std::uint32_t>(frame_.vertices.size());
   if (mesh == Mesh::kOutline) {
-    for (std::size_t v = 0; v < pieces_.size(); ++v) add_vertex(pieces_[v], outline_px_[v]);
-    for (const int t : triangles_) indices_.push_back(base + static_cast<std::uint32_t>(t));
+    for (std::size_t v = 0; v < scratch_.pieces.size(); ++v) add_vertex(scratch_.pieces[v], scratch_.outline_px[v]);
+    for (const int t : scratch_.triangles) frame_.indices.push_back(base + static_cast<std::uint32_t>(t));
     return true;
   }
   std::size_t k = 0;
-  for (int size : sizes_) {
-    const auto first = static_cast<std::uint32_t>(vertices_.size());
-    for (int v = 0; v < size; ++v, ++k) add_vertex(pieces_[k], pixel_of(pieces_[k]));
+  for (int size : scratch_.sizes) {
+    const auto first = static_cast<std::uint32_t>(frame_.vertices.size());
+    for (int v = 0; v < size; ++v, ++k) add_vertex(scratch_.pieces[k], projection_.pixel_of(scratch_.pieces[k]));
     for (int v = 1; v + 1 < size; ++v) {
-      indices_.push_back(first);
-      indices_.push_back(first + static_cast<std::uint32_t>(v));
-      indices_.push_back(first + static_cast<std::uint32_t>(v + 1));
+      frame_.indices.push_back(first);
+      frame_.indices.push_back(first + static_cast<std::uint32_t>(v));
+      frame_.indices.push_back(first + static_cast<std::uint32_t>(v + 1));
     }
   }
   return true;

@@ -159,11 +159,36 @@ struct GpuVertex {
 /// textured faces the interior grid, tags the edges grid.
 enum FaceGroup { kRoomFaces = 0, kFlatFaces = 1, kDecalFaces = 2, kTexturedFaces = 3, kFaceGroups = 4 };
 
-class LensMesher {
+/// The camera as GL rasterises it: the x s pinhole of gl_clip_from_camera, and the lens's
+/// exact pixel of a normalised point at that size.
+class LensProjection {
  public:
   /// `supersample` s: the image is rasterised at s times the size, pixel u_s = s u + (s-1)/2
   /// (the centre of the s x s block that becomes pixel u). Clip planes at Z = near_m, far_m.
-  /// Faces are clipped margin_px (output pixels) outside the image (the lens grids' region).
+  LensProjection(const CameraIntrinsics& K, int supersample, double near_m, double far_m);
+
+  /// The pixel (at the rasterised size) of a normalised point: exact, double precision.
+  Eigen::Vector2d pixel_of(const Eigen::Vector2d& xy) const;
+  /// GL's clip coordinates of a vertex at pixel px (rasterised size) with depth Z: the point
+  /// with that depth that the x s pinhole camera of gl_clip_from_camera sees at px, so x_ndc =
+  /// 2 (u_s + 0.5) / W - 1 as for any pinhole point and w = Z (perspective-correct interpolation).
+  Eigen::Vector4d clip_of(const Eigen::Vector2d& px, double Z) const;
+  int supersample() const { return s_; }
+  const CameraIntrinsics& intrinsics() const { return K_; }
+  double near_m() const { return near_m_; }
+  double far_m() const { return far_m_; }
+
+ private:
+  CameraIntrinsics K_;
+  int s_;
+  double near_m_, far_m_;
+  Eigen::Matrix4d clip_from_camera_;  // gl_clip_from_camera of the rasterised (x s) pinhole
+};
+
+class LensMesher {
+ public:
+  /// The projection's arguments (LensProjection); faces are clipped margin_px (output pixels)
+  /// outside the image (the lens grids' region).
   LensMesher(const CameraIntrinsics& K, int supersample, double near_m, double far_m,
              double tolerance_px, double margin_px = 2.0);
 
@@ -181,12 +206,12 @@ class LensMesher {
   /// point of the face.
   void build(const ReadoutPoses& readout);
 
-  const std::vector<GpuVertex>& vertices() const { return vertices_; }
-  const std::vector<std::uint32_t>& indices() const { return indices_; }
+  const std::vector<GpuVertex>& vertices() const { return frame_.vertices; }
+  const std::vector<std::uint32_t>& indices() const { return frame_.indices; }
   /// The camera-frame point (metres) of each vertex, in double precision: what the vertex is
   /// the projection of (for tests; under a rolling shutter, in the camera at its row's pose).
-  const std::vector<Eigen::Vector3d>& points_C() const { return points_C_; }
-  std::size_t first_index(int group) const { return group_start_[static_cast<std::size_t>(group)]; }
+  const std::vector<Eigen::Vector3d>& points_C() const { return frame_.points_C; }
+  std::size_t first_index(int group) const { return frame_.group_start[static_cast<std::size_t>(group)]; }
 
   /// The room faces of the last frame, each with its index range and its area in the image
   /// (pixels at the rasterised size), in drawing order.
@@ -195,28 +220,35 @@ class LensMesher {
     double area_px2 = 0.0;
     Eigen::Vector3f rgb = Eigen::Vector3f::Zero();
   };
-  const std::vector<FaceSpan>& room_spans() const { return room_spans_; }
+  const std::vector<FaceSpan>& room_spans() const { return frame_.room_spans; }
   const LensGrids& grids() const { return grids_; }
   /// Solids (or lone faces) of the room and flat groups that the last frame meshed along the
   /// edges grid because a triangle of their outline exceeded the interior bound.
-  std::size_t grid_solids() const { return grid_solids_; }
+  std::size_t grid_solids() const { return frame_.grid_solids; }
   /// The faces of a group, as set.
   std::vector<MeshFace> faces(FaceGroup group) const;
-
-  /// The pixel (at the rasterised size) of a normalised point: exact, double precision.
-  Eigen::Vector2d pixel_of(const Eigen::Vector2d& xy) const;
-  /// GL's clip coordinates of a vertex at pixel px (rasterised size) with depth Z: the point
-  /// with that depth that the x s pinhole camera of gl_clip_from_camera sees at px, so x_ndc =
-  /// 2 (u_s + 0.5) / W - 1 as for any pinhole point and w = Z (perspective-correct interpolation).
-  Eigen::Vector4d clip_of(const Eigen::Vector2d& px, double Z) const;
-  int supersample() const { return s_; }
-  const CameraIntrinsics& intrinsics() const { return K_; }
-  double near_m() const { return near_m_; }
+  const LensProjection& projection() const { return projection_; }
 
  private:
   struct Face {
     MeshFace face;
     Eigen::Vector3d e1_dual_W, e2_dual_W;  // s = e1_dual . (p - c0), t = e2_dual . (p - c0)
+  };
+  // What build() makes of one frame.
+  struct FrameMesh {
+    std::vector<GpuVertex> vertices;
+    std::vector<std::uint32_t> indices;
+    std::vector<Eigen::Vector3d> points_C;
+    std::vector<FaceSpan> room_spans;
+    std::array<std::size_t, kFaceGroups + 1> group_start{};
+    std::size_t grid_solids = 0;
+  };
+  // Buffers a face's clip and split reuse from face to face.
+  struct Scratch {
+    std::vector<Eigen::Vector3d> poly_C, clipped_C;
+    std::vector<Eigen::Vector2d> poly_n, pieces, outline_px;
+    std::vector<int> sizes, triangles;
+    std::vector<std::pair<std::size_t, std::size_t>> spans;  // index range of each face of a solid
   };
   // How a face is meshed: along the edges grid, the interior grid (textured), or its own
   // edges; with kOutline, `interior_px` is the largest interior bound allowed (infinite where
@@ -226,30 +258,18 @@ class LensMesher {
   bool add_face(const Face& f, const Eigen::Isometry3d& X_CW, const Eigen::Vector3d& p_WC, Mesh mesh,
                 double interior_px);
   // The face in C, dropped if entirely outside the frustum of grid's region, clipped against
-  // the near and far planes, then projected to the normalised plane: poly_n_. False if nothing
-  // is left.
+  // the near and far planes, then projected to the normalised plane: scratch_.poly_n. False if
+  // nothing is left.
   bool clip_face(const MeshFace& m, const Eigen::Isometry3d& X_CW, const LensGrid& grid);
 
-  CameraIntrinsics K_;
-  int s_;
-  Eigen::Matrix4d clip_from_camera_;  // gl_clip_from_camera of the rasterised (x s) pinhole
-  double near_m_, far_m_;
+  LensProjection projection_;
   double tolerance_px_;
   LensGrids grids_;
   LensGrid region_;  // one cell over the grids' region: the clip of faces meshed along their edges
   std::array<std::vector<Face>, kFaceGroups> faces_;
   std::array<bool, kFaceGroups> depth_tested_{true, true, true, true};
-  std::vector<GpuVertex> vertices_;
-  std::vector<std::uint32_t> indices_;
-  std::vector<Eigen::Vector3d> points_C_;
-  std::vector<FaceSpan> room_spans_;
-  std::array<std::size_t, kFaceGroups + 1> group_start_{};
-  std::size_t grid_solids_ = 0;
-  // scratch
-  std::vector<Eigen::Vector3d> poly_C_, clipped_C_;
-  std::vector<Eigen::Vector2d> poly_n_, pieces_, outline_px_;
-  std::vector<int> sizes_, triangles_;
-  std::vector<std::pair<std::size_t, std::size_t>> spans_;  // index range of each face of a solid
+  FrameMesh frame_;
+  Scratch scratch_;
 };
 
 }  // namespace shelfcross::render
