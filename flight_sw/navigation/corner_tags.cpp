@@ -4,6 +4,8 @@
 #include <cmath>
 
 #include <opencv2/calib3d.hpp>
+#include <opencv2/tracking.hpp>  // declares the trackers tracking_legacy.hpp derives from
+#include <opencv2/tracking/tracking_legacy.hpp>
 
 namespace shelfcross::flight_sw {
 

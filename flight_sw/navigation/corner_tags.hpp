@@ -9,14 +9,20 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
-#include <opencv2/tracking.hpp>  // declares the trackers tracking_legacy.hpp derives from
-#include <opencv2/tracking/tracking_legacy.hpp>
 
 #include "flight_sw/config.hpp"
 #include "flight_sw/navigation/navigation.hpp"
 #include "flight_sw/perception/box_tracker.hpp"
 #include "flight_sw/perception/shelf_view.hpp"
 #include "shelfcross/sdk_messages.hpp"
+
+// Median Flow's base class, declared as opencv2/tracking/tracking_legacy.hpp does: the follower
+// holds one by pointer, and only corner_tags.cpp needs the tracking module's headers.
+namespace cv::legacy {
+inline namespace tracking {
+class Tracker;
+}  // namespace tracking
+}  // namespace cv::legacy
 
 namespace shelfcross::flight_sw {
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include <opencv2/aruco.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "shelfcross/aruco_dictionaries.hpp"

@@ -8,8 +8,14 @@
 #include <string>
 #include <vector>
 
-#include <opencv2/aruco.hpp>
 #include <opencv2/core.hpp>
+
+// The detector's dictionary and parameters, declared as opencv2/aruco.hpp does: held by
+// pointer here, so only marker_detector.cpp reads the aruco module's headers.
+namespace cv::aruco {
+class Dictionary;
+struct DetectorParameters;
+}  // namespace cv::aruco
 
 namespace shelfcross::flight_sw {
 
