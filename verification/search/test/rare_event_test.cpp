@@ -211,29 +211,40 @@ TEST(CrossEntropy, EstimateCoversTheKnownProbabilityIn19Of20Seeds) {
     // defensive share).
     EXPECT_GE(r.estimate.mean_weight, 0.5) << "seed " << seed;
     EXPECT_LE(r.estimate.mean_weight, 2.0) << "seed " << seed;
-    // A relative standard error of 7 to 27 % from 1000 runs; plain Monte Carlo's would be
+    // A relative standard error of 10 % on average, 31 % at most, from 1000 runs (measured;
+    // the nominal share's fifth of the runs rarely fails, which costs about sqrt(1 / 0.8) =
+    // 1.12 times the fitted component's); plain Monte Carlo's would be
     // sqrt((1 - p) / (1000 p)) = 250 %.
-    EXPECT_LT(r.estimate.standard_error / r.estimate.p_hat, 0.3) << "seed " << seed;
+    EXPECT_LT(r.estimate.standard_error / r.estimate.p_hat, 0.35) << "seed " << seed;
   }
+  // Measured with the default shares (s = 0.2, s_j = 0.1): 20 of 20, and 185 of 200 seeds.
+  // Without the per-parameter floor (s_j = 0) 177 of 200: the joint share caps a drifted
+  // parameter's weight at 1 / s, still thousands of times a well-placed failure's (file comment
+  // of rare_event.hpp); with per-parameter shares alone (s = 0), 188 of 200.
   EXPECT_GE(covered, 19);
   // The mean of 20 unbiased estimates, each within ~10 %: within 5 % of p.
   EXPECT_NEAR(sum_p_hat / 20.0 / toy.p, 1.0, 0.05);
   // The estimate from every round (mixture_log_weight) on this sharp region: within 10 % of p
-  // on average, but its interval covers p in only 16 of 20 seeds (measured): the adapted
-  // proposals were fitted to the very runs it reuses (consistent, not unbiased:
-  // rare_event.hpp), and with hundreds of failures its interval is narrow enough to show it.
-  // The report gives both estimates; the soft region below is where the mixture is needed.
-  EXPECT_GE(mixture_covered, 16);
+  // on average; its interval covers p in 20 of these 20 seeds, 184 of 200 (measured; 179 of
+  // 200 with per-parameter shares alone). The adapted proposals were fitted to the very runs it
+  // reuses (consistent, not unbiased: rare_event.hpp), and with hundreds of failures its
+  // interval is narrow enough to show it. The report gives both estimates; the soft region
+  // below is where the mixture is needed.
+  EXPECT_GE(mixture_covered, 18);
   EXPECT_NEAR(sum_mixture_p_hat / 20.0 / toy.p, 1.0, 0.1);
 }
 
 // The soft toy with the gust search's settings (docs/search.md: 2 elites at least, rho 0.25,
 // alpha 0.9, stddev floor 2 x the nominal's, x adapted) in 200 runs (rounds of 20, 100 for the
-// estimate) and a nominal share of 0.3. The final round, fitted where failures are easy, misses
-// the soft edge where most of p lies: measured, its interval covers p in 10 of 20 seeds
-// (geometric mean of p_hat / p 0.46); every round together in 19 (0.98). With the gust demo's
-// 60 runs (rounds of 6, share 0.1) neither works (5 and 8 of 20; ESS near 1): the soft edge
-// needs runs, and a share of the nominal large enough to sample it.
+// estimate) and a share of 0.3 of x's nominal (x is the only adapted parameter, so a joint
+// share and a per-parameter one give the same distribution; the per-parameter one keeps these
+// draws). The final round, fitted where failures are easy, misses the soft edge where most of p
+// lies: measured, its interval covers p in 10 of 20 seeds (geometric mean of p_hat / p 0.46);
+// every round together in 19 (0.98). Over 200 seeds both cover less, 119 and 150 of 200
+// (and 117 and 152 with the joint share's draws, s = 0.3, s_j = 0): 19 of these 20 is a lucky
+// draw of a coverage near 75 %. With the gust demo's 60 runs (rounds of 6, share 0.1) neither
+// works (5 and 8 of 20; ESS near 1): the soft edge needs runs, and a share of the nominal large
+// enough to sample it.
 TEST(CrossEntropy, OnASoftFailureRegionEveryRoundTogetherEstimatesWhatTheFinalRoundMisses) {
   const SoftToy toy;
   ASSERT_GT(toy.p, 1e-3);
@@ -245,7 +256,8 @@ TEST(CrossEntropy, OnASoftFailureRegionEveryRoundTogetherEstimatesWhatTheFinalRo
   settings.smoothing = 0.9;
   settings.min_stddev_fraction = 2.0;
   settings.estimation_runs = 100;
-  settings.nominal_share = 0.3;
+  settings.nominal_share = 0.0;
+  settings.parameter_share = 0.3;
   settings.adapted = {"x"};
   int final_covered = 0, mixture_covered = 0;
   double log_ratio_final = 0.0, log_ratio_mixture = 0.0;
@@ -311,9 +323,13 @@ TEST(JointDefence, NoWeightExceedsOneOverTheNominalShare) {
         ASSERT_LE(log_w, -std::log(q.least_ratio()) + 1e-12) << "s " << s << " s_j " << s_j << " x1 " << x.at("x1");
         largest = std::max(largest, log_w);
       }
+      // Without per-parameter shares the fitted component vanishes far below x1's fit and at
+      // u = 0: the weight there is 1 / s.
       const DrawnValues corner{{"x1", -8.0}, {"x2", 0.0}, {"u", 0.0}, {"c", 0.0}};
-      EXPECT_NEAR(log_density(toy.nominal, corner) - q.log_pdf(corner), -std::log(q.least_ratio()), 1e-6);
-      EXPECT_GT(largest, -std::log(q.least_ratio()) - 0.01);
+      if (s_j == 0.0) {
+        EXPECT_NEAR(log_density(toy.nominal, corner) - q.log_pdf(corner), -std::log(s), 1e-6);
+      }
+      EXPECT_GT(largest, -std::log(q.least_ratio()) - 0.1);
     }
   }
 }
@@ -407,9 +423,11 @@ TEST(ZeroFailureBound, WorthOfA400RunSearchOf18AdaptedParameters) {
     EXPECT_NEAR(nominal_worth(rounds, runs), 10.0 + 390.0 * c, 1e-9);
     const double bound = zero_failure_upper_bound(rounds, runs);
     EXPECT_NEAR(10.0 * std::log1p(-bound) + 390.0 * std::log1p(-c * bound), std::log(0.05), 1e-9);
-    // Never better than a plain campaign of 400, never worse than one of its worth.
-    EXPECT_GT(bound, 1.0 - std::pow(0.05, 1.0 / 400.0));
-    EXPECT_LE(bound, 1.0 - std::pow(0.05, 1.0 / (10.0 + 390.0 * c)) + 1e-12);
+    // A little above a plain campaign of as many runs as the search's worth W (log(1 - c p) >=
+    // c log(1 - p)), below -log(0.05) / W (prod_k (1 - c_k p)^n_k <= exp(-p W)).
+    const double worth = 10.0 + 390.0 * c;
+    EXPECT_GE(bound, 1.0 - std::pow(0.05, 1.0 / worth));
+    EXPECT_LE(bound, -std::log(0.05) / worth);
   }
   EXPECT_NEAR(nominal_worth(plan(0.1), std::vector<std::int64_t>(21, 0)), 0.0, 1e-12);
   // The bound of these settings (quoted in docs/search.md): 6.06 %, 3.39 %, 2.35 %.
