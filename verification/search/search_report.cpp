@@ -321,8 +321,8 @@ void write_rounds_md(std::ostream& md, const SearchAnalysis& a, const nlohmann::
      << " runs kept for the estimate. Every run: `shelfcross replay " << dir_text << " --run K`.\n\n";
   md << "## Rounds\n\nEach round after round 0 draws a whole run from the nominal with probability s (its nominal "
         "share), else each parameter from its fit mixed with its own nominal at the parameter share s_j; c_k = s + "
-        "(1 - s) prod_j s_j is the least q / f anywhere, a run's worth in nominal runs in the zero-failure bound (a "
-        "search stored before the joint share has s = 0).\n\n| round | runs (stored) | fitted to level | elites | "
+        "(1 - s) prod_j s_j is the least q / f anywhere, a run's worth in nominal runs in the zero-failure bound (s = "
+        "0 in a search of format 1, which mixed each parameter with its own nominal only).\n\n| round | runs (stored) | fitted to level | elites | "
      << failure_class_name(a.target) << " failures | kind | s | c_k |\n|---|---|---|---|---|---|---|---|\n";
   for (const json& r : summary["rounds"]) {
     md << "| " << r["round"] << " | " << r["runs"] << " (" << r["stored"] << ") | "
