@@ -40,7 +40,8 @@ struct SearchOptions {
   std::int64_t min_elites = 3;
   double smoothing = 0.8;
   double min_stddev_fraction = 0.5;
-  double nominal_share = 0.1;
+  double nominal_share = verification::CeSettings{}.nominal_share;
+  double parameter_share = verification::CeSettings{}.parameter_share;
   std::string campaign;
   std::vector<std::string> parameters;
   double rank_timeout_s = 60.0;
@@ -187,9 +188,16 @@ void add_search_options(CLI::App& sub, SearchOptions& o) {
       ->capture_default_str()
       ->check(CLI::Range(0.01, 10.0));
   sub.add_option("--nominal-share", o.nominal_share,
-                 "the nominal's share in every proposal (defensive mixture; bounds each parameter's ratio by 1/share)")
+                 "s: the share of each adapted round's runs drawn wholly from the nominal dispersions (bounds "
+                 "every weight by 1/s; each adapted run counts as s nominal runs in the zero-failure bound; 0: "
+                 "none, with --parameter-share above 0)")
       ->capture_default_str()
-      ->check(CLI::Range(0.01, 1.0));
+      ->check(CLI::Range(0.0, 1.0));
+  sub.add_option("--parameter-share", o.parameter_share,
+                 "s_j: each adapted parameter's fit mixed with its own nominal at this share (keeps a parameter's "
+                 "ratio within 1/s_j inside the fitted component; 0: none)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   sub.add_option("--parameters", o.parameters,
                  "the dispersed parameters the search adapts (comma-separated; default: all); the others keep "
                  "their nominal distribution")
@@ -218,6 +226,10 @@ int run_search_command(const SearchOptions& o) {
   settings.ce.smoothing = o.smoothing;
   settings.ce.min_stddev_fraction = o.min_stddev_fraction;
   settings.ce.nominal_share = o.nominal_share;
+  settings.ce.parameter_share = o.parameter_share;
+  if (o.nominal_share == 0.0 && o.parameter_share == 0.0) {
+    throw UsageError("--nominal-share 0 with --parameter-share 0: nothing would bound the importance weights");
+  }
   settings.ce.estimation_runs = o.estimation_runs < 0 ? o.budget / 2 : o.estimation_runs;
   if (settings.ce.estimation_runs > o.budget) {
     throw UsageError("--estimation-runs " + std::to_string(settings.ce.estimation_runs) + " exceeds --budget " +
@@ -260,7 +272,8 @@ int run_search_command(const SearchOptions& o) {
   const auto print_estimate = [](const nlohmann::json& x) {
     if (x["failures"].get<std::int64_t>() == 0) {
       std::cout << "none sampled: p <= " << x["zero_failure_upper_95"].get<double>()
-                << " (one-sided 95 %, zero-failure bound)";
+                << " (one-sided 95 %, zero-failure bound; the runs are worth " << x["nominal_worth"].get<double>()
+                << " nominal runs)";
       return;
     }
     std::cout << x["p_hat"].get<double>() << ", 95 % interval [" << x["lower"].get<double>() << ", "

@@ -66,7 +66,7 @@ Distribution continuous_proposal(const Distribution& nominal, double mean, doubl
 Distribution choice_proposal(const Distribution& nominal, std::vector<double> weights);
 
 /// The defensive mixture q_mix = (1 - s) q + s f of a proposal q (`shifted`, of f's family on
-/// f's support) and the nominal f, s = nominal_share in (0, 1]: q_mix >= s f, so f / q_mix <= 1 / s.
+/// f's support) and the nominal f, s = nominal_share in [0, 1]: q_mix >= s f, f / q_mix <= 1 / s (s = 0: q).
 /// A draw takes one uniform to pick the component (u < s: the nominal), then that component's
 /// draw; with s = 1 it is the nominal's draw alone (no selector), so a proposal equal to the
 /// nominal draws exactly the nominal's values from the same stream.

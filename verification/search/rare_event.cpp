@@ -8,10 +8,24 @@
 
 #include <boost/math/distributions/normal.hpp>
 
+#include "shelfcross/random.hpp"
+
 namespace shelfcross::verification {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kMinusInfinity = -std::numeric_limits<double>::infinity();
+
+/// Mixed into a run's seed for its selector stream (RoundProposal::sample): a stream apart
+/// from the per-parameter dispersion streams, which mix the seed with a name's hash.
+constexpr std::uint64_t kSelectorSalt = 0x5e1ec7020e5e1ec7ull;
+
+/// log(exp(a) + exp(b)).
+double log_sum_exp(double a, double b) {
+  const double hi = std::max(a, b);
+  if (hi == kMinusInfinity) return kMinusInfinity;
+  return hi + std::log1p(std::exp(std::min(a, b) - hi));
+}
 
 /// Margins ordered with NaN (no margin) after every number.
 bool margin_less(double a, double b) {
@@ -45,6 +59,36 @@ double log_density(const ParameterProposals& q, const DrawnValues& x) {
   return sum;
 }
 
+ParameterDistributions RoundProposal::nominal() const {
+  ParameterDistributions f;
+  for (const auto& [name, q] : parameters) f[name] = q.nominal;
+  return f;
+}
+
+double RoundProposal::log_pdf(const DrawnValues& x) const {
+  const double log_f = log_density(nominal(), x);
+  if (nominal_share >= 1.0) return log_f;
+  const double log_fit = log_density(parameters, x);
+  if (nominal_share <= 0.0) return log_fit;
+  return log_sum_exp(std::log(nominal_share) + log_f, std::log1p(-nominal_share) + log_fit);
+}
+
+double RoundProposal::least_ratio() const {
+  const double s = std::clamp(nominal_share, 0.0, 1.0);
+  double fitted = 1.0;
+  for (const auto& [name, q] : parameters) fitted *= std::clamp(q.nominal_share, 0.0, 1.0);
+  return s + (1.0 - s) * fitted;
+}
+
+DrawnValues RoundProposal::sample(std::uint64_t run_seed) const {
+  bool from_nominal = nominal_share >= 1.0;
+  if (nominal_share > 0.0 && nominal_share < 1.0) {
+    RandomStream selector(mix64(run_seed ^ kSelectorSalt), StreamId::dispersion);
+    from_nominal = selector.uniform01() < nominal_share;
+  }
+  return from_nominal ? draw_dispersions(nominal(), run_seed) : draw_dispersions(parameters, run_seed);
+}
+
 double mixture_log_weight(const ParameterDistributions& nominal, const std::vector<CeRound>& rounds,
                           const std::vector<std::int64_t>& runs_per_round, const DrawnValues& x) {
   assert(rounds.size() == runs_per_round.size());
@@ -53,23 +97,31 @@ double mixture_log_weight(const ParameterDistributions& nominal, const std::vect
   std::vector<double> a;
   for (size_t k = 0; k < rounds.size(); ++k) {
     if (runs_per_round[k] <= 0) continue;
-    a.push_back(std::log(static_cast<double>(runs_per_round[k]) / total) + log_density(rounds[k].proposal, x));
+    a.push_back(std::log(static_cast<double>(runs_per_round[k]) / total) + rounds[k].proposal.log_pdf(x));
   }
-  const double top = a.empty() ? -std::numeric_limits<double>::infinity() : *std::max_element(a.begin(), a.end());
-  if (!std::isfinite(top)) return -std::numeric_limits<double>::infinity();  // outside every proposal
+  const double top = a.empty() ? kMinusInfinity : *std::max_element(a.begin(), a.end());
+  if (!std::isfinite(top)) return kMinusInfinity;  // outside every proposal
   double sum = 0.0;
   for (double v : a) sum += std::exp(v - top);
   return log_density(nominal, x) - (top + std::log(sum));
 }
 
+double nominal_worth(const std::vector<CeRound>& rounds, const std::vector<std::int64_t>& runs_per_round) {
+  assert(rounds.size() == runs_per_round.size());
+  double worth = 0.0;
+  for (size_t k = 0; k < rounds.size(); ++k) {
+    worth += rounds[k].proposal.least_ratio() * static_cast<double>(std::max<std::int64_t>(0, runs_per_round[k]));
+  }
+  return worth;
+}
+
 double zero_failure_upper_bound(const std::vector<CeRound>& rounds, const std::vector<std::int64_t>& runs_per_round,
                                 double confidence) {
   assert(rounds.size() == runs_per_round.size());
-  // c_k = prod_j s_kj: the least ratio q_k / f anywhere (file comment).
+  // c_k: the least ratio q_k / f anywhere (file comment).
   std::vector<std::pair<double, double>> c_n;  // (c_k, n_k)
   for (size_t k = 0; k < rounds.size(); ++k) {
-    double c = 1.0;
-    for (const auto& [name, q] : rounds[k].proposal) c *= std::min(1.0, q.nominal_share);
+    const double c = rounds[k].proposal.least_ratio();
     if (runs_per_round[k] > 0 && c > 0.0) c_n.emplace_back(c, static_cast<double>(runs_per_round[k]));
   }
   if (c_n.empty()) return 1.0;
@@ -90,7 +142,7 @@ double zero_failure_upper_bound(const std::vector<CeRound>& rounds, const std::v
   return hi;
 }
 
-CeFit ce_refit(const ParameterDistributions& nominal, const ParameterProposals& current,
+CeFit ce_refit(const ParameterDistributions& nominal, const RoundProposal& current,
                const std::vector<CeSample>& samples, const CeSettings& settings) {
   assert(!samples.empty());
   const auto n = static_cast<std::int64_t>(samples.size());
@@ -120,7 +172,7 @@ CeFit ce_refit(const ParameterDistributions& nominal, const ParameterProposals& 
   // density f 1[fail] / p for the estimate. Scaled by the largest (only ratios matter).
   std::vector<double> log_w;
   for (const CeSample* s : elites) {
-    log_w.push_back(fit.level > 0.0 ? 0.0 : log_density(nominal, s->drawn) - log_density(current, s->drawn));
+    log_w.push_back(fit.level > 0.0 ? 0.0 : log_density(nominal, s->drawn) - current.log_pdf(s->drawn));
   }
   const double log_w_max = *std::max_element(log_w.begin(), log_w.end());
   std::vector<double> w;
@@ -128,13 +180,14 @@ CeFit ce_refit(const ParameterDistributions& nominal, const ParameterProposals& 
   const double w_sum = std::accumulate(w.begin(), w.end(), 0.0);
   const double alpha = settings.smoothing;
 
+  fit.proposal.nominal_share = settings.nominal_share;
   for (const auto& [name, f_j] : nominal) {
     if (!settings.adapted.empty() && !settings.adapted.count(name)) {
-      fit.proposal[name] = ProposalDistribution::of_nominal(f_j);
+      fit.proposal.parameters[name] = ProposalDistribution::of_nominal(f_j);
       continue;
     }
     // The current parameters are those of the shifted component (the nominal's in round 0).
-    const ProposalDistribution& current_j = current.at(name);
+    const ProposalDistribution& current_j = current.parameters.at(name);
     const Distribution& q_j = current_j.nominal_share >= 1.0 ? current_j.nominal : current_j.shifted;
     if (f_j.is_choice()) {
       // Weighted frequency of each value among the elites, smoothed with q_j's probabilities.
@@ -152,7 +205,7 @@ CeFit ce_refit(const ParameterDistributions& nominal, const ParameterProposals& 
       // Smoothed; a value no elite took keeps a share of q_j's probability (and the
       // defensive mixture keeps the nominal's).
       for (size_t v = 0; v < p.size(); ++v) p[v] = alpha * p[v] + (1.0 - alpha) * q_j.weights[v] / q_total;
-      fit.proposal[name] = {choice_proposal(f_j, p), f_j, settings.nominal_share};
+      fit.proposal.parameters[name] = {choice_proposal(f_j, p), f_j, settings.parameter_share};
       continue;
     }
     double mean = 0.0;
@@ -173,7 +226,7 @@ CeFit ce_refit(const ParameterDistributions& nominal, const ParameterProposals& 
     stddev = std::max(stddev, (unbounded ? 1.0 : settings.min_stddev_fraction) * f_j.scale());
     if (!(stddev > 0.0)) stddev = settings.min_stddev_fraction * std::max(1.0, std::abs(mean));  // point-mass nominal
     if (!unbounded) mean = std::clamp(mean, f_j.min, f_j.max);
-    fit.proposal[name] = {continuous_proposal(f_j, mean, stddev), f_j, settings.nominal_share};
+    fit.proposal.parameters[name] = {continuous_proposal(f_j, mean, stddev), f_j, settings.parameter_share};
   }
   return fit;
 }
@@ -189,7 +242,7 @@ std::optional<CeRound> next_ce_round(const ParameterDistributions& nominal, cons
   next.index = static_cast<int>(rounds.size());
   next.first_run = used;
   if (rounds.empty()) {
-    next.proposal = nominal_proposals(nominal);
+    next.proposal = RoundProposal::of_nominal(nominal);
     next.level = kNaN;
     next.estimation = adaptation_budget == 0;  // no adaptation asked for: plain Monte Carlo
     next.runs = next.estimation ? budget : std::min(settings.round_runs, adaptation_budget);

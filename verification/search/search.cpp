@@ -13,7 +13,10 @@
 namespace shelfcross::verification {
 namespace {
 
-constexpr const char* kSearchFormatVersion = "1";
+/// "2": a round's proposal mixes the joint nominal (RoundProposal, rare_event.hpp). "1" mixed
+/// each parameter with its own nominal only: such a search still reads (its rounds with a joint
+/// share of 0, its bound as it was), but is not resumed.
+constexpr const char* kSearchFormatVersion = "2";
 
 const char* kind_name(Distribution::Kind k) {
   switch (k) {
@@ -42,6 +45,7 @@ nlohmann::json search_settings_json(const SearchSettings& s) {
           {"smoothing", s.ce.smoothing},
           {"min_stddev_fraction", s.ce.min_stddev_fraction},
           {"nominal_share", s.ce.nominal_share},
+          {"parameter_share", s.ce.parameter_share},
           {"estimation_runs", s.ce.estimation_runs},
           {"adapted", s.ce.adapted}};
 }
@@ -121,6 +125,11 @@ SearchStore SearchStore::open_or_create(const std::filesystem::path& db_path, co
   SQLite::Statement q(db, "SELECT value FROM search WHERE key = 'settings'");
   if (!q.executeStep()) throw ResultsMismatch(db_path.string() + ": search settings missing");
   store.settings_ = nlohmann::json::parse(q.getColumn(0).getString());
+  if (const auto version = store.settings_.value("format_version", std::string("?")); version != kSearchFormatVersion) {
+    throw ResultsMismatch(db_path.string() + " holds a search of format " + version + " (this version writes " +
+                          kSearchFormatVersion + ": each round also draws whole runs from the nominal); it cannot be "
+                          "resumed: use another --out");
+  }
   if (store.settings_ != wanted) {
     throw ResultsMismatch(db_path.string() + " holds a search with other settings (" + store.settings_.dump() +
                           "); use another --out");
@@ -162,20 +171,24 @@ std::vector<CeRound> SearchStore::rounds() const {
   return out;
 }
 
-nlohmann::json proposals_json(const ParameterProposals& q) {
-  nlohmann::json j = nlohmann::json::object();
-  for (const auto& [name, d] : q) {
-    j[name] = {{"shifted", distribution_json(d.shifted)}, {"nominal", distribution_json(d.nominal)},
-               {"nominal_share", d.nominal_share}};
+nlohmann::json proposals_json(const RoundProposal& q) {
+  nlohmann::json parameters = nlohmann::json::object();
+  for (const auto& [name, d] : q.parameters) {
+    parameters[name] = {{"shifted", distribution_json(d.shifted)}, {"nominal", distribution_json(d.nominal)},
+                        {"nominal_share", d.nominal_share}};
   }
-  return j;
+  return {{"nominal_share", q.nominal_share}, {"parameters", parameters}};
 }
 
-ParameterProposals proposals_from_json(const nlohmann::json& j) {
-  ParameterProposals q;
-  for (const auto& [name, d] : j.items()) {
-    q[name] = {distribution_from_json(d.at("shifted")), distribution_from_json(d.at("nominal")),
-               d.at("nominal_share").get<double>()};
+RoundProposal proposals_from_json(const nlohmann::json& j) {
+  // Format 1 stored the parameters' proposals alone, one object per parameter name.
+  const bool joint = j.contains("parameters") && j.at("parameters").is_object() && j.contains("nominal_share") &&
+                     j.at("nominal_share").is_number();
+  RoundProposal q;
+  q.nominal_share = joint ? j.at("nominal_share").get<double>() : 0.0;
+  for (const auto& [name, d] : (joint ? j.at("parameters") : j).items()) {
+    q.parameters[name] = {distribution_from_json(d.at("shifted")), distribution_from_json(d.at("nominal")),
+                          d.at("nominal_share").get<double>()};
   }
   return q;
 }
@@ -200,9 +213,9 @@ void SearchStore::insert_round(const CeRound& r) {
 
 // ---------------------------------------------------------------------------------------------
 
-DrawFunction round_draws(ParameterProposals proposal) {
-  auto q = std::make_shared<const ParameterProposals>(std::move(proposal));
-  return [q](std::uint64_t seed) { return draw_dispersions(*q, seed); };
+DrawFunction round_draws(RoundProposal proposal) {
+  auto q = std::make_shared<const RoundProposal>(std::move(proposal));
+  return [q](std::uint64_t seed) { return q->sample(seed); };
 }
 
 RunMargins record_margins(const Scenario& nominal, const RunRecord& record) {

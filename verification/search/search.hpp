@@ -5,8 +5,9 @@
 //
 // Runs: run k has the seed run_seed(search seed, k), as run k of a campaign with that seed;
 // its dispersed values are drawn from its round's proposal with the same per-parameter
-// streams (draw_dispersions), so round 0, which draws from the nominal dispersions, repeats a
-// campaign's runs exactly (same records, same run hashes). The seed seeds everything else.
+// streams (RoundProposal::sample), so round 0, which draws from the nominal dispersions,
+// repeats a campaign's runs exactly (same records, same run hashes), and so does every later
+// run whose selector picks the nominal component. The seed seeds everything else.
 //
 // Storage: DIR/results.sqlite is a campaign database (results_store.hpp; campaign_seed = the
 // search seed, runs_requested = the budget; every run with its drawn values), plus
@@ -14,10 +15,12 @@
 //                                                    and the CE settings, as JSON
 //   search_rounds(round INTEGER PRIMARY KEY, first_run INTEGER, runs INTEGER,
 //                 estimation INTEGER, level REAL, elites INTEGER, proposal_json TEXT)
-// A round is stored before its first run starts. Resume: the same command reads the rounds,
+// proposal_json holds {"nominal_share": s, "parameters": {name: {"shifted", "nominal",
+// "nominal_share"}}} (RoundProposal). A round is stored before its first run starts. Resume: the same command reads the rounds,
 // runs what is missing of the last one, and plans the next ones from the stored runs; every
 // plan is a function of the stored runs, so an interrupted search ends where an uninterrupted
-// one does. Reopening with other settings is refused.
+// one does. Reopening with other settings is refused, and so is resuming a search of an older
+// format (the settings' format_version); its rounds still read.
 //
 // Parallelism: the runs of a round go through run_pending (campaign_pool.hpp) on `jobs`
 // workers, each with its own renderer; in `shelfcross search` each is a worker process
@@ -61,9 +64,10 @@ nlohmann::json search_settings_json(const SearchSettings& settings);
 nlohmann::json distribution_json(const Distribution& d);
 Distribution distribution_from_json(const nlohmann::json& j);
 /// A round's proposal as stored (search_rounds.proposal_json) and sent to MPI worker ranks:
-/// {parameter: {"shifted": ..., "nominal": ..., "nominal_share": s}}; and back.
-nlohmann::json proposals_json(const ParameterProposals& q);
-ParameterProposals proposals_from_json(const nlohmann::json& j);
+/// {"nominal_share": s, "parameters": {parameter: {"shifted": ..., "nominal": ...,
+/// "nominal_share": s_j}}}; and back, reading format 1's {parameter: {...}} as s = 0.
+nlohmann::json proposals_json(const RoundProposal& q);
+RoundProposal proposals_from_json(const nlohmann::json& j);
 
 /// The search's tables in a results database (see the file comment).
 class SearchStore {
@@ -94,8 +98,8 @@ bool is_search_database(const std::filesystem::path& db_path);
 /// The margins of a stored run; a "worker_error" run has none (NaN in every class).
 RunMargins record_margins(const Scenario& nominal, const RunRecord& record);
 
-/// The draws of a round's runs: draw_dispersions(proposal, seed).
-DrawFunction round_draws(ParameterProposals proposal);
+/// The draws of a round's runs: proposal.sample(seed).
+DrawFunction round_draws(RoundProposal proposal);
 
 struct SearchProgress {
   int round = 0;

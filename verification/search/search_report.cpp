@@ -63,8 +63,10 @@ struct ClassEstimate {
   IsEstimate is;
   int round = -1;  ///< the round whose runs it uses
   IsEstimate every_round;  ///< from every stored run, weighted by mixture_log_weight
-  /// Upper 95 % bounds on p from the same runs, used when none failed (zero_failure_upper_bound).
+  /// Upper 95 % bounds on p from the same runs, used when none failed (zero_failure_upper_bound),
+  /// and those runs' worth in nominal runs (nominal_worth).
   double bound_round = 1.0, bound_every_round = 1.0;
+  double worth_round = 0.0, worth_every_round = 0.0;
 };
 
 nlohmann::json estimate_json(const IsEstimate& e) {
@@ -115,7 +117,7 @@ std::vector<Row> read_rows(const SearchAnalysis& a) {
       row.log_nominal = row.log_proposal = std::numeric_limits<double>::quiet_NaN();
     } else {
       row.log_nominal = log_density(a.f, row.drawn);
-      row.log_proposal = log_density(a.rounds[static_cast<size_t>(row.round)].proposal, row.drawn);
+      row.log_proposal = a.rounds[static_cast<size_t>(row.round)].proposal.log_pdf(row.drawn);
     }
     rows.push_back(std::move(row));
   }
@@ -145,12 +147,18 @@ std::map<FailureClass, ClassEstimate> class_estimates(const SearchAnalysis& a) {
   for (const Row& row : a.rows) {
     if (!std::isnan(row.log_nominal)) mixture_log_w.push_back(mixture_log_weight(a.f, a.rounds, stored_per_round, row.drawn));
   }
-  // The zero-failure bounds: the estimation round alone, and every round.
+  // The zero-failure bounds and the worth in nominal runs: the estimation round alone, and
+  // every round.
+  std::vector<CeRound> last_round;
+  std::vector<std::int64_t> last_stored;
+  if (a.estimate_round >= 0) {
+    last_round.push_back(a.rounds[static_cast<size_t>(a.estimate_round)]);
+    last_stored.push_back(stored_per_round[static_cast<size_t>(a.estimate_round)]);
+  }
   const double bound_every_round = zero_failure_upper_bound(a.rounds, stored_per_round);
-  const double bound_round =
-      a.estimate_round < 0 ? 1.0
-                           : zero_failure_upper_bound({a.rounds[static_cast<size_t>(a.estimate_round)]},
-                                                      {stored_per_round[static_cast<size_t>(a.estimate_round)]});
+  const double bound_round = zero_failure_upper_bound(last_round, last_stored);
+  const double worth_every_round = nominal_worth(a.rounds, stored_per_round);
+  const double worth_round = nominal_worth(last_round, last_stored);
   for (FailureClass c : kFailureClasses) {
     std::vector<bool> failed;
     for (const Row& row : a.rows) {
@@ -159,6 +167,8 @@ std::map<FailureClass, ClassEstimate> class_estimates(const SearchAnalysis& a) {
     estimates[c].every_round = importance_estimate(mixture_log_w, failed);
     estimates[c].bound_round = bound_round;
     estimates[c].bound_every_round = bound_every_round;
+    estimates[c].worth_round = worth_round;
+    estimates[c].worth_every_round = worth_every_round;
   }
   return estimates;
 }
@@ -268,19 +278,22 @@ nlohmann::json summary_json(const SearchAnalysis& a) {
       failed += row.margins.failed(a.target);
     }
     json proposal = json::object();
-    for (const auto& [name, q] : round.proposal) {
+    for (const auto& [name, q] : round.proposal.parameters) {
       proposal[name] = {{"shifted", distribution_json(q.shifted)}, {"nominal_share", q.nominal_share}};
     }
     summary["rounds"].push_back({{"round", round.index}, {"first_run", round.first_run}, {"runs", round.runs},
                                  {"stored", stored}, {"estimation", round.estimation},
                                  {"level", number_or_null(round.level)}, {"elites", round.elites},
-                                 {"failures", failed}, {"proposal", proposal}});
+                                 {"failures", failed}, {"nominal_share", round.proposal.nominal_share},
+                                 {"least_ratio", round.proposal.least_ratio()}, {"proposal", proposal}});
   }
   summary["estimates"] = json::object();
   for (const auto& [c, e] : a.estimates) {
     json j = estimate_json(e.is);
     j["round"] = e.round;
     j["every_round"] = estimate_json(e.every_round);
+    j["nominal_worth"] = e.worth_round;
+    j["every_round"]["nominal_worth"] = e.worth_every_round;
     if (e.is.failures == 0) j["zero_failure_upper_95"] = e.bound_round;
     if (e.every_round.failures == 0) j["every_round"]["zero_failure_upper_95"] = e.bound_every_round;
     if (a.plain.count(c)) {
@@ -306,14 +319,19 @@ void write_rounds_md(std::ostream& md, const SearchAnalysis& a, const nlohmann::
      << a.settings.at("budget") << " runs (" << a.rows.size() << " stored), rounds of " << a.settings.at("round_runs")
      << ", elite fraction " << a.settings.at("elite_fraction") << ", at least " << a.settings.at("estimation_runs")
      << " runs kept for the estimate. Every run: `shelfcross replay " << dir_text << " --run K`.\n\n";
-  md << "## Rounds\n\n| round | runs (stored) | fitted to level | elites | " << failure_class_name(a.target)
-     << " failures | kind |\n|---|---|---|---|---|---|\n";
+  md << "## Rounds\n\nEach round after round 0 draws a whole run from the nominal with probability s (its nominal "
+        "share), else each parameter from its fit mixed with its own nominal at the parameter share s_j; c_k = s + "
+        "(1 - s) prod_j s_j is the least q / f anywhere, a run's worth in nominal runs in the zero-failure bound (s = "
+        "0 in a search of format 1, which mixed each parameter with its own nominal only).\n\n| round | runs (stored) | fitted to level | elites | "
+     << failure_class_name(a.target) << " failures | kind | s | c_k |\n|---|---|---|---|---|---|---|---|\n";
   for (const json& r : summary["rounds"]) {
     md << "| " << r["round"] << " | " << r["runs"] << " (" << r["stored"] << ") | "
        << (r["level"].is_null() ? std::string("- (nominal)") : fmt(r["level"].get<double>())) << " | " << r["elites"]
-       << " | " << r["failures"] << " | " << (r["estimation"].get<bool>() ? "estimation" : "adaptation") << " |\n";
+       << " | " << r["failures"] << " | " << (r["estimation"].get<bool>() ? "estimation" : "adaptation") << " | "
+       << fmt(r["nominal_share"].get<double>()) << " | " << fmt(r["least_ratio"].get<double>()) << " |\n";
   }
-  md << "\nThe proposals (the shifted component; each mixed with the nominal at the share given in the settings):\n\n"
+  md << "\nThe proposals (the fitted component, each parameter mixed with its own nominal at the share s_j of "
+        "the summary's rounds):\n\n"
      << "| parameter | nominal |";
   for (const CeRound& round : a.rounds) md << " round " << round.index << " |";
   md << "\n|---|---|";
@@ -322,7 +340,7 @@ void write_rounds_md(std::ostream& md, const SearchAnalysis& a, const nlohmann::
   for (const auto& [name, d] : a.f) {
     md << "| " << name << " | " << describe(d) << " |";
     for (const CeRound& round : a.rounds) {
-      const ProposalDistribution& q = round.proposal.at(name);
+      const ProposalDistribution& q = round.proposal.parameters.at(name);
       md << " " << (q.nominal_share >= 1.0 ? std::string("nominal") : describe(q.shifted)) << " |";
     }
     md << "\n";
@@ -345,10 +363,7 @@ void write_estimates_md(std::ostream& md, const SearchAnalysis& a, const std::op
         "the rounds' proposals (multiple importance sampling, balance heuristic: w = f(x) / sum_k (n_k / N) q_k(x); "
         "rare_event.hpp): bounded weights (round 0 is the nominal), and the early rounds cover the edge of a soft "
         "failure region that the final proposal leaves out. Where no run failed, the interval is the one-sided 95 % "
-        "zero-failure bound: each round k's proposal is at least c_k = prod_j s_kj (the nominal's defensive shares) "
-        "times the nominal everywhere, so a class of nominal probability p fails a run of round k with probability at "
-        "least c_k p; the bound is the p at which prod_k (1 - c_k p)^n_k = 0.05 (rare_event.hpp; for plain Monte "
-        "Carlo 1 - 0.05^(1/n), about 3 / n).";
+        "zero-failure bound (below).";
   md << "\n\n| class | from | runs | failures | p_hat | 95 % interval | CLT interval | ESS | mean weight |"
      << (campaign_dir ? " plain Monte Carlo | its 95 % interval | its first failure |" : "") << "\n|---|---|---|---|---|---|---|---|---|"
      << (campaign_dir ? "---|---|---|" : "") << "\n";
@@ -381,6 +396,19 @@ void write_estimates_md(std::ostream& md, const SearchAnalysis& a, const std::op
     row(e.is, "round " + std::to_string(e.round), e.bound_round);
     row(e.every_round, "every round", e.bound_every_round);
   }
+  if (a.estimates.empty()) return;
+  const ClassEstimate& any = a.estimates.begin()->second;  // the bound is the same for every class
+  md << "\n### The zero-failure bound\n\nEach round k's proposal is at least c_k times the nominal everywhere "
+        "(the rounds' table), so a class of nominal probability p fails a run of round k with probability at least "
+        "c_k p, wherever its failures lie. The runs of every round are worth sum_k c_k n_k = **"
+     << fmt(any.worth_every_round, "%.1f") << " nominal runs** (the estimation round's alone " << fmt(any.worth_round, "%.1f")
+     << "): a class none of them failed has **p <= " << fmt(any.bound_every_round)
+     << "** (one-sided 95 %: the p at which prod_k (1 - c_k p)^n_k = 0.05; a plain campaign of n runs gives 1 - "
+        "0.05^(1/n), about 3 / n). It holds however the proposals were fitted and wherever the search is stopped "
+        "(rare_event.hpp). It assumes: the runs' outcomes are the simulation's (a bound on the model under the "
+        "scenario's dispersions, not on the world); a run's outcome is a function of its draws and its seed; a run "
+        "without the class's margin counts as no failure of it (never near a shelf; a crashed or hung worker: a crash "
+        "is trusted to hide no contact); a run lost to a worker error was not lost because it failed.\n";
 }
 
 /// report.md's failures of the target class (each with its replay command), the most likely

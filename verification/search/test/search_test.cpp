@@ -1,7 +1,9 @@
 // The pieces of the search that touch a scenario: disperse() with given draws, the run margins
-// from stored metrics, proposals stored as JSON.
+// from stored metrics, proposals stored as JSON, searches stored by an older format.
 #include <cmath>
+#include <filesystem>
 
+#include <SQLiteCpp/SQLiteCpp.h>
 #include <gtest/gtest.h>
 
 #include "verification/scenario/dispersion.hpp"
@@ -26,6 +28,7 @@ TEST(SearchPieces, DisperseWithTheSeedsOwnDrawsIsDisperse) {
     // The nominal as a proposal draws the same values (round 0 of a search is a campaign).
     EXPECT_EQ(draw_dispersions(nominal_proposals({nominal.dispersions.begin(), nominal.dispersions.end()}), seed),
               a.drawn);
+    EXPECT_EQ(RoundProposal::of_nominal({nominal.dispersions.begin(), nominal.dispersions.end()}).sample(seed), a.drawn);
   }
   // Given draws are applied: the start 2.6 m in front of the shelf.
   DrawnValues drawn = draw_dispersions(nominal.dispersions, 1);
@@ -141,6 +144,68 @@ TEST(SearchPieces, DistributionsRoundTripThroughJson) {
   c.values = {0.5, 1.0};
   c.weights = {0.25, 0.75};
   EXPECT_EQ(distribution_from_json(distribution_json(c)), c);
+}
+
+/// A round's proposal on the scenario's dispersions: start_distance_m fitted, the rest nominal.
+RoundProposal fitted_round(const Scenario& s, double nominal_share) {
+  RoundProposal q = RoundProposal::of_nominal({s.dispersions.begin(), s.dispersions.end()});
+  q.nominal_share = nominal_share;
+  const Distribution& f = s.dispersions.at("start_distance_m");
+  q.parameters["start_distance_m"] = {continuous_proposal(f, f.highest(), 0.1), f, 0.1};
+  return q;
+}
+
+TEST(SearchPieces, RoundProposalsRoundTripThroughJsonAndFormatOneReadsWithoutTheJointShare) {
+  const Scenario s = load_scenario(kDefault);
+  const RoundProposal q = fitted_round(s, 0.2);
+  EXPECT_EQ(proposals_from_json(proposals_json(q)), q);
+  EXPECT_DOUBLE_EQ(proposals_from_json(proposals_json(q)).least_ratio(), 0.2 + 0.8 * 0.1);
+  // Format 1 stored the parameters' proposals alone: read with no joint share, so its bound
+  // is what it was (c = prod_j s_j).
+  const nlohmann::json format_one = proposals_json(q).at("parameters");
+  const RoundProposal old = proposals_from_json(format_one);
+  EXPECT_EQ(old.parameters, q.parameters);
+  EXPECT_EQ(old.nominal_share, 0.0);
+  EXPECT_DOUBLE_EQ(old.least_ratio(), 0.1);
+}
+
+// A search stored by format 1 (per-parameter shares only) is refused on resume with the reason,
+// and its rounds still read (for its report).
+TEST(SearchPieces, AFormatOneSearchIsNotResumedButReads) {
+  const Scenario s = load_scenario(kDefault);
+  const auto dir = std::filesystem::temp_directory_path() / "shelfcross_search_format_one";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const auto db_path = dir / "results.sqlite";
+  SearchSettings settings;
+  nlohmann::json old_settings = search_settings_json(settings);
+  old_settings["format_version"] = "1";
+  old_settings.erase("parameter_share");
+  {
+    SQLite::Database db(db_path.string(), SQLite::OPEN_READWRITE | SQLite::OPEN_CREATE);
+    db.exec("CREATE TABLE search(key TEXT PRIMARY KEY, value TEXT NOT NULL)");
+    db.exec(
+        "CREATE TABLE search_rounds(round INTEGER PRIMARY KEY, first_run INTEGER NOT NULL, runs INTEGER NOT NULL,"
+        " estimation INTEGER NOT NULL, level REAL, elites INTEGER NOT NULL, proposal_json TEXT NOT NULL)");
+    SQLite::Statement q(db, "INSERT INTO search(key, value) VALUES('settings', ?)");
+    q.bind(1, old_settings.dump());
+    q.exec();
+    SQLite::Statement r(db, "INSERT INTO search_rounds VALUES(1, 10, 10, 0, 0.5, 3, ?)");
+    r.bind(1, proposals_json(fitted_round(s, 0.2)).at("parameters").dump());
+    r.exec();
+  }
+  try {
+    SearchStore::open_or_create(db_path, settings);
+    ADD_FAILURE() << "a format 1 search was reopened";
+  } catch (const ResultsMismatch& e) {
+    EXPECT_NE(std::string(e.what()).find("format 1"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("cannot be resumed"), std::string::npos) << e.what();
+  }
+  const std::vector<CeRound> rounds = SearchStore::open_existing(db_path).rounds();
+  ASSERT_EQ(rounds.size(), 1u);
+  EXPECT_EQ(rounds[0].proposal.nominal_share, 0.0);
+  EXPECT_EQ(rounds[0].proposal.parameters.at("start_distance_m").nominal_share, 0.1);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
