@@ -143,26 +143,26 @@ TrackingLoop tracking_loop(Axis axis, const plant::AutopilotParams& P, const pla
     case Axis::forward:
     case Axis::lateral:
       L.kind = TrackingLoop::Kind::acceleration;
-      L.pos_gain_per_s = P.pos_gain_per_s;
-      L.vel_gain_per_s = P.vel_gain_per_s;
-      L.vel_integral_gain_per_s2 = P.vel_integral_gain_per_s2;
-      L.att_gain_per_s = P.att_gain_per_s;
-      L.rate_gain_per_s = P.rate_gain_per_s;
+      L.pos_gain_per_s = P.loops.pos_gain_per_s;
+      L.vel_gain_per_s = P.loops.vel_gain_per_s;
+      L.vel_integral_gain_per_s2 = P.loops.vel_integral_gain_per_s2;
+      L.att_gain_per_s = P.loops.att_gain_per_s;
+      L.rate_gain_per_s = P.loops.rate_gain_per_s;
       L.drag_per_s = V.linear_drag_Ns_per_m.x() / V.mass_kg;
       break;
     case Axis::vertical:
       L.kind = TrackingLoop::Kind::acceleration;
-      L.pos_gain_per_s = P.pos_gain_z_per_s;
-      L.vel_gain_per_s = P.vel_gain_z_per_s;
-      L.vel_integral_gain_per_s2 = P.vel_integral_gain_per_s2;
+      L.pos_gain_per_s = P.loops.pos_gain_z_per_s;
+      L.vel_gain_per_s = P.loops.vel_gain_z_per_s;
+      L.vel_integral_gain_per_s2 = P.loops.vel_integral_gain_per_s2;
       L.lag_s = V.motor_time_constant_s;  // thrust is the motors' alone
       L.drag_per_s = V.linear_drag_Ns_per_m.z() / V.mass_kg;
       break;
     case Axis::yaw:
       L.kind = TrackingLoop::Kind::rate;
-      L.pos_gain_per_s = P.yaw_gain_per_s;
-      L.rate_gain_per_s = P.yaw_rate_gain_per_s;
-      L.rate_integral_gain_per_s2 = P.rate_integral_gain_per_s2;
+      L.pos_gain_per_s = P.loops.yaw_gain_per_s;
+      L.rate_gain_per_s = P.loops.yaw_rate_gain_per_s;
+      L.rate_integral_gain_per_s2 = P.loops.rate_integral_gain_per_s2;
       break;
   }
   return L;

@@ -35,8 +35,8 @@ Eigen::Vector4d FlightController::control(double dt, const RigidBodyState& s, co
     e_p *= P.position_leash_m / e_p.norm();
     ref.p_W_m = p + e_p;
   }
-  const Eigen::Vector3d k_p(P.pos_gain_per_s, P.pos_gain_per_s, P.pos_gain_z_per_s);
-  const Eigen::Vector3d k_v(P.vel_gain_per_s, P.vel_gain_per_s, P.vel_gain_z_per_s);
+  const Eigen::Vector3d k_p(P.loops.pos_gain_per_s, P.loops.pos_gain_per_s, P.loops.pos_gain_z_per_s);
+  const Eigen::Vector3d k_v(P.loops.vel_gain_per_s, P.loops.vel_gain_per_s, P.loops.vel_gain_z_per_s);
   Eigen::Vector3d e_v = ref.v_W_mps + k_p.cwiseProduct(e_p) - sensed.v_W_mps;
   Eigen::Vector3d a_cmd = ref.a_ff_W_mps2 + k_v.cwiseProduct(e_v) + vel_integral_;
   if (!hold) {
@@ -58,7 +58,7 @@ Eigen::Vector4d FlightController::control(double dt, const RigidBodyState& s, co
   // Integral with conditional integration (anti-windup): frozen on the ground and while the
   // thrust vector or the motors saturate.
   if (!on_ground) {
-    const Eigen::Vector3d di = P.vel_integral_gain_per_s2 * e_v * dt;
+    const Eigen::Vector3d di = P.loops.vel_integral_gain_per_s2 * e_v * dt;
     if (!tilt_saturated && !was_saturated_) vel_integral_.head<2>() += di.head<2>();
     if (!was_saturated_) vel_integral_.z() += di.z();
     vel_integral_ = vel_integral_.cwiseMax(-2.0).cwiseMin(2.0);
@@ -78,15 +78,15 @@ Eigen::Vector4d FlightController::control(double dt, const RigidBodyState& s, co
   Eigen::Quaterniond q_e = Eigen::Quaterniond(R_d).conjugate() * s.q_WB;
   if (q_e.w() < 0.0) q_e.coeffs() = -q_e.coeffs();
   const Eigen::Vector3d e_att = 2.0 * q_e.vec();
-  Eigen::Vector3d w_d(-P.att_gain_per_s * e_att.x(), -P.att_gain_per_s * e_att.y(), -P.yaw_gain_per_s * e_att.z());
+  Eigen::Vector3d w_d(-P.loops.att_gain_per_s * e_att.x(), -P.loops.att_gain_per_s * e_att.y(), -P.loops.yaw_gain_per_s * e_att.z());
   w_d += R.transpose() * Eigen::Vector3d(0.0, 0.0, ref.yaw_rate_radps);
-  w_d.head<2>() = w_d.head<2>().cwiseMax(-P.max_tilt_rate_radps).cwiseMin(P.max_tilt_rate_radps);
-  w_d.z() = std::clamp(w_d.z(), -P.max_yaw_rate_radps, P.max_yaw_rate_radps);
+  w_d.head<2>() = w_d.head<2>().cwiseMax(-P.loops.max_tilt_rate_radps).cwiseMin(P.loops.max_tilt_rate_radps);
+  w_d.z() = std::clamp(w_d.z(), -P.loops.max_yaw_rate_radps, P.loops.max_yaw_rate_radps);
 
   // Body rates -> torque (PI, plus the rigid body's and the rotors' gyroscopic terms).
   const Eigen::Vector3d& w = s.w_WB_B_radps;
   const Eigen::Vector3d e_w = w_d - w;
-  const Eigen::Vector3d k_w(P.rate_gain_per_s, P.rate_gain_per_s, P.yaw_rate_gain_per_s);
+  const Eigen::Vector3d k_w(P.loops.rate_gain_per_s, P.loops.rate_gain_per_s, P.loops.yaw_rate_gain_per_s);
   const Eigen::Vector3d alpha = k_w.cwiseProduct(e_w) + rate_integral_;
   const Eigen::Vector3d I = vehicle_.inertia_kgm2;
   const Eigen::Vector3d h_rotor(0.0, 0.0, vehicle_.rotor_inertia_kgm2 * net_rotor_speed_radps(s.rotor_speed_radps));
@@ -96,7 +96,7 @@ Eigen::Vector4d FlightController::control(double dt, const RigidBodyState& s, co
   const Eigen::Vector4d cmd = mix_rotor_speeds(vehicle_, thrust, torque, saturated);
   was_saturated_ = saturated;
   if (!saturated && !on_ground) {
-    rate_integral_ += P.rate_integral_gain_per_s2 * e_w * dt;
+    rate_integral_ += P.loops.rate_integral_gain_per_s2 * e_w * dt;
     rate_integral_ = rate_integral_.cwiseMax(-5.0).cwiseMin(5.0);
   }
   return cmd;

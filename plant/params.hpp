@@ -139,6 +139,24 @@ struct WindParams {
   bool operator==(const WindParams&) const = default;
 };
 
+/// The autopilot's inner loops (plant/flight_controller.hpp): gains per second, position ->
+/// velocity -> acceleration -> attitude -> rate, and the rate limits.
+struct LoopGains {
+  double pos_gain_per_s = 1.2;
+  double pos_gain_z_per_s = 1.5;
+  double vel_gain_per_s = 3.0;
+  double vel_gain_z_per_s = 4.0;
+  double vel_integral_gain_per_s2 = 0.3;
+  double att_gain_per_s = 10.0;         ///< roll/pitch angle error -> rate
+  double yaw_gain_per_s = 4.0;
+  double rate_gain_per_s = 40.0;        ///< roll/pitch rate error -> angular acceleration
+  double yaw_rate_gain_per_s = 12.0;
+  double rate_integral_gain_per_s2 = 20.0;
+  double max_tilt_rate_radps = 4.0;
+  double max_yaw_rate_radps = 3.0;
+  bool operator==(const LoopGains&) const = default;
+};
+
 /// The Tello's onboard autopilot as an SDK user experiences it. rc-to-velocity gains and time
 /// constants have no published identification (docs/tello_sdk.md gives plausible ranges); campaigns
 /// disperse them.
@@ -166,19 +184,7 @@ struct AutopilotParams {
   double takeoff_climb_mps = 0.45;      ///< spin-up 1 s + climb ~2.2 s + settle + 0.5 s ~ 4 s
   double move_speed_default_mps = 1.0;  ///< `speed?` default 100 cm/s; `speed x` changes it
   double position_leash_m = 0.5;        ///< the position reference never runs further ahead
-  // Inner-loop gains (per second): position -> velocity -> acceleration -> attitude -> rate.
-  double pos_gain_per_s = 1.2;
-  double pos_gain_z_per_s = 1.5;
-  double vel_gain_per_s = 3.0;
-  double vel_gain_z_per_s = 4.0;
-  double vel_integral_gain_per_s2 = 0.3;
-  double att_gain_per_s = 10.0;         ///< roll/pitch angle error -> rate
-  double yaw_gain_per_s = 4.0;
-  double rate_gain_per_s = 40.0;        ///< roll/pitch rate error -> angular acceleration
-  double yaw_rate_gain_per_s = 12.0;
-  double rate_integral_gain_per_s2 = 20.0;
-  double max_tilt_rate_radps = 4.0;
-  double max_yaw_rate_radps = 3.0;
+  LoopGains loops;                      ///< the inner loops' gains and rate limits
   double battery_endurance_s = 780.0;   ///< 13 min of motor-on time from 100 % (Table 4)
   double battery_start_pct = 100.0;     ///< charge at power-on; drains linearly with motor-on time
   bool operator==(const AutopilotParams&) const = default;

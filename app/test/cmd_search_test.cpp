@@ -97,6 +97,11 @@ TEST(CmdSearch, RefusesBadInput) {
   EXPECT_EQ(wait_exit(spawn(with("--smoothing", "0"))), 2);
   EXPECT_EQ(wait_exit(spawn(with("--smoothing", "1.5"))), 2);
   EXPECT_EQ(wait_exit(spawn(with("--min-stddev-fraction", "0"))), 2);
+  EXPECT_EQ(wait_exit(spawn(with("--nominal-share", "-0.1"))), 2);
+  EXPECT_EQ(wait_exit(spawn(with("--parameter-share", "1.5"))), 2);
+  auto no_defence = with("--nominal-share", "0");  // and no per-parameter share: weights unbounded
+  no_defence.insert(no_defence.end(), {"--parameter-share", "0"});
+  EXPECT_EQ(wait_exit(spawn(no_defence)), 2);
   EXPECT_EQ(wait_exit(spawn(with("--campaign", (root / "nowhere").string()))), 2);
   EXPECT_EQ(wait_exit(spawn(with("--parameters", "start_distance_m,not_a_parameter"))), 2);
   EXPECT_EQ(wait_exit(spawn({SHELFCROSS_PROGRAM, "search", "--scenario", scenario, "--frobnicate"})), 2);

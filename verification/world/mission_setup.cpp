@@ -115,7 +115,7 @@ render::RenderOptions render_options_for(const Scenario& s) {
   if (const auto d = s.dispersions.find("camera_readout_s"); d != s.dispersions.end())
     readout_s = std::max(readout_s, std::min(d->second.highest(), 1.0 / s.frame_rate_hz));
   o.rolling_shutter_margin_px =
-      std::ceil(0.5 * std::max(s.camera.fx_px, s.camera.fy_px) * s.autopilot.max_yaw_rate_radps * readout_s);
+      std::ceil(0.5 * std::max(s.camera.fx_px, s.camera.fy_px) * s.autopilot.loops.max_yaw_rate_radps * readout_s);
   return o;
 }
 
