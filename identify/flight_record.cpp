@@ -131,6 +131,8 @@ FlightRecord parse_flight_record(std::istream& in, const std::string& name) {
       r.frames.push_back(f);
     } else if (type == "reply" && string_field(j, "command") == "takeoff" && string_field(j, "reply") == "ok") {
       if (!r.takeoff_ok_ns) r.takeoff_ok_ns = t;
+    } else if (type == "stick_program" && string_field(j, "event") == "started") {
+      if (!r.takeoff_ok_ns) r.takeoff_ok_ns = t;  // airborne, the takeoff's reply lost
     } else if (type == "sent" && string_field(j, "command") == "land") {
       if (r.takeoff_ok_ns && !r.land_sent_ns) r.land_sent_ns = t;
     }

@@ -45,7 +45,9 @@ struct FlightRecord {
   std::vector<RcSent> rc;              ///< in send order
   std::vector<StateRecord> states;     ///< in receive order; t_ns = receive time
   std::vector<FrameStamps> frames;     ///< in hand-over order
-  std::optional<TimeNs> takeoff_ok_ns; ///< the takeoff's `ok` received
+  /// The takeoff's `ok` received; its reply lost, the stick program's start (tello_pilot starts
+  /// it once the state shows the drone airborne).
+  std::optional<TimeNs> takeoff_ok_ns;
   std::optional<TimeNs> land_sent_ns;  ///< the first `land` sent after it
   TimeNs start_ns = 0, end_ns = 0;     ///< the start and end lines
   int lines = 0;
