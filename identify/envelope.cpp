@@ -266,13 +266,14 @@ std::map<std::string, double> emulator_truth(const std::string& path, const veri
   };
   const plant::AutopilotParams& ap = s.autopilot;
   const double scale = drawn("rc_gain_scale", 1.0);
-  std::map<std::string, double> truth = {{"rc_gain_scale", scale},
-          {"rc_horizontal_mps_at_100", ap.rc_horizontal_mps_at_100 * scale},
-          {"rc_vertical_mps_at_100", ap.rc_vertical_mps_at_100 * scale},
-          {"rc_yaw_radps_at_100", ap.rc_yaw_radps_at_100 * scale},
-          {"velocity_time_constant_s", drawn("velocity_time_constant_s", ap.velocity_time_constant_s)},
-          {"vertical_time_constant_s", drawn("vertical_time_constant_s", ap.vertical_time_constant_s)},
-          {"yaw_time_constant_s", drawn("yaw_time_constant_s", ap.yaw_time_constant_s)}};
+  std::map<std::string, double> truth = {
+      {"rc_gain_scale", scale},
+      {"rc_horizontal_mps_at_100", ap.rc_horizontal_mps_at_100 * scale},
+      {"rc_vertical_mps_at_100", ap.rc_vertical_mps_at_100 * scale},
+      {"rc_yaw_radps_at_100", ap.rc_yaw_radps_at_100 * scale},
+      {"velocity_time_constant_s", drawn("velocity_time_constant_s", ap.velocity_time_constant_s)},
+      {"vertical_time_constant_s", drawn("vertical_time_constant_s", ap.vertical_time_constant_s)},
+      {"yaw_time_constant_s", drawn("yaw_time_constant_s", ap.yaw_time_constant_s)}};
   for (const std::string& name : senses_parameter_names()) truth[name] = drawn(name.c_str(), nominal_of(s, name));
   return truth;
 }

@@ -18,7 +18,9 @@
 // allowed range). The senses (senses_fit.hpp) likewise: each identified one against its
 // dispersion (or its `senses:` value), and in the calibrated scenario its `senses:` key set and
 // its dispersion centred on it; the VPS's noise, an upper bound only, drawn uniformly from 0 to
-// the bound. Every other key of the scenario is kept.
+// the bound (its key: the bound's middle). A sense the scenario neither disperses nor sets (a
+// scenario without `senses:` senses exactly) holds only a drone whose interval reaches that
+// value. Every other key of the scenario is kept.
 
 #include <optional>
 #include <string>

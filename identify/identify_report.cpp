@@ -43,14 +43,15 @@ const char* observed_as(Axis a) {
   return "?";
 }
 
-// Breaks a series at the record's segment changes (NaN between segments).
-void with_breaks(const AxisRecord& r, const std::vector<double>& v, std::vector<double>& xs, std::vector<double>& ys) {
+// Breaks a series at its segment changes (NaN between segments).
+void with_breaks(const std::vector<double>& t, const std::vector<int>& segment, const std::vector<double>& v,
+                 std::vector<double>& xs, std::vector<double>& ys) {
   for (size_t k = 0; k < v.size(); ++k) {
-    if (k > 0 && r.segment[k] != r.segment[k - 1]) {
+    if (k > 0 && segment[k] != segment[k - 1]) {
       xs.push_back(std::numeric_limits<double>::quiet_NaN());
       ys.push_back(std::numeric_limits<double>::quiet_NaN());
     }
-    xs.push_back(r.t_s[k]);
+    xs.push_back(t[k]);
     ys.push_back(v[k]);
   }
 }
@@ -62,7 +63,7 @@ void write_axis_plots(const AxisResult& a, const std::string& dir) {
                           "time since the takeoff's ok (s)", observed_as(a.axis));
   fit.add_points(r.t_s, r.y, kMeasured, 3, "measured");
   std::vector<double> xs, ys;
-  with_breaks(r, a.id.fit.fitted, xs, ys);
+  with_breaks(r.t_s, r.segment, a.id.fit.fitted, xs, ys);
   fit.add_line(xs, ys, kModel, 2, "model");
   if (r.observation == Observation::direct) {
     // The commanded velocity K u(t - d), stepped: the response's target.
@@ -173,7 +174,7 @@ void write_senses_md(std::ostream& o, const SensesIdentification& s) {
   o << "\n";
   for (const auto& [name, why] : s.not_identified) o << "- " << name << ": " << why << "\n";
   if (!s.board.edges_s.empty()) {
-    o << "\nThe board's edges: " << s.board.edges_s.size() << " (steps of h - tof:";
+    o << "\nThe board's edges: " << s.board.edges_s.size() << " (the range reading fell by";
     for (double d : s.board.steps_m) o << " " << num(d);
     o << " m); the fit's residual rms " << num(s.board.rms_m, 4) << " m.\n\n![board pass](board_pass.png)\n";
   }
@@ -181,18 +182,11 @@ void write_senses_md(std::ostream& o, const SensesIdentification& s) {
 }
 
 void write_board_plot(const BoardPassFit& b, const std::string& dir) {
-  verification::Chart c("height hold over the board: h - tof - H u (points) and the fitted hold (line)",
+  verification::Chart c("height hold over the board: h - tof - H u and the fit",
                         "time since the takeoff's ok (s)", "m");
   c.add_points(b.t_s, b.y_m, kMeasured, 3, "measured");
   std::vector<double> xs, ys;
-  for (size_t k = 0; k < b.t_s.size(); ++k) {
-    if (k > 0 && b.window[k] != b.window[k - 1]) {
-      xs.push_back(std::numeric_limits<double>::quiet_NaN());
-      ys.push_back(std::numeric_limits<double>::quiet_NaN());
-    }
-    xs.push_back(b.t_s[k]);
-    ys.push_back(b.fitted_m[k]);
-  }
+  with_breaks(b.t_s, b.window, b.fitted_m, xs, ys);
   c.add_line(xs, ys, kModel, 2, "model");
   c.save_png((fs::path(dir) / "board_pass.png").string());
 }
