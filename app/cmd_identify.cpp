@@ -67,6 +67,7 @@ int run_identify(const IdentifyCliOptions& o) {
   for (const identify::AxisResult& a : id.axes) {
     if (!a.identified) std::cout << "  " << identify::axis_name(a.axis) << " not identified: " << a.why_not << "\n";
   }
+  for (const auto& [name, why] : id.senses.not_identified) std::cout << "  " << name << " not identified: " << why << "\n";
   const std::vector<std::string> outside = identify::outside_parameters(in.envelope);
   if (scenario) {
     std::cout << "  against " << scenario_path << ": ";
@@ -92,6 +93,10 @@ const CommandRegistration kIdentify{
           ->capture_default_str()->check(CLI::Range(20, 100000));
       sub.add_option("--seed", o->options.seed, "seed of the bootstrap's resampling")->capture_default_str();
       sub.add_option("--block", o->options.block_s, "bootstrap block length (s)")->capture_default_str()->check(CLI::Range(0.1, 30.0));
+      sub.add_option("--board-height", o->options.board_height_m,
+                     "height (m) of the board the senses block passed over (tello_pilot --fly-calibration --senses-board): "
+                     "identifies how the height hold follows a step of the range reading")
+          ->check(CLI::Range(identify::kBoardHeightMin_m, identify::kBoardHeightMax_m));
       sub.add_flag("--fail-if-outside", o->fail_if_outside,
                    "exit 3 when an identified parameter lies outside the scenario's draws");
       return [o]() -> int { return run_identify(*o); };

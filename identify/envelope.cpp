@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "verification/scenario/dispersion.hpp"
+#include "verification/scenario/senses_dispersion.hpp"
 
 namespace shelfcross::identify {
 namespace {
@@ -23,6 +24,12 @@ constexpr Mapped kMapped[] = {
     {"velocity_time_constant_s", "velocity_time_constant_s"},
     {"vertical_time_constant_s", "vertical_time_constant_s"},
     {"yaw_time_constant_s", "yaw_time_constant_s"},
+    {"vps_noise_mps", "vps_noise_mps"},
+    {"height_noise_m", "height_noise_m"},
+    {"baro_noise_m", "baro_noise_m"},
+    {"tof_noise_m", "tof_noise_m"},
+    {"height_hold_range_blend", "height_hold_range_blend"},
+    {"height_hold_time_constant_s", "height_hold_time_constant_s"},
 };
 
 double nominal_of(const verification::Scenario& s, const std::string& dispersion) {
@@ -31,6 +38,8 @@ double nominal_of(const verification::Scenario& s, const std::string& dispersion
   if (dispersion == "velocity_time_constant_s") return ap.velocity_time_constant_s;
   if (dispersion == "vertical_time_constant_s") return ap.vertical_time_constant_s;
   if (dispersion == "yaw_time_constant_s") return ap.yaw_time_constant_s;
+  plant::SensesParams senses = s.senses;
+  if (const double* field = verification::senses_dispersed_field(senses, dispersion)) return *field;
   throw std::logic_error("no nominal for " + dispersion);
 }
 
@@ -86,6 +95,27 @@ verification::Distribution centred(const Interval& iv, double centre, double rel
 const Interval* find(const Identification& id, const std::string& name) {
   const auto it = id.parameters.find(name);
   return it == id.parameters.end() ? nullptr : &it->second;
+}
+
+// The overlay's senses: section, the keys identified (scenarios/README.md, section `senses`).
+void write_senses_overlay(std::ostream& o, const Identification& id, const plant::SensesParams& senses) {
+  const bool vps = find(id, "vps_noise_mps") != nullptr;
+  const bool height = find(id, "height_noise_m") || find(id, "baro_noise_m") || find(id, "tof_noise_m");
+  const bool hold = find(id, "height_hold_range_blend") || find(id, "height_hold_time_constant_s");
+  if (!vps && !height && !hold) return;
+  o << "senses:\n";
+  if (vps) o << "  vps:\n    noise_mps: " << senses.vps.noise_mps << "\n";
+  if (height) {
+    o << "  height:\n";
+    if (find(id, "tof_noise_m")) o << "    tof_noise_m: " << senses.height.tof_noise_m << "\n";
+    if (find(id, "height_noise_m")) o << "    height_noise_m: " << senses.height.height_noise_m << "\n";
+    if (find(id, "baro_noise_m")) o << "    baro_noise_m: " << senses.height.baro_noise_m << "\n";
+  }
+  if (hold) {
+    o << "  height_hold:\n";
+    if (find(id, "height_hold_range_blend")) o << "    range_blend: " << senses.height_hold.range_blend << "\n";
+    if (find(id, "height_hold_time_constant_s")) o << "    time_constant_s: " << senses.height_hold.time_constant_s << "\n";
+  }
 }
 
 }  // namespace
@@ -169,6 +199,24 @@ verification::Scenario calibrated_scenario(const verification::Scenario& base, c
       s.dispersions[name] = centred(*t, t->value, 1.0, name);
     }
   }
+  // The senses: a noise's interval centred as the autopilot's; the VPS's noise is an upper bound
+  // only (senses_fit.hpp), so the campaign draws it anywhere below the bound.
+  for (const std::string& name : senses_parameter_names()) {
+    const Interval* iv = find(id, name);
+    double* field = verification::senses_dispersed_field(s.senses, name);
+    if (!iv || !field) continue;
+    if (name == "vps_noise_mps") {
+      verification::Distribution d;
+      d.kind = verification::Distribution::Kind::uniform;
+      d.min = 0.0;
+      d.max = std::max(iv->hi, 1e-4);
+      *field = 0.5 * d.max;
+      s.dispersions[name] = d;
+      continue;
+    }
+    *field = std::max(iv->value, 0.0);
+    s.dispersions[name] = centred(*iv, *field, 1.0, name);
+  }
   s.name = base.name + "_calibrated";
   return s;
 }
@@ -187,8 +235,13 @@ std::string overlay_yaml(const Identification& id) {
   if (find(id, "velocity_time_constant_s")) o << "  velocity_time_constant_s: " << s.autopilot.velocity_time_constant_s << "\n";
   if (find(id, "vertical_time_constant_s")) o << "  vertical_time_constant_s: " << s.autopilot.vertical_time_constant_s << "\n";
   if (find(id, "yaw_time_constant_s")) o << "  yaw_time_constant_s: " << s.autopilot.yaw_time_constant_s << "\n";
+  write_senses_overlay(o, id, s.senses);
   o << "dispersions:\n";
   for (const auto& [name, d] : s.dispersions) {
+    if (d.kind == verification::Distribution::Kind::uniform) {
+      o << "  " << name << ": {uniform: {min: " << d.min << ", max: " << d.max << "}}\n";
+      continue;
+    }
     o << "  " << name << ": {truncated_normal: {mean: " << d.mean << ", stddev: " << d.stddev << ", min: " << d.min
       << ", max: " << d.max << "}}\n";
   }
@@ -213,13 +266,16 @@ std::map<std::string, double> emulator_truth(const std::string& path, const veri
   };
   const plant::AutopilotParams& ap = s.autopilot;
   const double scale = drawn("rc_gain_scale", 1.0);
-  return {{"rc_gain_scale", scale},
-          {"rc_horizontal_mps_at_100", ap.rc_horizontal_mps_at_100 * scale},
-          {"rc_vertical_mps_at_100", ap.rc_vertical_mps_at_100 * scale},
-          {"rc_yaw_radps_at_100", ap.rc_yaw_radps_at_100 * scale},
-          {"velocity_time_constant_s", drawn("velocity_time_constant_s", ap.velocity_time_constant_s)},
-          {"vertical_time_constant_s", drawn("vertical_time_constant_s", ap.vertical_time_constant_s)},
-          {"yaw_time_constant_s", drawn("yaw_time_constant_s", ap.yaw_time_constant_s)}};
+  std::map<std::string, double> truth = {
+      {"rc_gain_scale", scale},
+      {"rc_horizontal_mps_at_100", ap.rc_horizontal_mps_at_100 * scale},
+      {"rc_vertical_mps_at_100", ap.rc_vertical_mps_at_100 * scale},
+      {"rc_yaw_radps_at_100", ap.rc_yaw_radps_at_100 * scale},
+      {"velocity_time_constant_s", drawn("velocity_time_constant_s", ap.velocity_time_constant_s)},
+      {"vertical_time_constant_s", drawn("vertical_time_constant_s", ap.vertical_time_constant_s)},
+      {"yaw_time_constant_s", drawn("yaw_time_constant_s", ap.yaw_time_constant_s)}};
+  for (const std::string& name : senses_parameter_names()) truth[name] = drawn(name.c_str(), nominal_of(s, name));
+  return truth;
 }
 
 }  // namespace shelfcross::identify

@@ -15,7 +15,12 @@
 // constants, and their dispersions replaced by truncated normals centred on them: rc_gain_scale
 // mean 1 with the relative standard deviation of the combined gain; each time constant mean
 // its estimate; stddev the bootstrap's; truncated at +-3 stddev (inside the parameter's
-// allowed range). Every other key of the scenario is kept.
+// allowed range). The senses (senses_fit.hpp) likewise: each identified one against its
+// dispersion (or its `senses:` value), and in the calibrated scenario its `senses:` key set and
+// its dispersion centred on it; the VPS's noise, an upper bound only, drawn uniformly from 0 to
+// the bound (its key: the bound's middle). A sense the scenario neither disperses nor sets (a
+// scenario without `senses:` senses exactly) holds only a drone whose interval reaches that
+// value. Every other key of the scenario is kept.
 
 #include <optional>
 #include <string>
@@ -51,8 +56,8 @@ std::map<std::string, std::pair<double, double>> scenario_ranges(const verificat
 /// The scenario with the identified drone as its autopilot (see the file comment).
 verification::Scenario calibrated_scenario(const verification::Scenario& scenario, const Identification& id);
 
-/// The overlay alone: the `autopilot:` and `dispersions:` entries calibrated_scenario sets, as
-/// YAML to merge by hand into another scenario.
+/// The overlay alone: the `autopilot:`, `senses:` and `dispersions:` entries calibrated_scenario
+/// sets, as YAML to merge by hand into another scenario.
 std::string overlay_yaml(const Identification& id);
 
 /// The true values of a drone tello-sim flew: its report's drawn `dispersions` applied to the

@@ -1,5 +1,7 @@
 #include "identify/flight_record.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <sstream>
 #include <variant>
@@ -129,6 +131,8 @@ FlightRecord parse_flight_record(std::istream& in, const std::string& name) {
       r.frames.push_back(f);
     } else if (type == "reply" && string_field(j, "command") == "takeoff" && string_field(j, "reply") == "ok") {
       if (!r.takeoff_ok_ns) r.takeoff_ok_ns = t;
+    } else if (type == "stick_program" && string_field(j, "event") == "started") {
+      if (!r.takeoff_ok_ns) r.takeoff_ok_ns = t;  // airborne, the takeoff's reply lost
     } else if (type == "sent" && string_field(j, "command") == "land") {
       if (r.takeoff_ok_ns && !r.land_sent_ns) r.land_sent_ns = t;
     }
@@ -140,6 +144,23 @@ FlightRecord parse_flight_record(std::istream& in, const std::string& name) {
                       "): the log is truncated (the program was killed or the file cut)");
   }
   return r;
+}
+
+std::vector<TimeNs> state_send_times(const FlightRecord& r) {
+  std::vector<TimeNs> t(r.states.size());
+  for (size_t i = 0; i < t.size(); ++i) t[i] = r.states[i].t_ns;
+  std::vector<double> periods;
+  for (size_t i = 1; i < t.size(); ++i) {
+    if (t[i] > t[i - 1]) periods.push_back(static_cast<double>(t[i] - t[i - 1]));
+  }
+  if (periods.size() < 10) return t;
+  // The median period (between the middle two of an even count).
+  std::sort(periods.begin(), periods.end());
+  const double pos = 0.5 * static_cast<double>(periods.size() - 1);
+  const size_t lo = static_cast<size_t>(std::floor(pos)), hi = std::min(lo + 1, periods.size() - 1);
+  const auto least_gap = static_cast<TimeNs>(periods[lo] + (pos - static_cast<double>(lo)) * (periods[hi] - periods[lo]));
+  for (size_t i = t.size() - 1; i-- > 0;) t[i] = std::min(t[i], t[i + 1] - least_gap);
+  return t;
 }
 
 }  // namespace shelfcross::identify

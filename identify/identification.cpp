@@ -168,19 +168,6 @@ TrackingLoop tracking_loop(Axis axis, const plant::AutopilotParams& P, const pla
   return L;
 }
 
-std::vector<TimeNs> state_send_times(const FlightRecord& r) {
-  std::vector<TimeNs> t(r.states.size());
-  for (size_t i = 0; i < t.size(); ++i) t[i] = r.states[i].t_ns;
-  std::vector<double> periods;
-  for (size_t i = 1; i < t.size(); ++i) {
-    if (t[i] > t[i - 1]) periods.push_back(static_cast<double>(t[i] - t[i - 1]));
-  }
-  if (periods.size() < 10) return t;
-  const auto least_gap = static_cast<TimeNs>(percentile(periods, 0.5));
-  for (size_t i = t.size() - 1; i-- > 0;) t[i] = std::min(t[i], t[i + 1] - least_gap);
-  return t;
-}
-
 AxisRecord axis_record(const FlightRecord& r, Axis axis, int min_stick, int* windows) {
   AxisRecord rec;
   rec.observation = axis == Axis::vertical || axis == Axis::yaw ? Observation::integral : Observation::direct;
@@ -368,6 +355,13 @@ Identification identify_flight(const FlightRecord& r, const IdentifyOptions& o) 
   }
   if (auto scale = gain_scale(id, o.autopilot)) id.parameters["rc_gain_scale"] = std::move(*scale);
   if (link_delay) id.parameters["response_delay_s"] = *link_delay;
+  SensesOptions so;
+  so.board_height_m = o.board_height_m;
+  so.bootstrap_replicates = o.bootstrap_replicates;
+  so.seed = o.seed;
+  so.block_s = o.block_s;
+  id.senses = identify_senses(r, so);
+  for (const auto& [name, iv] : id.senses.parameters) id.parameters[name] = iv;
   return id;
 }
 

@@ -32,6 +32,8 @@
 //                              heading axes are then refitted with it (and with its bootstrap
 //                              replicates). Not a scenario parameter: the co-simulation builds
 //                              it from its links.
+// The Tello's senses (senses_fit.hpp) come from the same record: the still hover and the board
+// pass of the calibration's senses block.
 // A combination is formed replicate by replicate from the axes' bootstrap replicates (the axes'
 // resamplings are independent), so its interval is again a bootstrap percentile interval.
 
@@ -43,6 +45,7 @@
 
 #include "identify/flight_record.hpp"
 #include "identify/response_fit.hpp"
+#include "identify/senses_fit.hpp"
 #include "plant/params.hpp"
 
 namespace shelfcross::identify {
@@ -86,6 +89,8 @@ struct IdentifyOptions {
   plant::AutopilotParams autopilot;
   plant::VehicleParams vehicle;
   FitBounds bounds;
+  /// The board the senses block passed over (--board-height), for the height hold.
+  std::optional<double> board_height_m;
 };
 
 struct AxisResult {
@@ -115,7 +120,8 @@ struct Identification {
   std::string source;
   double flight_s = 0.0;                  ///< takeoff `ok` to first `land`
   std::array<AxisResult, 4> axes;
-  std::map<std::string, Interval> parameters;  ///< names above; only those identified
+  std::map<std::string, Interval> parameters;  ///< names above and the senses'; only those identified
+  SensesIdentification senses;                 ///< the senses (senses_fit.hpp); theirs are in parameters too
   LinkFigures link;
   IdentifyOptions options;
 };
@@ -127,19 +133,6 @@ Identification identify_flight(const FlightRecord& record, const IdentifyOptions
 /// rc_gain_scale against the nominal gains of `nominal` (rc_*_at_100): each identified axis's
 /// gain over its nominal, combined as above; nothing when no axis was identified.
 std::optional<Interval> gain_scale(const Identification& id, const plant::AutopilotParams& nominal);
-
-/// The state records' times (ns, the log's clock) as the fit takes them. A drone sends its
-/// state at a steady rate (the Tello 10 Hz) and a record arrives no earlier than it left; the
-/// log stamps it when the program read it. Records read closer together than the period were
-/// held up on the way (the program busy, the link's queue) and carry the time they were read,
-/// up to several periods after the state they hold: at a heading turning 1 rad/s, a record read
-/// 0.3 s late is 0.3 rad off the model. So each record's time is at most its stamp and at least
-/// the median period before the next record's (a pass backwards from the last): a burst of
-/// records after a stall goes back onto the sender's period, a record read on time keeps its
-/// stamp (the next one comes a period later). Exact for a steady sender when no record of the
-/// burst was lost (with one lost, the burst's earlier records stay up to a period late); a
-/// sender's jitter moves a record by at most that jitter.
-std::vector<TimeNs> state_send_times(const FlightRecord& record);
 
 /// The axis records of a flight (exposed for tests and plots), without their tracking loop.
 AxisRecord axis_record(const FlightRecord& record, Axis axis, int min_stick, int* windows);

@@ -43,14 +43,15 @@ const char* observed_as(Axis a) {
   return "?";
 }
 
-// Breaks a series at the record's segment changes (NaN between segments).
-void with_breaks(const AxisRecord& r, const std::vector<double>& v, std::vector<double>& xs, std::vector<double>& ys) {
+// Breaks a series at its segment changes (NaN between segments).
+void with_breaks(const std::vector<double>& t, const std::vector<int>& segment, const std::vector<double>& v,
+                 std::vector<double>& xs, std::vector<double>& ys) {
   for (size_t k = 0; k < v.size(); ++k) {
-    if (k > 0 && r.segment[k] != r.segment[k - 1]) {
+    if (k > 0 && segment[k] != segment[k - 1]) {
       xs.push_back(std::numeric_limits<double>::quiet_NaN());
       ys.push_back(std::numeric_limits<double>::quiet_NaN());
     }
-    xs.push_back(r.t_s[k]);
+    xs.push_back(t[k]);
     ys.push_back(v[k]);
   }
 }
@@ -62,7 +63,7 @@ void write_axis_plots(const AxisResult& a, const std::string& dir) {
                           "time since the takeoff's ok (s)", observed_as(a.axis));
   fit.add_points(r.t_s, r.y, kMeasured, 3, "measured");
   std::vector<double> xs, ys;
-  with_breaks(r, a.id.fit.fitted, xs, ys);
+  with_breaks(r.t_s, r.segment, a.id.fit.fitted, xs, ys);
   fit.add_line(xs, ys, kModel, 2, "model");
   if (r.observation == Observation::direct) {
     // The commanded velocity K u(t - d), stepped: the response's target.
@@ -156,6 +157,48 @@ void write_envelope_md(std::ostream& o, const ReportInputs& in) {
   }
 }
 
+void write_senses_md(std::ostream& o, const SensesIdentification& s) {
+  o << "## The Tello's senses\n\nFrom the senses block (tello_pilot --fly-calibration --senses-board): the still hover's "
+       "readings and the height hold's answer to the board (identify/senses_fit.hpp, docs/calibration.md). ";
+  if (s.still_found) {
+    o << "Still hover: " << num(s.still_from_s, 1) << " to " << num(s.still_to_s, 1) << " s after the takeoff's ok, "
+      << s.still_records << " state records. ";
+  }
+  if (s.board_height_m) o << "Board: " << num(*s.board_height_m) << " m high. ";
+  o << "\n\n| parameter | identified [95 %] | from |\n|---|---|---|\n";
+  for (const std::string& name : senses_parameter_names()) {
+    const auto it = s.parameters.find(name);
+    if (it == s.parameters.end()) continue;
+    o << "| " << name << " | " << interval_text(it->second, 4) << " | " << s.how.at(name) << " |\n";
+  }
+  o << "\n";
+  for (const auto& [name, why] : s.not_identified) o << "- " << name << ": " << why << "\n";
+  if (!s.board.edges_s.empty()) {
+    o << "\nThe board's edges: " << s.board.edges_s.size() << " (the range reading fell by";
+    for (double d : s.board.steps_m) o << " " << num(d);
+    o << " m); the fit's residual rms " << num(s.board.rms_m, 4) << " m.\n\n![board pass](board_pass.png)\n";
+  }
+  o << "\n";
+}
+
+void write_board_plot(const BoardPassFit& b, const std::string& dir) {
+  verification::Chart c("height hold over the board: h - tof - H u and the fit",
+                        "time since the takeoff's ok (s)", "m");
+  c.add_points(b.t_s, b.y_m, kMeasured, 3, "measured");
+  std::vector<double> xs, ys;
+  with_breaks(b.t_s, b.window, b.fitted_m, xs, ys);
+  c.add_line(xs, ys, kModel, 2, "model");
+  c.save_png((fs::path(dir) / "board_pass.png").string());
+}
+
+json senses_json(const SensesIdentification& s) {
+  json j = {{"still_found", s.still_found}, {"still_from_s", s.still_from_s}, {"still_to_s", s.still_to_s},
+            {"still_records", s.still_records}, {"not_identified", s.not_identified}, {"how", s.how},
+            {"board_height_m", s.board_height_m ? json(*s.board_height_m) : json(nullptr)},
+            {"board_edges_s", s.board.edges_s}, {"board_steps_m", s.board.steps_m}, {"board_rms_m", s.board.rms_m}};
+  return j;
+}
+
 void write_link_md(std::ostream& o, const LinkFigures& l) {
   o << "## The link, from the log's stamps\n\n";
   o << "| figure | value |\n|---|---|\n";
@@ -207,6 +250,7 @@ json report_json(const ReportInputs& in) {
     axes[axis_name(a.axis)] = x;
   }
   j["axes"] = axes;
+  j["senses"] = senses_json(id.senses);
   json env = json::array();
   for (const EnvelopeEntry& e : in.envelope) {
     env.push_back({{"parameter", e.parameter}, {"identified", interval_json(e.identified)}, {"dispersed", e.dispersed},
@@ -247,6 +291,7 @@ void write_identify_report(const ReportInputs& in, const std::string& dir) {
   for (const AxisResult& a : id.axes) {
     if (a.identified) write_axis_plots(a, dir);
   }
+  if (!id.senses.board.t_s.empty()) write_board_plot(id.senses.board, dir);
   std::ostringstream md;
   md << "# Identification of " << id.source << "\n\n";
   md << "The simulated Tello's autopilot parameters (plant/autopilot.hpp) from " << num(id.flight_s, 1)
@@ -255,6 +300,7 @@ void write_identify_report(const ReportInputs& in, const std::string& dir) {
   md << "\n\n";
   write_parameters_md(md, in);
   write_axes_md(md, id);
+  write_senses_md(md, id.senses);
   if (in.scenario) write_envelope_md(md, in);
   write_link_md(md, id.link);
   md << "## Files\n\noverlay.yaml: the autopilot and dispersion entries of this drone; calibrated_scenario.yaml: "

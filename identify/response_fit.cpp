@@ -83,6 +83,19 @@ Solution solve(const AxisRecord& r, const std::vector<double>& y, const FitBound
 
 }  // namespace
 
+double log_normal_mass(double a, double b) {
+  constexpr double kRoot2 = 1.4142135623730951;
+  double mass = 0.0;
+  if (a > 0.0) {
+    mass = 0.5 * (std::erfc(a / kRoot2) - std::erfc(b / kRoot2));
+  } else if (b < 0.0) {
+    mass = 0.5 * (std::erfc(-b / kRoot2) - std::erfc(-a / kRoot2));
+  } else {
+    mass = 1.0 - 0.5 * (std::erfc(-a / kRoot2) + std::erfc(b / kRoot2));
+  }
+  return std::log(std::max(mass, 1e-300));
+}
+
 namespace {
 
 // The reference model and the tracking loop's state, advanced with the input held.
@@ -188,19 +201,6 @@ namespace {
 // that fitted 0.955 and 0.44 s and a dead time of 0.04 s where the truth is 0.
 constexpr double kSigmaFloorQuanta = 0.05;
 
-// log(Phi(b) - Phi(a)) for a < b, accurate in either tail.
-double log_normal_mass(double a, double b) {
-  constexpr double kRoot2 = 1.4142135623730951;
-  double mass = 0.0;
-  if (a > 0.0) {
-    mass = 0.5 * (std::erfc(a / kRoot2) - std::erfc(b / kRoot2));
-  } else if (b < 0.0) {
-    mass = 0.5 * (std::erfc(-b / kRoot2) - std::erfc(-a / kRoot2));
-  } else {
-    mass = 1.0 - 0.5 * (std::erfc(-a / kRoot2) + std::erfc(b / kRoot2));
-  }
-  return std::log(std::max(mass, 1e-300));
-}
 
 // The negative log-likelihood of rounded samples y at theta = (K, log tau, d, log(sigma -
 // sigma_floor)); outside the search box the bound's value plus a slope back in.

@@ -110,6 +110,10 @@ struct AxisFit {
 /// plateaus pulled to the middle of their readings, the dead time and the time constant traded.
 AxisFit fit_axis(const AxisRecord& record, const FitBounds& bounds = {});
 
+/// log(Phi(b) - Phi(a)) for a < b (Phi the standard normal CDF), accurate in either tail: the
+/// likelihood of a rounded reading.
+double log_normal_mass(double a, double b);
+
 /// A value with its 95 % bootstrap interval and the replicates it came from. `margin` is a
 /// stated model-error allowance (identification.hpp), already added to both ends of [lo, hi];
 /// stddev and the replicates are the bootstrap's alone.

@@ -8,7 +8,9 @@
 # OUT_DIR/seed_N/{emulator.txt,report.json,pilot.txt,flight_log.jsonl,identify/} and
 # OUT_DIR/summary.md (identify/summarize_validation.py). Run from the source root after
 # `cmake --build --preset release --target shelfcross tello_pilot` (or with BIN=DIR holding copies
-# of both programs).
+# of both programs). SENSES_BOARD="DISTANCE HEIGHT" flies the senses block too, over the
+# scenario's board (tello_pilot --senses-board DISTANCE, identify --board-height HEIGHT): with
+# scenarios/calibration/senses_board.yaml, SENSES_BOARD="1.5 0.29".
 set -uo pipefail
 out=${1:?usage: validate_tello_sim.sh OUT_DIR SCENARIO LOSS SEED...}
 scenario=${2:?scenario}
@@ -19,6 +21,12 @@ pilot=$bin/flight_sw/tello/pilot/tello_pilot
 [[ -x $pilot ]] || pilot=$bin/tello_pilot
 shelfcross=$bin/app/shelfcross
 [[ -x $shelfcross ]] || shelfcross=$bin/shelfcross
+pilot_senses=() identify_senses=()
+if [[ -n ${SENSES_BOARD:-} ]]; then
+  read -r board_distance board_height <<< "$SENSES_BOARD"
+  pilot_senses=(--senses-board "$board_distance")
+  identify_senses=(--board-height "$board_height")
+fi
 mkdir -p "$out"
 for seed in "$@"; do
   dir="$out/seed_$seed"
@@ -36,14 +44,14 @@ for seed in "$@"; do
   emu=$!
   for _ in $(seq 600); do grep -q '^renderer:' "$dir/emulator.txt" 2>/dev/null && break; sleep 0.1; done
   status=0
-  "$pilot" --config flight_sw/config/paper_test_shelf.yaml --fly-calibration \
+  "$pilot" --config flight_sw/config/paper_test_shelf.yaml --fly-calibration "${pilot_senses[@]}" \
     --drone-ip 127.0.0.1 --local-ip 127.0.0.1 --command-port $cmd --state-port $state --video-port $video \
     --state-source-port $state_src --video-source-port $video_src \
     --log "$dir/flight_log.jsonl" --inventory "$dir/inventory.json" > "$dir/pilot.txt" 2>&1 || status=$?
   kill -TERM $emu 2>/dev/null || true
   wait $emu 2>/dev/null || true
   echo "seed $seed: tello_pilot exit $status"
-  "$shelfcross" identify --log "$dir/flight_log.jsonl" --scenario "$scenario" --truth "$dir/report.json" \
+  "$shelfcross" identify --log "$dir/flight_log.jsonl" --scenario "$scenario" --truth "$dir/report.json" "${identify_senses[@]}" \
     --out "$dir/identify" > "$dir/identify.txt" 2>&1 || echo "seed $seed: identify failed (see $dir/identify.txt)"
 done
 python3 "$(dirname "$0")/summarize_validation.py" "$out" "$scenario" > "$out/summary.md"

@@ -33,6 +33,21 @@
 // section 5): a smaller heading amplitude is the margin, at the heading's resolution's cost.
 // Space needed (at K = 1.25 m/s, 1.875 rad/s): about 0.9 m each way forward, back, left and
 // right of the take-off point, 0.6 m above the take-off height, a turn of 65 deg each way.
+//
+// The senses block (CalibrationSenses, when a board's distance is stated), flown first, right
+// after the first hover, so that the drone's own drift has had the least time to carry it off
+// its path: a still hover of 15 s (every stick centred: the scatter of vgx, vgy, h, baro and tof
+// about their slow wander is the readings' noise), then backward at stick 20 (0.2 m/s at the
+// nominal 1 m/s at full stick) for distance / 0.2 m/s, so that the drone stops over the middle
+// of a board of known height lying straight behind the take-off point; 8 s of hover over it
+// (four time constants of the slowest height hold the scenarios draw, 2 s), forward at stick 20
+// as long, back over the take-off point, and 2.5 s of hover before the pulses. Backward, so that
+// the camera never faces the board. The range reading steps by the board's height as the drone
+// passes its edge, in and out; how the height hold answers those steps identifies it
+// (`shelfcross identify`, docs/calibration.md). A drone of 0.8 to 1.25 times the nominal gain
+// stops 0.8 to 1.25 times the distance back: the board must reach that far on both sides of its
+// middle (docs/calibration.md gives its size). The pass's step of 0.2 m/s asks 0.83 m/s^2 of the
+// strongest, fastest drone, well inside the slow mode's tilt.
 
 #include <array>
 #include <optional>
@@ -53,11 +68,25 @@ struct CalibrationAmplitudes {
   int yaw = 50;         ///< clockwise stick (doublets 0.8 to 1.2 times)
 };
 
+/// The senses block's board: the distance from the take-off point straight back to the board's
+/// middle, along the path.
+struct CalibrationSenses {
+  double board_distance_m = 1.5;
+};
+
 class CalibrationManoeuvre {
  public:
+  /// The senses block's limits on the board's distance (m): at least a drone's length beyond the
+  /// take-off point's own excursions, at most what 0.2 m/s covers in 12.5 s.
+  static constexpr double kBoardDistanceMin_m = 1.0, kBoardDistanceMax_m = 2.5;
+  /// The senses block's still hover (s) and the pass's stick.
+  static constexpr double kStillHover_s = 15.0;
+  static constexpr int kPassStick = 20;
+
   /// Throws std::invalid_argument when an amplitude lies outside 5..80 (its pulses reach 1.2
-  /// times it, within the sticks' 100).
-  explicit CalibrationManoeuvre(const CalibrationAmplitudes& amplitudes = {});
+  /// times it, within the sticks' 100) or the board's distance outside its limits.
+  explicit CalibrationManoeuvre(const CalibrationAmplitudes& amplitudes = {},
+                                const std::optional<CalibrationSenses>& senses = std::nullopt);
   const std::vector<ManoeuvreStep>& steps() const { return steps_; }
   double duration_s() const;
   /// The step flown `t_s` seconds after the start (steps in order), nothing after the end.

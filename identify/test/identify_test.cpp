@@ -222,6 +222,22 @@ TEST(Identify, ALogWithoutAFlightIsRefused) {
   EXPECT_THROW(identify_flight(record_of(log), quick_options()), std::invalid_argument);
 }
 
+// The takeoff's reply lost (3 % loss on the link): tello_pilot starts the calibration's stick
+// program when the state shows the drone airborne; its start stands for the takeoff's ok.
+TEST(FlightRecord, ATakeoffWhoseReplyWasLostFliesFromTheStickProgramsStart) {
+  std::string log = synthetic_log(KnownDrone{});
+  const std::string ok = testing::log_line(5 * kNsPerSecond, "reply", {{"command", "takeoff"}, {"reply", "ok"}});
+  const size_t at = log.find(ok);
+  ASSERT_NE(at, std::string::npos);
+  const std::string started = testing::log_line(5 * kNsPerSecond, "stick_program", {{"event", "started"}});
+  log.replace(at, ok.size(), started);
+  const FlightRecord lost = record_of(log);
+  ASSERT_TRUE(lost.takeoff_ok_ns);
+  EXPECT_EQ(*lost.takeoff_ok_ns, 5 * kNsPerSecond);
+  log.erase(log.find(started), started.size());
+  EXPECT_EQ(record_of(log).takeoff_ok_ns, std::nullopt);  // neither: no flight
+}
+
 TEST(FlightRecord, RefusesATruncatedLogNamingTheLine) {
   const std::string log = synthetic_log(KnownDrone{});
   // Cut mid-line: the last line is no complete JSON object.

@@ -5,10 +5,18 @@
 // model tracked by the simulated autopilot's loops, plant defaults) with known gains, time
 // constants and dead time, plus Gaussian noise from a fixed seed, written by the simulated
 // Tello's own state formatter (the SDK's integer dm/s, cm and degrees).
+// With KnownSenses, the manoeuvre flies its senses block too, and the records carry the senses
+// of plant/tello_senses.hpp, simulated directly at 50 Hz: the board behind the take-off point
+// under the forward response's path; the hold's range offset o following -beta (S + d + tof
+// noise) with its time constant; the barometer's drift d; the height hold's correction of z
+// (first order, 0.5 s) and a slow wander of the air (AR(1), 1 s) in height and velocity; then
+// h = z + d + o + noise, tof = 0.1 + z - S + noise, baro = 100 + z + d + noise, vgx and vgy the
+// response plus the wander plus the VPS's noise.
 
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -27,6 +35,17 @@
 
 namespace shelfcross::identify::testing {
 
+struct KnownSenses {
+  double board_distance_m = 1.5;     ///< its middle, straight behind the take-off point
+  double board_half_length_m = 0.6;  ///< along the path
+  double board_height_m = 0.29;
+  bool board_on_path = true;         ///< false: the board lies elsewhere, never passed over
+  double vps_noise_mps = 0.03, height_noise_m = 0.01, baro_noise_m = 0.05, tof_noise_m = 0.01;
+  double range_blend = 0.5, hold_time_constant_s = 0.6;
+  double baro_drift_m_per_sqrt_s = 0.005;
+  double wander_m = 0.004, wander_mps = 0.01;  ///< the air's, stationary standard deviations
+};
+
 struct KnownDrone {
   // forward, lateral, vertical, yaw
   std::array<double, 4> gain = {1.0, 1.0, 1.0, 1.5};
@@ -37,7 +56,47 @@ struct KnownDrone {
   double yaw_noise_rad = 0.005;
   std::uint64_t seed = 7;
   bool excite_lateral = true;
+  std::optional<KnownSenses> senses;
 };
+
+/// The senses' readings at the state records (KnownSenses above), per record: h, tof, baro and
+/// the two velocity wanders with the VPS's noise.
+struct SensedRecords {
+  std::vector<double> h_m, tof_m, baro_m, dvx_mps, dvy_mps;
+};
+
+inline SensedRecords simulate_senses(const KnownSenses& k, const std::vector<double>& forward_position_m,
+                                     const std::vector<double>& height_m, std::uint64_t seed) {
+  // forward_position_m and height_m at 50 Hz (every record is each fifth sample).
+  constexpr double dt = 0.02;
+  RandomStream rng(seed, StreamId::height_sensors);
+  const double a_tau = -std::expm1(-dt / k.hold_time_constant_s), a_hold = -std::expm1(-dt / 0.5);
+  const double a_air = std::exp(-dt / 1.0), kick = std::sqrt(1.0 - a_air * a_air);
+  double d = 0.0, o = 0.0, c = 0.0, wz = 0.0, wx = 0.0, wy = 0.0;
+  SensedRecords out;
+  for (size_t i = 0; i < forward_position_m.size(); ++i) {
+    const double x = forward_position_m[i];
+    const bool over = k.board_on_path && std::abs(x + k.board_distance_m) <= k.board_half_length_m;
+    const double S = over ? k.board_height_m : 0.0;
+    const double n_tof = rng.normal(0.0, k.tof_noise_m);
+    d += k.baro_drift_m_per_sqrt_s * std::sqrt(dt) * rng.normal();
+    o += (-k.range_blend * (S + d - n_tof) - o) * a_tau;
+    c += (-(d + o) - c) * a_hold;
+    wz = a_air * wz + kick * k.wander_m * rng.normal();
+    wx = a_air * wx + kick * k.wander_mps * rng.normal();
+    wy = a_air * wy + kick * k.wander_mps * rng.normal();
+    const double n_h = rng.normal(0.0, k.height_noise_m), n_b = rng.normal(0.0, k.baro_noise_m);
+    const double n_vx = rng.normal(0.0, k.vps_noise_mps), n_vy = rng.normal(0.0, k.vps_noise_mps);
+    if (i % 5 != 0) continue;
+    const double z = height_m[i] + c + wz;
+    out.h_m.push_back(z + d + o + n_h);
+    out.tof_m.push_back(0.1 + z - S + n_tof);
+    out.baro_m.push_back(100.0 + z + d + n_b);
+    out.dvx_mps.push_back(wx + n_vx);
+    out.dvy_mps.push_back(wy + n_vy);
+  }
+  return out;
+}
 
 inline std::string log_line(TimeNs t_ns, const std::string& type, nlohmann::json fields = nlohmann::json::object()) {
   nlohmann::ordered_json j;
@@ -50,7 +109,9 @@ inline std::string log_line(TimeNs t_ns, const std::string& type, nlohmann::json
 
 /// The whole log: start, takeoff ok, the manoeuvre (rc lines), state lines, land, end.
 inline std::string synthetic_log(const KnownDrone& drone) {
-  const tello::CalibrationManoeuvre manoeuvre;
+  const tello::CalibrationManoeuvre manoeuvre(
+      tello::CalibrationAmplitudes{},
+      drone.senses ? std::optional(tello::CalibrationSenses{drone.senses->board_distance_m}) : std::nullopt);
   const TimeNs t_takeoff = 5 * kNsPerSecond;
   const TimeNs t_program = t_takeoff + kNsPerSecond / 20;
   const TimeNs t_land = t_program + seconds_to_ns(manoeuvre.duration_s()) + kNsPerSecond;
@@ -85,6 +146,28 @@ inline std::string synthetic_log(const KnownDrone& drone) {
     y[i] = unit_response(input, drone.tau_s[i], drone.delay_s, t_s, obs, tracking_loop(axis, autopilot, vehicle));
     for (double& v : y[i]) v *= drone.gain[i];
   }
+  std::optional<SensedRecords> sensed;
+  if (drone.senses) {
+    // The forward position and the height at 50 Hz, for the board and the hold.
+    std::vector<double> t50;
+    for (size_t k = 0; k < t_s.size(); ++k) {
+      for (int j = 0; j < 5; ++j) t50.push_back(t_s[k] + 0.02 * j);
+    }
+    PiecewiseInput forward, up;
+    for (const auto& [t, sticks] : rc) {
+      forward.t_s.push_back(ns_to_seconds(t - t_takeoff));
+      forward.u.push_back(sticks[1] / 100.0);
+      up.t_s.push_back(forward.t_s.back());
+      up.u.push_back(sticks[2] / 100.0);
+    }
+    std::vector<double> x = unit_response(forward, drone.tau_s[0], drone.delay_s, t50, Observation::integral,
+                                          tracking_loop(Axis::forward, autopilot, vehicle));
+    std::vector<double> z = unit_response(up, drone.tau_s[2], drone.delay_s, t50, Observation::integral,
+                                          tracking_loop(Axis::vertical, autopilot, vehicle));
+    for (double& v : x) v *= drone.gain[0];
+    for (double& v : z) v = 1.0 + v * drone.gain[2];
+    sensed = simulate_senses(*drone.senses, x, z, drone.seed);
+  }
   RandomStream noise(drone.seed, StreamId::sensor_noise);
   std::ostringstream log;
   log << log_line(0, "start", {{"mode", "calibration_flight"}});
@@ -103,6 +186,13 @@ inline std::string synthetic_log(const KnownDrone& drone) {
     r.yaw_rad = shelfcross::wrap_pi(0.3 + y[3][k] + noise.normal(0.0, drone.yaw_noise_rad));
     r.battery_pct = 80;
     r.tof_m = r.height_m + 0.1;
+    if (sensed) {
+      r.vx_H_mps = y[0][k] + sensed->dvx_mps[k];
+      r.vy_H_mps = y[1][k] + sensed->dvy_mps[k];
+      r.height_m = sensed->h_m[k];
+      r.tof_m = sensed->tof_m[k];
+      r.baro_m = sensed->baro_m[k];
+    }
     r.az_B_mps2 = 9.81;
     log << log_line(t, "state", {{"raw", verification::format_state_record(r)}, {"battery_pct", 80}, {"height_m", r.height_m}});
   }

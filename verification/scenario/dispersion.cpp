@@ -3,32 +3,42 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+#include <utility>
 
 #include "shelfcross/rotation.hpp"
 #include "verification/scenario/scenario.hpp"
+#include "verification/scenario/senses_dispersion.hpp"
 
 namespace shelfcross::verification {
+
+double* senses_dispersed_field(plant::SensesParams& senses, const std::string& name) {
+  const std::pair<const char*, double*> fields[] = {
+      {"vps_noise_mps", &senses.vps.noise_mps},
+      {"vps_bias_stddev_mps", &senses.vps.bias_stddev_mps},
+      {"vps_min_range_m", &senses.vps.min_range_m},
+      {"vps_floor_texture", &senses.vps.texture.floor},
+      {"vps_box_texture", &senses.vps.texture.box},
+      {"vps_bar_texture", &senses.vps.texture.bar},
+      {"tof_noise_m", &senses.height.tof_noise_m},
+      {"height_noise_m", &senses.height.height_noise_m},
+      {"baro_noise_m", &senses.height.baro_noise_m},
+      {"baro_drift_m_per_sqrt_s", &senses.height.baro_drift_m_per_sqrt_s},
+      {"height_hold_range_blend", &senses.height_hold.range_blend},
+      {"height_hold_range_below_m", &senses.height_hold.range_below_m},
+      {"height_hold_time_constant_s", &senses.height_hold.time_constant_s}};
+  for (const auto& [n, field] : fields) {
+    if (name == n) return field;
+  }
+  return nullptr;
+}
 
 namespace {
 
 /// The senses' dispersed keys (dispersion_table.hpp), each replacing its key.
 void apply_senses_draws(const DrawnValues& drawn, plant::SensesParams& senses) {
-  const auto set = [&](const char* name, double& field) {
-    if (const auto it = drawn.find(name); it != drawn.end()) field = it->second;
-  };
-  set("vps_noise_mps", senses.vps.noise_mps);
-  set("vps_bias_stddev_mps", senses.vps.bias_stddev_mps);
-  set("vps_min_range_m", senses.vps.min_range_m);
-  set("vps_floor_texture", senses.vps.texture.floor);
-  set("vps_box_texture", senses.vps.texture.box);
-  set("vps_bar_texture", senses.vps.texture.bar);
-  set("tof_noise_m", senses.height.tof_noise_m);
-  set("height_noise_m", senses.height.height_noise_m);
-  set("baro_noise_m", senses.height.baro_noise_m);
-  set("baro_drift_m_per_sqrt_s", senses.height.baro_drift_m_per_sqrt_s);
-  set("height_hold_range_blend", senses.height_hold.range_blend);
-  set("height_hold_range_below_m", senses.height_hold.range_below_m);
-  set("height_hold_time_constant_s", senses.height_hold.time_constant_s);
+  for (const auto& [name, value] : drawn) {
+    if (double* field = senses_dispersed_field(senses, name)) *field = value;
+  }
 }
 
 }  // namespace

@@ -21,8 +21,9 @@ namespace {
 // log's first rc datagram of it, and a lost one would move the edge the drone flew by the
 // 100 ms to the next repeat; with three copies that needs all three lost (p^3: 2.7e-5 at 3 %
 // loss, against 0.03 for each of the manoeuvre's 46 edges).
-void fly_calibration_instead(PilotLoopConfig& config) {
-  auto manoeuvre = std::make_shared<const CalibrationManoeuvre>();
+void fly_calibration_instead(PilotLoopConfig& config, const std::optional<double>& board_m) {
+  auto manoeuvre = std::make_shared<const CalibrationManoeuvre>(
+      CalibrationAmplitudes{}, board_m ? std::optional(CalibrationSenses{*board_m}) : std::nullopt);
   config.mode = "calibration_flight";
   config.driver.rc_new_copies = 3;
   config.flight.timeouts.find_shelf_s = std::max(config.flight.timeouts.find_shelf_s, manoeuvre->duration_s() + 15.0);
@@ -52,7 +53,7 @@ int run_pilot(const PilotOptions& o, const Clock& clock, const std::atomic<int>&
   config.flight_config_path = o.flight_config_path;
   config.calibration_path = o.calibration_path;
   config.console = &std::cout;
-  if (o.fly_calibration) fly_calibration_instead(config);
+  if (o.fly_calibration) fly_calibration_instead(config, o.senses_board_m);
   std::optional<PilotLoop> loop;
   try {
     loop.emplace(config, clock);

@@ -168,6 +168,10 @@ void add_flight_options(CLI::App& app, PilotOptions& o, CommandLine& c) {
   app.add_flag("--fly-calibration", o.fly_calibration,
                "fly the calibration manoeuvre (pulses and doublets of each stick, about 48 s, in open space) instead of the mission, "
                "then land: its --log is for `shelfcross identify`");
+  app.add_option("--senses-board", o.senses_board_m,
+                 "with --fly-calibration: first a still hover and a slow pass over a board whose middle lies this far (m, 1.0..2.5) "
+                 "straight behind the take-off point (docs/calibration.md); its height goes to `shelfcross identify --board-height`")
+      ->check(CLI::Range(1.0, 2.5));
 }
 
 void add_failsafe_options(CLI::App& app, CommandLine& c) {
@@ -300,6 +304,7 @@ std::optional<PilotOptions> parse_options(int argc, char** argv) {
   o.video.local_ip = o.driver.local_ip;
   parse_board_and_markers(c, o);
   load_flight_files(o);
+  if (o.senses_board_m && !o.fly_calibration) throw UsageError("--senses-board is part of --fly-calibration");
   if (o.fly_calibration && !o.calibrate_path.empty()) {
     throw UsageError("--fly-calibration and --calibrate: one at a time (the camera's calibration never flies)");
   }

@@ -27,6 +27,9 @@ struct PilotOptions {
   /// --fly-calibration: fly the calibration manoeuvre (calibration_manoeuvre.hpp) instead of
   /// the mission, for `shelfcross identify`.
   bool fly_calibration = false;
+  /// --senses-board DISTANCE: the calibration flight flies its senses block too, over a board
+  /// whose middle lies this far (m) straight behind the take-off point.
+  std::optional<double> senses_board_m;
   // Calibration mode (--calibrate OUT): record chessboard views, write the intrinsics, exit.
   std::string calibrate_path;
   int board_columns = 9;            ///< inner corners per row

@@ -111,5 +111,36 @@ TEST(CalibrationManoeuvre, StepAtFollowsTheScheduleAndEnds) {
   EXPECT_THROW(CalibrationManoeuvre(CalibrationAmplitudes{.horizontal = 90}), std::invalid_argument);
 }
 
+// The senses block: first, after the first hover: 15 s of still hover, back at stick 20 for the
+// board's distance at 0.2 m/s, 8 s over the board, forward as long, 2.5 s of hover; then the
+// manoeuvre as without it. Back where it began; refused for a board too near or too far.
+TEST(CalibrationManoeuvre, TheSensesBlockHoversStillThenPassesOverTheBoardAndBack) {
+  const CalibrationManoeuvre plain;
+  const CalibrationManoeuvre m(CalibrationAmplitudes{}, CalibrationSenses{1.5});
+  ASSERT_EQ(m.steps().size(), plain.steps().size() + 5);
+  const std::array<int, 4> centred{};
+  EXPECT_EQ(m.steps()[1].sticks, centred);
+  EXPECT_DOUBLE_EQ(m.steps()[1].duration_s, CalibrationManoeuvre::kStillHover_s);
+  EXPECT_EQ(m.steps()[2].sticks, (std::array<int, 4>{0, -20, 0, 0}));
+  EXPECT_EQ(m.steps()[4].sticks, (std::array<int, 4>{0, 20, 0, 0}));
+  EXPECT_DOUBLE_EQ(m.steps()[2].duration_s, 7.5);
+  EXPECT_DOUBLE_EQ(m.steps()[4].duration_s, 7.5);
+  EXPECT_GE(m.steps()[3].duration_s, 8.0);  // four of the slowest height hold's 2 s
+  EXPECT_GE(m.steps()[5].duration_s, 2.5);  // the forward axis settles before its first pulse
+  for (size_t i = 1; i < plain.steps().size(); ++i) EXPECT_EQ(m.steps()[i + 5].sticks, plain.steps()[i].sticks) << i;
+  EXPECT_NEAR(m.duration_s(), plain.duration_s() + 40.5, 1e-9);
+  double x = 0.0, farthest = 0.0;
+  for (size_t i = 0; i < m.steps().size(); ++i) {
+    x += m.steps()[i].sticks[1] / 100.0 * m.steps()[i].duration_s;  // at 1 m/s at full stick
+    farthest = std::min(farthest, x);
+    if (i == 5) {
+      EXPECT_NEAR(x, 0.0, 1e-9);  // back over the take-off point
+    }
+  }
+  EXPECT_NEAR(farthest, -1.5, 1e-9);  // the board's middle
+  EXPECT_THROW(CalibrationManoeuvre(CalibrationAmplitudes{}, CalibrationSenses{0.9}), std::invalid_argument);
+  EXPECT_THROW(CalibrationManoeuvre(CalibrationAmplitudes{}, CalibrationSenses{2.6}), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace shelfcross::tello

@@ -205,6 +205,10 @@ TEST(TelloPilot, BadCommandLineOrConfigExitsWith2) {
   EXPECT_EQ(run_to_exit({"--config", kConfig, "--pilot", (dir / "pilot.yaml").string()}, &err), 2);
   EXPECT_NE(err.find("pilot.yaml:3"), std::string::npos) << err;
   EXPECT_EQ(run_to_exit({"--config", kConfig, "--log", (dir / "no" / "such" / "dir.jsonl").string()}, &err), 2);
+  EXPECT_EQ(run_to_exit({"--config", kConfig, "--senses-board", "1.5"}, &err), 2);  // a part of --fly-calibration
+  EXPECT_NE(err.find("--fly-calibration"), std::string::npos) << err;
+  EXPECT_EQ(run_to_exit({"--config", kConfig, "--fly-calibration", "--senses-board", "3"}, &err), 2);  // 1.0..2.5 m
+  EXPECT_NE(err.find("--senses-board"), std::string::npos) << err;
   EXPECT_EQ(run_to_exit({"--config", kConfig, "--damaged-video", "blurry"}, &err), 2);
   EXPECT_NE(err.find("--damaged-video"), std::string::npos) << err;
   std::ofstream(dir / "video.yaml") << "video:\n  damaged_frames: conceal\n  damage_limit: 3\n";
