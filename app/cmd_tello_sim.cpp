@@ -4,6 +4,7 @@
 #include <csignal>
 #include <fstream>
 #include <iostream>
+#include <tuple>
 
 #include <opencv2/core.hpp>
 
@@ -21,6 +22,8 @@ struct TelloSimOptions {
   std::string scenario = verification::kDefaultScenarioFile;
   verification::EmulatorConfig config;
   std::string video_stall;
+  std::string outage;         ///< --outage T,D
+  std::string outage_lengths; ///< --outage-lengths MIN,MAX
   double max_seconds = 0.0;
   std::string report;
   bool nominal = false;
@@ -37,19 +40,34 @@ void write_calibration(const std::string& path, const CameraIntrinsics& c) {
      << "distortion_coefficients" << d;
 }
 
-/// "T,D" in seconds.
-void parse_stall(const std::string& text, verification::EmulatorFaults& f) {
+/// "A,B": two numbers; `what` names the option and the numbers for the message.
+std::pair<double, double> parse_pair(const std::string& text, const std::string& what) {
   const auto comma = text.find(',');
   try {
     if (comma == std::string::npos) throw std::invalid_argument("");
-    std::size_t used_t = 0, used_d = 0;
-    const std::string t = text.substr(0, comma), d = text.substr(comma + 1);
-    const double start = std::stod(t, &used_t), duration = std::stod(d, &used_d);
-    if (used_t != t.size() || used_d != d.size()) throw std::invalid_argument("");
-    f.video_stall_start_s = start;
-    f.video_stall_duration_s = duration;
+    std::size_t used_a = 0, used_b = 0;
+    const std::string a = text.substr(0, comma), b = text.substr(comma + 1);
+    const double first = std::stod(a, &used_a), second = std::stod(b, &used_b);
+    if (used_a != a.size() || used_b != b.size()) throw std::invalid_argument("");
+    return {first, second};
   } catch (const std::exception&) {
-    throw UsageError("--video-stall: expected T,D (seconds since the start, duration), got '" + text + "'");
+    throw UsageError(what + ", got '" + text + "'");
+  }
+}
+
+/// The options given as pairs: the video stall, the fixed outage, the random outages' lengths.
+void parse_pairs(const TelloSimOptions& o, verification::EmulatorFaults& f) {
+  if (!o.video_stall.empty()) {
+    std::tie(f.video_stall_start_s.emplace(), f.video_stall_duration_s) =
+        parse_pair(o.video_stall, "--video-stall: expected T,D (seconds since the start, duration)");
+  }
+  if (!o.outage.empty()) {
+    std::tie(f.outages.start_s.emplace(), f.outages.duration_s) =
+        parse_pair(o.outage, "--outage: expected T,D (seconds since the start, duration)");
+  }
+  if (!o.outage_lengths.empty()) {
+    std::tie(f.outages.min_s, f.outages.max_s) =
+        parse_pair(o.outage_lengths, "--outage-lengths: expected MIN,MAX (seconds)");
   }
 }
 
@@ -99,6 +117,18 @@ const CommandRegistration kTelloSim{
       sub.add_option("--no-valid-imu", f.no_valid_imu, "probability of 'error No valid imu' for a manoeuvre (1: always)")
           ->check(probability);
       sub.add_option("--video-stall", o->video_stall, "T,D: no frames from T s after the start for D s");
+      sub.add_option("--burst-mean", f.bursts.bad_mean_s,
+                     "losses in bursts: mean burst length (s; each channel's bad state; 0: no bursts)")
+          ->capture_default_str()->check(CLI::Range(0.0, 60.0));
+      sub.add_option("--burst-interval", f.bursts.good_mean_s, "mean time between bursts (s; the good state)")
+          ->capture_default_str()->check(CLI::Range(0.1, 3600.0));
+      sub.add_option("--burst-loss", f.bursts.bad_loss, "probability that a datagram is lost in a burst")
+          ->capture_default_str()->check(probability);
+      sub.add_option("--outage-interval", f.outages.interval_mean_s,
+                     "outages of every channel at random: mean time between them (s; 0: none)")
+          ->capture_default_str();
+      sub.add_option("--outage-lengths", o->outage_lengths, "MIN,MAX: a random outage lasts uniform in [MIN, MAX] s (1,5)");
+      sub.add_option("--outage", o->outage, "T,D: every channel down from T s after the start for D s");
       sub.add_option("--key-interval", c.key_interval_frames,
                      "frames between key frames (0: one per second, as the Tello)")
           ->capture_default_str()->check(CLI::Range(0, 600));
@@ -111,7 +141,7 @@ const CommandRegistration kTelloSim{
           ->capture_default_str()->check(CLI::Range(0.0, 1e6));
       sub.add_option("--report", o->report, "write the report as JSON to this file");
       return [o]() -> int {
-        if (!o->video_stall.empty()) parse_stall(o->video_stall, o->config.faults);
+        parse_pairs(*o, o->config.faults);
         try {
           verification::validate_emulator_config(o->config);
         } catch (const std::invalid_argument& e) {

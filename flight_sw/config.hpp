@@ -203,9 +203,12 @@ struct Timeouts {
   double video_land_s = 3.0;     ///< no frame for this long: land
   /// The mission's time budget from its start (the first command): an operator's limit (the
   /// Tello flies about 13 min on a charge; the battery failsafe lands it at low_battery_pct).
+  /// tello_pilot's shipped configuration gives it 110 s, what a campaign of the default
+  /// scenario gives (verification's flight_config_for: cosim.timeout_s less 10 s).
   /// Once spent, the airborne mission gives up where that is safe: an approach backs out to
-  /// land clear of the shelf, a crossing is finished, a transfer flies its leg, the other
-  /// phases land where they are (in front of a shelf or beyond it, never in it).
+  /// land clear of the shelf, a re-read begun close to the shelf finishes backing out, a
+  /// crossing is finished, a transfer flies its leg, the other phases land where they are (in
+  /// front of a shelf or beyond it, never in it).
   double mission_s = 600.0;
 };
 

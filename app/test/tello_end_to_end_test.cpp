@@ -367,6 +367,14 @@ TEST(TelloSimCommandLine, BadOptionsExit2WithAMessage) {
   expect_bad("--delay-state -3", "--delay-state");
   expect_bad("--video-stall 5", "--video-stall");
   expect_bad("--video-stall 5,0", "video stall");
+  expect_bad("--burst-mean 61", "--burst-mean");
+  expect_bad("--burst-loss 2", "--burst-loss");
+  expect_bad("--burst-interval 0", "--burst-interval");
+  expect_bad("--outage-interval 0.5", "time between outages");
+  expect_bad("--outage-lengths 3", "--outage-lengths");
+  expect_bad("--outage-lengths 4,2", "outage lengths");
+  expect_bad("--outage 5", "--outage");
+  expect_bad("--outage 5,0", "an outage needs");
   expect_bad("--command-port 70000", "--command-port");
   expect_bad("--slices 0", "--slices");
   expect_bad("--bind-ip 300.1.1.1", "300.1.1.1");

@@ -59,7 +59,11 @@ bool AirbornePhases::supervise(AirborneTools t) {
     return false;
   };
   switch (facts.phase.current()) {
-    case Phase::FindShelf: return timed_out(to.find_shelf_s, "shelf not found");
+    case Phase::FindShelf:
+      // A re-read from close backs straight out first (TargetApproach::reread_back_until_ns):
+      // out of time then, it finishes backing out and lands there, not close to the shelf.
+      if (out_of_time && rereading_from_close(facts)) return false;
+      return timed_out(to.find_shelf_s, "shelf not found");
     case Phase::GoToViewpoint: return timed_out(to.go_to_viewpoint_s, "viewpoint not reached");
     case Phase::TakeInventory:
       // Out of time in a hover that has lost the whole grid: search for the shelf once more.
@@ -135,10 +139,13 @@ void AirbornePhases::on_phase_change() {
 
 // ---- Phase behaviours on a picture ----
 
-void AirbornePhases::find_shelf(const Picture& pic, AirborneTools t) {
+bool AirbornePhases::rereading_from_close(const MissionFacts& facts) const {
   const std::optional<TimeNs>& back_until = approach_.reread_back_until_ns();
-  const bool back_out = back_until && t.facts.now_ns < *back_until;
-  const SurveyStep step = survey_.find_shelf(pic, back_out, t.facts.telemetry);
+  return back_until && facts.now_ns < *back_until;
+}
+
+void AirbornePhases::find_shelf(const Picture& pic, AirborneTools t) {
+  const SurveyStep step = survey_.find_shelf(pic, rereading_from_close(t.facts), t.facts.telemetry);
   fly(step, t.sticks, t.facts.now_ns);
   if (step.next == SurveyStep::Next::WholeShelfInView) {
     t.mission.enter(Phase::GoToViewpoint, "whole shelf in view");

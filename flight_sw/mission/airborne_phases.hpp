@@ -69,6 +69,8 @@ class AirbornePhases {
   int shelf() const { return shelf_; }  ///< the shelf being read or passed, from 0
 
  private:
+  /// In FindShelf: a re-read that started closer than the viewpoint is still backing straight out.
+  bool rereading_from_close(const MissionFacts& facts) const;
   void find_shelf(const Picture& pic, AirborneTools t);
   void go_to_viewpoint(const Picture& pic, bool view_fresh, AirborneTools t);
   /// The inventory taken: the conventional strategies fly their transfer; through the cells,

@@ -47,6 +47,7 @@ enum class StreamId : std::uint64_t {
   state_latency = 12,  ///< state records and replies
   vps = 13,            ///< the vision positioning system's velocity errors
   height_sensors = 14, ///< barometer, range sensor and height noise and drift
+  link_bursts = 15,    ///< the link's loss bursts and outages (their spells' lengths)
 };
 
 /// xoshiro256** (Blackman & Vigna 2018), state filled from SplitMix64 of the stream's seed.

@@ -1,19 +1,21 @@
 // The ideal link of the co-simulation: whole messages (a frame, a state record, a command, a
-// reply, delivered or lost whole), the flight software alone, no driver and no decoder. The
-// world advances to every event time, not only to autopilot ticks.
+// reply, delivered or lost whole), the flight software alone, no driver and no decoder. The world
+// advances to every event time, not only to autopilot ticks.
 //
-// Its faults are the sdk link's: one DatagramFaults from the same settings (link_faults) and
-// the same seed (the run's) as the simulated Tello's, each message drawn as the Tello draws
-// its datagram: a frame's loss (frame_lost, the video stall), a command's, a state record's
-// and a reply's fate (lost, twice, late), each channel's arrival (due: delay, jitter, order
-// kept). A message sent twice is delivered twice at the same instant, as the sdk link does:
-// the firmware answers a second command as it answers any (a second `takeoff` in the air is
-// refused "error"), and the flight software drops a reply that answers nothing as stale.
-// What the ideal link has no part for: video datagrams (video.loss: a lost datagram gives an
-// error-concealed picture on the sdk link, not a lost frame, and the ideal link has no
-// decoder to damage a picture, so its pictures are always whole and per-datagram loss is not
-// applied), the firmware's injected refusals (not_joystick, no_valid_imu: the simulated
-// Tello's command interpreter answers them; here the plant's firmware answers every command).
+// Its faults are the sdk link's: one DatagramFaults from the same settings (link_faults) and the
+// same seed (the run's) as the simulated Tello's, each message drawn as the Tello draws its
+// datagram: a frame's loss (frame_lost, the video stall), a command's, a state record's and a
+// reply's fate (lost, twice, late), each channel's arrival (due: delay, jitter, order kept), and
+// the bursts and outages (fault_windows.hpp: a command, reply or state record drawn at its time on
+// air; a frame lost whole in an outage at its arrival). A message sent twice is delivered twice at
+// the same instant, as the sdk link does: the firmware answers a second command as it answers any
+// (a second `takeoff` in the air is refused "error"), and the flight software drops a reply that
+// answers nothing as stale. What the ideal link has no part for: video datagrams (video.loss: a
+// lost datagram gives an error-concealed picture on the sdk link, not a lost frame, and the ideal
+// link has no decoder to damage a picture, so its pictures are always whole and per-datagram loss
+// is not applied, nor the video channel's bursts), the firmware's injected refusals (not_joystick,
+// no_valid_imu: the simulated Tello's command interpreter answers them; here the plant's firmware
+// answers every command).
 
 #include <algorithm>
 #include <memory>
@@ -85,7 +87,7 @@ class IdealLink {
 void IdealLink::send_commands(const std::vector<SdkCommand>& commands) {
   LinkMetrics& l = run_.result.metrics.link;
   for (const SdkCommand& c : commands) {
-    const DatagramFaults::Fate fate = faults_.command(c.text);
+    const DatagramFaults::Fate fate = faults_.command(c.text, c.t_ns + compute_ns_);
     run_.log_event(c.t_ns, "send " + c.text + (fate.lost ? " (lost)" : ""));
     ++l.commands_sent;
     if (fate.lost) {
@@ -99,7 +101,7 @@ void IdealLink::send_commands(const std::vector<SdkCommand>& commands) {
 }
 
 void IdealLink::reply_to_fsw(TimeNs t_sent, const std::string& text) {
-  const DatagramFaults::Fate fate = faults_.reply();
+  const DatagramFaults::Fate fate = faults_.reply(t_sent);
   if (fate.lost) {
     ++run_.result.metrics.link.replies_lost;
     return;
@@ -111,7 +113,7 @@ void IdealLink::reply_to_fsw(TimeNs t_sent, const std::string& text) {
 
 void IdealLink::send_state(TimeNs t) {
   const StateText record{format_state_record(world_.state_record(t))};
-  const DatagramFaults::Fate fate = faults_.state();
+  const DatagramFaults::Fate fate = faults_.state(t);
   if (fate.lost) {
     ++run_.result.metrics.link.state_records_lost;
     return;
@@ -180,6 +182,11 @@ void IdealLink::capture(TimeNs t) {
     return;
   }
   const TimeNs arrival = faults_.due(DatagramFaults::Channel::video, t);
+  // On air from its arrival, as the sdk link's datagrams are: lost whole in an outage.
+  if (faults_.outage(arrival)) {
+    ++l.frames_lost;
+    return;
+  }
   cv::Mat& frame_bgr = free_frame_buffer();
   if (run_.cs.motion_blur_samples > 1) {
     run_.renderer.render_blurred_rolling_into(capture->X_WC_prev, capture->X_WC_readout_start, capture->X_WC,

@@ -16,9 +16,17 @@ EmulatorFaults link_faults(const LinkSettings& l) {
   f.no_valid_imu = l.no_valid_imu_probability;
   f.lost_command_prefix = l.lost_command;
   f.lost_command_count = l.lost_command_count;
-  if (l.video_stall_start_s >= 0.0 && l.video_stall_duration_s > 0.0) {
-    f.video_stall_start_s = l.video_stall_start_s;
-    f.video_stall_duration_s = l.video_stall_duration_s;
+  if (l.spells.video_stall_start_s >= 0.0 && l.spells.video_stall_duration_s > 0.0) {
+    f.video_stall_start_s = l.spells.video_stall_start_s;
+    f.video_stall_duration_s = l.spells.video_stall_duration_s;
+  }
+  f.bursts = {l.spells.burst_loss, l.spells.burst_mean_s, l.spells.burst_interval_s};
+  f.outages.interval_mean_s = l.spells.outage_interval_s;
+  f.outages.min_s = l.spells.outage_min_s;
+  f.outages.max_s = l.spells.outage_max_s;
+  if (l.spells.outage_start_s >= 0.0 && l.spells.outage_duration_s > 0.0) {
+    f.outages.start_s = l.spells.outage_start_s;
+    f.outages.duration_s = l.spells.outage_duration_s;
   }
   return f;
 }

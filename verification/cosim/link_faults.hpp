@@ -12,8 +12,9 @@
 namespace shelfcross::verification {
 
 /// The fault settings of a link: latencies in ms, each channel's loss and duplication, the
-/// whole-frame loss, late replies, refusals, the lost-command injection and the video stall
-/// (on only when video_stall_start_s >= 0 and video_stall_duration_s > 0). Requires settings
+/// whole-frame loss, late replies, refusals, the lost-command injection, the video stall
+/// (on only when video_stall_start_s >= 0 and video_stall_duration_s > 0), the bursts and the
+/// outages (the fixed one on only when outage_start_s >= 0 and outage_duration_s > 0). Requires settings
 /// checked by the scenario reader; not checked again here. Does not throw.
 EmulatorFaults link_faults(const LinkSettings& link);
 

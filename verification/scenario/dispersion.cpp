@@ -150,8 +150,14 @@ RunSetup disperse(const Scenario& nominal, std::uint64_t run_seed, const DrawnVa
   if (has("state_loss")) link.state_loss = value("state_loss");
   if (has("reply_loss")) link.reply_loss = value("reply_loss");
   if (has("not_joystick_probability")) link.not_joystick_probability = value("not_joystick_probability");
-  if (has("video_stall_start_s")) link.video_stall_start_s = value("video_stall_start_s");
-  if (has("video_stall_duration_s")) link.video_stall_duration_s = value("video_stall_duration_s");
+  if (has("video_stall_start_s")) link.spells.video_stall_start_s = value("video_stall_start_s");
+  if (has("video_stall_duration_s")) link.spells.video_stall_duration_s = value("video_stall_duration_s");
+  if (has("burst_loss")) link.spells.burst_loss = value("burst_loss");
+  if (has("burst_mean_s")) link.spells.burst_mean_s = value("burst_mean_s");
+  if (has("burst_interval_s")) link.spells.burst_interval_s = value("burst_interval_s");
+  if (has("outage_interval_s")) link.spells.outage_interval_s = value("outage_interval_s");
+  if (has("outage_start_s")) link.spells.outage_start_s = value("outage_start_s");
+  if (has("outage_duration_s")) link.spells.outage_duration_s = value("outage_duration_s");
   apply_senses_draws(setup.drawn, s->senses);
   setup.scenario = std::move(s);
   return setup;

@@ -33,6 +33,12 @@
 //                           distribution (cosim_settings.hpp, kMeasuredStepLatency): the
 //                           draw is a quantile q, the step time its inverse CDF at q; so
 //                           {uniform: {min: 0, max: 1}} draws from the measured distribution
+//   burst_loss              link: loss in a burst (cosim.link.burst_loss)        [0, 1]
+//   burst_mean_s            link: mean burst length, s (0: no bursts)            [0, 60]
+//   burst_interval_s        link: mean good spell between bursts, s              [0.1, 3600]
+//   outage_interval_s       link: mean quiet spell between random outages, s     [1, 3600]
+//   outage_start_s          link: the fixed outage's start, s since the start    [0, 3600]
+//   outage_duration_s       link: the fixed outage's length, s (0: none)         [0, 60]
 //   shelf_behind_distance_m shelf 1's front face this far behind shelf 0's      [0.1, 20]
 //                           (along shelf 0's normal; shelf 1 takes shelf 0's heading)
 //   shelf_behind_lateral_m  shelf 1 moved along shelf 0's y_S, added             [-5, 5]

@@ -13,6 +13,30 @@
 
 namespace shelfcross::verification {
 
+/// The link's faults that last (the keys stay flat in `cosim.link`): the video stall, losses
+/// in bursts, outages.
+struct LinkSpells {
+  double video_stall_start_s = -1.0;       ///< no frames in [start, start + duration); < 0: none
+  double video_stall_duration_s = 0.0;
+  /// Losses in bursts (verification/world/fault_windows.hpp): each channel's two-state chain,
+  /// a bad spell of Exp(burst_mean_s) after a good one of Exp(burst_interval_s), a datagram
+  /// (ideal: a command, reply or state record; not a frame) lost with burst_loss in the bad
+  /// state and with the channel's own loss in the good one. burst_mean_s 0: no bursts.
+  double burst_loss = 0.5;
+  double burst_mean_s = 0.0;
+  double burst_interval_s = 10.0;
+  /// Outages: nothing passes on any channel, either way (ideal: a frame lost whole). At random,
+  /// a quiet spell of Exp(outage_interval_s) then an outage of uniform [outage_min_s,
+  /// outage_max_s] in turn (outage_interval_s 0: none at random); and one at outage_start_s
+  /// (< 0: none) lasting outage_duration_s.
+  double outage_interval_s = 0.0;
+  double outage_min_s = 1.0;
+  double outage_max_s = 5.0;
+  double outage_start_s = -1.0;
+  double outage_duration_s = 0.0;
+  bool operator==(const LinkSpells&) const = default;
+};
+
 /// The link between the Tello and the flight computer, for both models (scenarios/README.md
 /// argues every default):
 ///   sdk    the Tello's own datagrams: the simulated Tello's firmware answers command
@@ -54,8 +78,7 @@ struct LinkSettings {
   /// command, and this key is ignored).
   double not_joystick_probability = 0.0;
   double no_valid_imu_probability = 0.0;   ///< ... refused "error No valid imu" (sdk only, as above)
-  double video_stall_start_s = -1.0;       ///< no frames in [start, start + duration); < 0: none
-  double video_stall_duration_s = 0.0;
+  LinkSpells spells;                       ///< the video stall, losses in bursts, outages
   int video_slices = 45;                   ///< slices per picture (one per macroblock row; sdk only)
   int key_interval_frames = 0;             ///< 0: a key frame per second of captures (sdk only)
   /// Fault injection: every command beginning with this text is lost ("land": a lost land, as

@@ -357,8 +357,19 @@ void visit_link(V& v, LinkSettings& l) {
   v.field("late_reply_s", l.late_reply_s, between(0.0, 600.0));
   v.field("not_joystick_probability", l.not_joystick_probability, between(0.0, 1.0));
   v.field("no_valid_imu_probability", l.no_valid_imu_probability, between(0.0, 1.0));
-  v.field("video_stall_start_s", l.video_stall_start_s, between(-1.0, 3600.0));
-  v.field("video_stall_duration_s", l.video_stall_duration_s, between(0.0, 3600.0));
+  v.field("video_stall_start_s", l.spells.video_stall_start_s, between(-1.0, 3600.0));
+  v.field("video_stall_duration_s", l.spells.video_stall_duration_s, between(0.0, 3600.0));
+  v.field("burst_loss", l.spells.burst_loss, between(0.0, 1.0));
+  v.field("burst_mean_s", l.spells.burst_mean_s, between(0.0, 60.0));
+  v.field("burst_interval_s", l.spells.burst_interval_s, between(0.1, 3600.0));
+  v.field("outage_interval_s", l.spells.outage_interval_s, between(0.0, 3600.0));
+  v.check("outage_interval_s", l.spells.outage_interval_s == 0.0 || l.spells.outage_interval_s >= 1.0,
+          "0 (no outages at random) or at least 1 s");
+  v.field("outage_min_s", l.spells.outage_min_s, between(0.01, 60.0));
+  v.field("outage_max_s", l.spells.outage_max_s, between(0.01, 60.0));
+  v.check("outage_max_s", l.spells.outage_max_s >= l.spells.outage_min_s, "must not be below outage_min_s");
+  v.field("outage_start_s", l.spells.outage_start_s, between(-1.0, 3600.0));
+  v.field("outage_duration_s", l.spells.outage_duration_s, between(0.0, 60.0));
   v.field("video_slices", l.video_slices, between(1, 45));
   v.field("key_interval_frames", l.key_interval_frames, between(0, 600));
   v.field("lost_command", l.lost_command);

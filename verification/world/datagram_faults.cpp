@@ -19,7 +19,8 @@ TimeNs jittered_ms(RandomStream& stream, double mean_ms, double sigma_ms) {
 }  // namespace
 
 // Each stream's seed is the run's seed mixed with a number of its own (1 to 10): streams apart,
-// and a run's draws fixed by its seed.
+// and a run's draws fixed by its seed. The bursts' and outages' streams are of a stream id of
+// their own (link_bursts), numbered the same way (1 to 5).
 DatagramFaults::DatagramFaults(const EmulatorFaults& faults, std::uint64_t seed)
     : faults_(faults),
       command_(mix64(seed ^ 1), StreamId::link_faults),
@@ -31,11 +32,32 @@ DatagramFaults::DatagramFaults(const EmulatorFaults& faults, std::uint64_t seed)
       command_jitter_(mix64(seed ^ 7), StreamId::link_faults),
       reply_jitter_(mix64(seed ^ 8), StreamId::link_faults),
       state_jitter_(mix64(seed ^ 9), StreamId::link_faults),
-      video_jitter_(mix64(seed ^ 10), StreamId::link_faults) {}
+      video_jitter_(mix64(seed ^ 10), StreamId::link_faults),
+      bursts_{burst_windows(faults.bursts, RandomStream(mix64(seed ^ 1), StreamId::link_bursts)),
+              burst_windows(faults.bursts, RandomStream(mix64(seed ^ 2), StreamId::link_bursts)),
+              burst_windows(faults.bursts, RandomStream(mix64(seed ^ 3), StreamId::link_bursts)),
+              burst_windows(faults.bursts, RandomStream(mix64(seed ^ 4), StreamId::link_bursts))},
+      outages_(outage_windows(faults.outages, RandomStream(mix64(seed ^ 5), StreamId::link_bursts))) {}
 
-DatagramFaults::Fate DatagramFaults::command(std::string_view text) {
+bool DatagramFaults::outage(TimeNs t) {
+  const LinkOutages& o = faults_.outages;
+  if (o.start_s && t >= seconds_to_ns(*o.start_s) && t < seconds_to_ns(*o.start_s + o.duration_s)) return true;
+  return outages_.active(t);
+}
+
+bool DatagramFaults::burst(Channel channel, TimeNs t) { return bursts_[static_cast<int>(channel)].active(t); }
+
+bool DatagramFaults::lost(RandomStream& stream, double loss, Channel channel, TimeNs t) {
+  // One draw, always (as RandomStream::bernoulli takes it): the stream's place never depends on
+  // the state of the link.
+  const double u = stream.uniform01();
+  if (outage(t)) return true;
+  return u < (burst(channel, t) ? faults_.bursts.bad_loss : loss);
+}
+
+DatagramFaults::Fate DatagramFaults::command(std::string_view text, TimeNs t) {
   Fate f;
-  f.lost = command_.bernoulli(faults_.commands.loss);
+  f.lost = lost(command_, faults_.commands.loss, Channel::command, t);
   f.twice = command_.bernoulli(faults_.commands.duplicate);
   const std::string& prefix = faults_.lost_command_prefix;
   if (!prefix.empty() && text.starts_with(prefix)) {
@@ -45,24 +67,24 @@ DatagramFaults::Fate DatagramFaults::command(std::string_view text) {
   return f;
 }
 
-DatagramFaults::Fate DatagramFaults::reply() {
+DatagramFaults::Fate DatagramFaults::reply(TimeNs t) {
   Fate f;
-  f.lost = reply_.bernoulli(faults_.replies.loss);
+  f.lost = lost(reply_, faults_.replies.loss, Channel::reply, t);
   f.late = reply_.bernoulli(faults_.late_replies);
   f.twice = reply_.bernoulli(faults_.replies.duplicate);
   return f;
 }
 
-DatagramFaults::Fate DatagramFaults::state() {
+DatagramFaults::Fate DatagramFaults::state(TimeNs t) {
   Fate f;
-  f.lost = state_.bernoulli(faults_.state.loss);
+  f.lost = lost(state_, faults_.state.loss, Channel::state, t);
   f.twice = state_.bernoulli(faults_.state.duplicate);
   return f;
 }
 
 bool DatagramFaults::frame_lost() { return frame_.bernoulli(faults_.video_frame_loss); }
 
-bool DatagramFaults::video_datagram_lost() { return video_.bernoulli(faults_.video.loss); }
+bool DatagramFaults::video_datagram_lost(TimeNs t) { return lost(video_, faults_.video.loss, Channel::video, t); }
 
 DatagramFaults::Refusal DatagramFaults::refusal() {
   Refusal r;

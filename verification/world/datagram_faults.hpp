@@ -5,7 +5,11 @@
 // late replies come from a stream of its own, seeded from the run's seed (so one setting
 // never shifts another's draws, and every fate draws the same count whatever it turns out),
 // and each channel's delivery times: the delay plus a normal jitter truncated at +-3 sigma,
-// never before the channel's previous datagram (one Wi-Fi hop does not reorder).
+// never before the channel's previous datagram (one Wi-Fi hop does not reorder). Losses in
+// bursts and outages (fault_windows.hpp) come from streams of their own too (StreamId::
+// link_bursts): a datagram's loss is still one draw of its channel's stream, compared with the
+// bad state's loss probability instead of the channel's own while a burst lasts, and lost
+// whatever it drew while an outage lasts; with neither on, every draw is what it was.
 
 #include <cstdint>
 #include <optional>
@@ -14,6 +18,7 @@
 
 #include "shelfcross/random.hpp"
 #include "shelfcross/time.hpp"
+#include "verification/world/fault_windows.hpp"
 
 namespace shelfcross::verification {
 
@@ -43,6 +48,8 @@ struct EmulatorFaults {
   int lost_command_count = 0;
   std::optional<double> video_stall_start_s;  ///< no frames in [start, start + duration)
   double video_stall_duration_s = 0.0;
+  BurstLoss bursts;      ///< losses in bursts, each channel its own chain; off by default
+  LinkOutages outages;   ///< every channel down at once; none by default
   bool operator==(const EmulatorFaults&) const = default;
 };
 
@@ -64,18 +71,23 @@ class DatagramFaults {
   /// probabilities in [0, 1], delays and jitters >= 0); not checked again here. Any seed.
   DatagramFaults(const EmulatorFaults& faults, std::uint64_t seed);
 
-  /// A command datagram with this text: lost, twice (two draws, always); lost also when the
-  /// text begins with lost_command_prefix, the first lost_command_count of them (applied
-  /// after the draws, so it shifts none).
-  Fate command(std::string_view text);
-  /// A reply: lost, late, twice (three draws, always).
-  Fate reply();
-  /// A state record: lost, twice (two draws, always).
-  Fate state();
-  /// A whole frame: one draw per capture.
+  /// A command datagram with this text on air at t: lost, twice (two draws, always); lost also
+  /// when the text begins with lost_command_prefix, the first lost_command_count of them
+  /// (applied after the draws, so it shifts none). Every fate below is lost in an outage and
+  /// drawn against the bad state's loss in a burst of its channel, at its t.
+  Fate command(std::string_view text, TimeNs t);
+  /// A reply on air at t: lost, late, twice (three draws, always).
+  Fate reply(TimeNs t);
+  /// A state record on air at t: lost, twice (two draws, always).
+  Fate state(TimeNs t);
+  /// A whole frame: one draw per capture (the outages are the caller's: outage()).
   bool frame_lost();
-  /// One datagram of a frame that is sent: one draw each.
-  bool video_datagram_lost();
+  /// One datagram of a frame that is sent, on air at t: one draw each.
+  bool video_datagram_lost(TimeNs t);
+  /// Whether the link is down at t (a random outage or the fixed one): nothing passes.
+  bool outage(TimeNs t);
+  /// Whether `channel` is in a burst (its chain's bad state) at t.
+  bool burst(Channel channel, TimeNs t);
   /// A refusable manoeuvre: "error Not joystick", "error No valid imu" (two draws, always).
   Refusal refusal();
   /// Whether a frame captured at t falls in the video stall [start, start + duration).
@@ -89,11 +101,17 @@ class DatagramFaults {
   TimeNs reply_due(const Fate& fate, TimeNs t);
 
  private:
+  /// One draw of `stream` against the channel's loss now: `loss` in the good state, the
+  /// bursts' bad_loss in a burst; lost in an outage whatever it drew.
+  bool lost(RandomStream& stream, double loss, Channel channel, TimeNs t);
+
   EmulatorFaults faults_;
   int prefixed_commands_seen_ = 0;
   RandomStream command_, reply_, state_, video_, error_, frame_;
   RandomStream command_jitter_, reply_jitter_, state_jitter_, video_jitter_;
   TimeNs last_due_[4] = {0, 0, 0, 0};  ///< per channel
+  FaultWindows bursts_[4];             ///< per channel: its chain's bad spells
+  FaultWindows outages_;               ///< the random outages
 };
 
 }  // namespace shelfcross::verification

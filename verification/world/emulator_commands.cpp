@@ -48,7 +48,7 @@ void SdkCommandInterpreter::receive(TimeNs now_ns, EmulatorOutbox& outbox) {
       continue;
     }
     DatagramFaults& faults = outbox.faults_locked();
-    const DatagramFaults::Fate fate = faults.command(d->bytes);
+    const DatagramFaults::Fate fate = faults.command(d->bytes, now_ns);
     if (fate.lost) {
       ++counters.commands_dropped;
       continue;

@@ -28,7 +28,7 @@ void EmulatorOutbox::queue_locked(TimeNs due_ns, Channel channel, const tello::E
 }
 
 void EmulatorOutbox::send_reply_locked(TimeNs t, const std::string& text, const tello::Endpoint& to) {
-  const DatagramFaults::Fate fate = faults_.reply();
+  const DatagramFaults::Fate fate = faults_.reply(t);
   if (fate.lost) {
     ++counters_.replies_dropped;
     return;
@@ -43,7 +43,7 @@ void EmulatorOutbox::send_reply_locked(TimeNs t, const std::string& text, const 
 }
 
 void EmulatorOutbox::send_state_locked(TimeNs t, const std::string& text, const tello::Endpoint& to) {
-  const DatagramFaults::Fate fate = faults_.state();
+  const DatagramFaults::Fate fate = faults_.state(t);
   if (fate.lost) {
     ++counters_.state_dropped;
     return;
@@ -62,7 +62,7 @@ void EmulatorOutbox::send_frame_locked(TimeNs t_capture, std::vector<std::string
   if (key) ++counters_.key_frames;
   const TimeNs due = faults_.due(DatagramFaults::Channel::video, t_capture);
   for (std::string& d : datagrams) {
-    if (faults_.video_datagram_lost()) {
+    if (faults_.video_datagram_lost(due)) {  // on air from its due time
       ++counters_.video_datagrams_dropped;
     } else {
       queue_locked(due, Channel::video, to, std::move(d));

@@ -29,7 +29,9 @@ bool emulator_applies_dispersion(const std::string& name) {
       "video_latency_mean_s",   "frame_drop_probability",   "command_latency_mean_s",
       "command_loss_probability", "compute_latency_s",      "compute_latency_quantile",
       "video_datagram_loss",    "state_loss",               "reply_loss",
-      "not_joystick_probability", "video_stall_start_s",    "video_stall_duration_s"};
+      "not_joystick_probability", "video_stall_start_s",    "video_stall_duration_s",
+      "burst_loss",             "burst_mean_s",             "burst_interval_s",
+      "outage_interval_s",      "outage_start_s",           "outage_duration_s"};
   return not_applied.count(name) == 0;
 }
 
@@ -58,6 +60,21 @@ void validate_emulator_config(const EmulatorConfig& c) {
   if (f.video_stall_start_s && !(*f.video_stall_start_s >= 0.0 && f.video_stall_duration_s > 0.0 &&
                                  std::isfinite(*f.video_stall_start_s) && std::isfinite(f.video_stall_duration_s))) {
     throw std::invalid_argument("video stall needs a start T >= 0 and a duration D > 0 (s)");
+  }
+  check_probability(f.bursts.bad_loss, "loss in a burst");
+  if (!(f.bursts.bad_mean_s >= 0.0 && f.bursts.bad_mean_s <= 60.0)) throw std::invalid_argument("burst length must be 0..60 s");
+  if (!(f.bursts.good_mean_s >= 0.1 && f.bursts.good_mean_s <= 3600.0)) {
+    throw std::invalid_argument("time between bursts must be 0.1..3600 s");
+  }
+  const LinkOutages& o = f.outages;
+  if (!(o.interval_mean_s == 0.0 || (o.interval_mean_s >= 1.0 && o.interval_mean_s <= 3600.0))) {
+    throw std::invalid_argument("time between outages must be 0 (none) or 1..3600 s");
+  }
+  if (!(o.min_s >= 0.01 && o.max_s >= o.min_s && o.max_s <= 60.0)) {
+    throw std::invalid_argument("outage lengths need 0.01 <= MIN <= MAX <= 60 s");
+  }
+  if (o.start_s && !(*o.start_s >= 0.0 && *o.start_s <= 3600.0 && o.duration_s > 0.0 && o.duration_s <= 60.0)) {
+    throw std::invalid_argument("an outage needs a start T in 0..3600 and a duration D in (0, 60] (s)");
   }
   if (!(c.linger_s >= 0.0 && std::isfinite(c.linger_s))) throw std::invalid_argument("linger must be >= 0 s");
   if (c.client_state_port == 0 || c.client_video_port == 0) throw std::invalid_argument("client ports must be 1..65535");

@@ -697,6 +697,46 @@ TEST(FlightSoftware, MissionOutOfTimeGivesUpClearOfTheShelf) {
   EXPECT_FALSE(e.saw_phase(Phase::Approach));
 }
 
+/// When the frame steps first enter `phase` (s since the start), if they do.
+std::optional<double> first_entry_s(const Harness& h, Phase phase) {
+  for (const FrameStep& st : h.frame_steps()) {
+    if (st.before != phase && st.after == phase) return ns_to_seconds(st.t_ns);
+  }
+  return std::nullopt;
+}
+
+// The budget spent just after a re-read from close began (the target lost 4 s into the
+// approach, pictures blank from then): the re-read's straight back-out is flown to its end
+// before the landing, not cut off close in front of the shelf.
+TEST(FlightSoftware, MissionOutOfTimeInAReReadFromCloseBacksOutFirst) {
+  Options o;
+  o.blank_after_approach_s = 4.0;
+  Harness first(o);
+  first.run(60.0);
+  // The re-read begins on a timer (the target lost too long): the first picture after the
+  // approach that finds the mission in FindShelf dates it to within a frame.
+  const std::vector<FrameStep>& steps = first.frame_steps();
+  const auto in_approach = std::find_if(steps.begin(), steps.end(), [](const FrameStep& s) { return s.before == Phase::Approach; });
+  const auto reread = std::find_if(in_approach, steps.end(), [](const FrameStep& s) { return s.after == Phase::FindShelf; });
+  ASSERT_NE(reread, steps.end()) << first.fsw().result().reason;
+  const std::optional<double> t_reread_s = ns_to_seconds(reread->t_ns);
+  double x_reread_m = 0.0;
+  for (const auto& p : first.track()) {
+    if (p[0] <= *t_reread_s) x_reread_m = p[1];
+  }
+  FlightConfig c;
+  c.timeouts.mission_s = *t_reread_s + 0.3;
+  Harness h(o, c);
+  h.run(60.0);
+  ASSERT_TRUE(h.fsw().finished()) << phase_name(h.fsw().phase()) << ": " << h.fsw().telemetry().event;
+  EXPECT_EQ(h.fsw().result().reason, kMissionTimeSpent);
+  EXPECT_TRUE(h.fsw().result().landed);
+  EXPECT_FALSE(h.saw_phase(Phase::Cross));
+  // Backed out by the range to the viewpoint (at the back-off speed) before landing.
+  EXPECT_LT(h.position().x(), x_reread_m - 0.3) << "from x " << x_reread_m;
+  EXPECT_LT(h.position().x(), 3.0 - c.mission.line_hold.give_up_clearance_m + 0.1) << "landed clear of the shelf";
+}
+
 TEST(FlightSoftware, NeverCrossesWithoutRoomBacksOutAndGivesUp) {
   FlightConfig c;
   // Leave 0.25 mm of lateral tolerance in the 32 cm opening (less than the pose's own
@@ -814,6 +854,24 @@ TEST(FlightSoftware, CrossesOnlyOnAStillHeading) {
     return yaw;
   };
   EXPECT_LT(std::abs(yaw_at(*t_cross_s + 1.5) - yaw_at(*t_cross_s - o.video_latency_s)), 0.012);
+  expect_through_cell_2_3(h);
+}
+
+// The budget spent half a second into the crossing: a committed crossing is finished (stopping
+// inside the cell is worse), and the mission ends crossed, landed beyond the shelf.
+TEST(FlightSoftware, MissionOutOfTimeMidCrossingFinishesTheCrossing) {
+  Harness nominal{Options{}};
+  nominal.run(80.0);
+  const std::optional<double> t_cross_s = first_entry_s(nominal, Phase::Cross);
+  ASSERT_TRUE(t_cross_s.has_value()) << nominal.fsw().result().reason;
+  FlightConfig c;
+  c.timeouts.mission_s = *t_cross_s + 0.5;
+  Harness h(Options{}, c);
+  h.run(80.0);
+  ASSERT_TRUE(h.fsw().finished()) << phase_name(h.fsw().phase()) << ": " << h.fsw().telemetry().event;
+  EXPECT_EQ(first_entry_s(h, Phase::Cross), t_cross_s) << "the same flight up to the crossing";
+  EXPECT_EQ(h.fsw().result().outcome, Outcome::Crossed) << h.fsw().result().reason;
+  EXPECT_TRUE(h.fsw().result().landed);
   expect_through_cell_2_3(h);
 }
 

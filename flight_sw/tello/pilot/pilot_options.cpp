@@ -141,6 +141,8 @@ struct CommandLine {
               *vport = nullptr, *ssport = nullptr, *vsport = nullptr, *log = nullptr, *inv = nullptr,
               *damaged_video = nullptr;
   CLI::Option *st = nullptr, *sst = nullptr, *vh = nullptr, *vl = nullptr, *bat = nullptr, *max = nullptr;
+  double mission_s = 0.0;
+  CLI::Option* budget = nullptr;
 };
 
 // The options of a flight: files, the link, the outputs, the modes (--help lists them in this order).
@@ -182,6 +184,10 @@ void add_failsafe_options(CLI::App& app, CommandLine& c) {
   c.vl = app.add_option("--video-land", fs.video_land_s, "airborne without frames this long (s): land")->check(CLI::PositiveNumber);
   c.bat = app.add_option("--critical-battery", fs.critical_battery_pct, "battery at or below this (%): land")->check(CLI::Range(0, 100));
   c.max = app.add_option("--max-flight", fs.max_flight_s, "airborne this long (s): land")->check(CLI::PositiveNumber);
+  c.budget = app.add_option("--mission-budget", c.mission_s,
+                            "the flight software's mission budget from its start (s; replaces the configuration's "
+                            "timeouts.mission_s): then it gives up where safe and lands, 'mission time limit reached'")
+                 ->check(CLI::PositiveNumber);
 }
 
 // The modes that do not fly the mission: calibrating the camera, printing markers.
@@ -305,6 +311,7 @@ std::optional<PilotOptions> parse_options(int argc, char** argv) {
   parse_board_and_markers(c, o);
   load_flight_files(o);
   if (o.senses_board_m && !o.fly_calibration) throw UsageError("--senses-board is part of --fly-calibration");
+  if (c.budget->count()) o.flight.timeouts.mission_s = c.mission_s;
   if (o.fly_calibration && !o.calibrate_path.empty()) {
     throw UsageError("--fly-calibration and --calibrate: one at a time (the camera's calibration never flies)");
   }

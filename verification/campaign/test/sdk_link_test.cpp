@@ -68,8 +68,8 @@ TEST(SdkLink, IdealModelCarriesWholeFramesWithoutDatagrams) {
   // the video stall (a second of 30 fps captures).
   s.cosim.link.state_loss = 0.5;
   s.cosim.link.lost_command = "takeoff";
-  s.cosim.link.video_stall_start_s = 1.5;
-  s.cosim.link.video_stall_duration_s = 1.0;
+  s.cosim.link.spells.video_stall_start_s = 1.5;
+  s.cosim.link.spells.video_stall_duration_s = 1.0;
   s.dispersions.erase("video_stall_start_s");
   const RunResult faulty = run_once(s, 5);
   const LinkMetrics& l = faulty.metrics.link;

@@ -134,6 +134,12 @@ TEST(MissionSetup, TheMissionsTimeBudgetEndsTenSecondsBeforeTheRunsLimit) {
   EXPECT_DOUBLE_EQ(flight_config_for(s, s.camera).timeouts.mission_s, 110.0);
   s.cosim.timeout_s = 20.0;
   EXPECT_DOUBLE_EQ(flight_config_for(s, s.camera).timeouts.mission_s, flight_sw::FlightConfig{}.timeouts.mission_s);
+  // tello_pilot's shipped configuration flies on the budget a campaign of the default scenario
+  // gives its flight software.
+  const Scenario d = load_scenario(kDefault);
+  EXPECT_DOUBLE_EQ(
+      flight_sw::load_flight_config(std::string(SHELFCROSS_SOURCE_DIR) + "/flight_sw/config/paper_test_shelf.yaml").timeouts.mission_s,
+      flight_config_for(d, d.camera).timeouts.mission_s);
 }
 
 TEST(RenderedFrames, InventoryOfTheDefaultShelfIsExact) {

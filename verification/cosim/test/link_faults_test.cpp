@@ -42,15 +42,40 @@ TEST(LinkFaults, EveryKeyMapsToItsChannelInMilliseconds) {
 
 TEST(LinkFaults, TheVideoStallIsOnOnlyWithAStartAndADuration) {
   LinkSettings l;
-  l.video_stall_start_s = 2.0;
+  l.spells.video_stall_start_s = 2.0;
   EXPECT_FALSE(link_faults(l).video_stall_start_s.has_value()) << "no duration";
-  l.video_stall_duration_s = 1.5;
+  l.spells.video_stall_duration_s = 1.5;
   const EmulatorFaults f = link_faults(l);
   ASSERT_TRUE(f.video_stall_start_s.has_value());
   EXPECT_EQ(*f.video_stall_start_s, 2.0);
   EXPECT_EQ(f.video_stall_duration_s, 1.5);
-  l.video_stall_start_s = -1.0;
+  l.spells.video_stall_start_s = -1.0;
   EXPECT_FALSE(link_faults(l).video_stall_start_s.has_value()) << "start < 0: none";
+}
+
+TEST(LinkFaults, BurstsAndOutagesMapToTheFaultModelOffByDefault) {
+  LinkSettings l;
+  EmulatorFaults f = link_faults(l);
+  EXPECT_FALSE(f.bursts.on());
+  EXPECT_EQ(f.outages, LinkOutages{}) << "no outages unless asked for";
+  l.spells.burst_loss = 0.7;
+  l.spells.burst_mean_s = 0.4;
+  l.spells.burst_interval_s = 12.0;
+  l.spells.outage_interval_s = 90.0;
+  l.spells.outage_min_s = 1.5;
+  l.spells.outage_max_s = 4.5;
+  l.spells.outage_start_s = 25.0;
+  f = link_faults(l);
+  EXPECT_EQ(f.bursts, (BurstLoss{0.7, 0.4, 12.0}));
+  EXPECT_EQ(f.outages.interval_mean_s, 90.0);
+  EXPECT_EQ(f.outages.min_s, 1.5);
+  EXPECT_EQ(f.outages.max_s, 4.5);
+  EXPECT_FALSE(f.outages.start_s.has_value()) << "no duration";
+  l.spells.outage_duration_s = 3.0;
+  f = link_faults(l);
+  ASSERT_TRUE(f.outages.start_s.has_value());
+  EXPECT_EQ(*f.outages.start_s, 25.0);
+  EXPECT_EQ(f.outages.duration_s, 3.0);
 }
 
 }  // namespace

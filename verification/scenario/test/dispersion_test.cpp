@@ -62,6 +62,28 @@ TEST(Dispersion, AppliesDrawsToTruthAndBeliefs) {
 
 // The stress family: the shelf behind (shelf 1) placed by its draws in shelf 0's frame,
 // uneven light; the shelf-behind parameters need two shelves.
+TEST(Dispersion, DrawsSetTheLinksBurstsAndOutages) {
+  const Scenario s = with_dispersions(
+      "dispersions:\n"
+      "  burst_loss: {choice: {values: [0.8]}}\n"
+      "  burst_mean_s: {choice: {values: [0.2]}}\n"
+      "  burst_interval_s: {choice: {values: [12]}}\n"
+      "  outage_interval_s: {choice: {values: [60]}}\n"
+      "  outage_start_s: {choice: {values: [18]}}\n"
+      "  outage_duration_s: {choice: {values: [3]}}\n");
+  const RunSetup run = disperse(s, 5);
+  const LinkSpells& d = run.scenario->cosim.link.spells;
+  EXPECT_DOUBLE_EQ(d.burst_loss, 0.8);
+  EXPECT_DOUBLE_EQ(d.burst_mean_s, 0.2);
+  EXPECT_DOUBLE_EQ(d.burst_interval_s, 12.0);
+  EXPECT_DOUBLE_EQ(d.outage_interval_s, 60.0);
+  EXPECT_DOUBLE_EQ(d.outage_start_s, 18.0);
+  EXPECT_DOUBLE_EQ(d.outage_duration_s, 3.0);
+  // A draw cannot leave the key's range: the random outages' interval is never drawn below 1 s.
+  EXPECT_THROW(with_dispersions("dispersions:\n  outage_interval_s: {uniform: {min: 0.0, max: 10.0}}\n"),
+               config::ConfigError);
+}
+
 TEST(Dispersion, PlacesTheShelfBehindAndTurnsTheLight) {
   const std::string row = std::string(SHELFCROSS_SOURCE_DIR) + "/scenarios/stress/row_shelf_behind.yaml";
   Scenario s = load_scenario(row);

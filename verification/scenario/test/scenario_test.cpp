@@ -251,6 +251,39 @@ TEST(Scenario, LinkModelIsSdkByDefaultAndRefusesUnknownModels) {
   expect_refused(insert_line(11, "cosim: {pilot: {stop_rc_repeats: -1}}"), 11, "stop_rc_repeats");
 }
 
+TEST(Scenario, RefusesEachBurstAndOutageKeyOutOfRange) {
+  const std::vector<std::pair<const char*, const char*>> keys{
+      {"burst_loss", "1.01"},        {"burst_loss", "-0.1"},          {"burst_mean_s", "-0.1"},
+      {"burst_mean_s", "61"},        {"burst_interval_s", "0.05"},    {"burst_interval_s", "3601"},
+      {"outage_interval_s", "-1"},   {"outage_interval_s", "3601"},   {"outage_min_s", "0"},
+      {"outage_max_s", "61"},        {"outage_start_s", "-2"},        {"outage_duration_s", "61"},
+  };
+  for (const auto& [key, value] : keys) {
+    expect_refused(insert_line(11, std::string("cosim:\n  link:\n    ") + key + ": " + value), 13, "out of range");
+  }
+  expect_refused(insert_line(11, "cosim:\n  link:\n    outage_interval_s: 0.5"), 13, "at least 1 s");
+  expect_refused(insert_line(11, "cosim:\n  link:\n    outage_min_s: 3\n    outage_max_s: 2"), 14,
+                 "must not be below outage_min_s");
+  // Off by default; every key read back as written, and on to the fault model.
+  const LinkSettings off = parse_scenario(kBase, "small.yaml").cosim.link;
+  EXPECT_EQ(off.spells.burst_mean_s, 0.0);
+  EXPECT_EQ(off.spells.outage_interval_s, 0.0);
+  EXPECT_LT(off.spells.outage_start_s, 0.0);
+  const Scenario s = parse_scenario(
+      insert_line(11, "cosim: {link: {burst_loss: 0.8, burst_mean_s: 0.3, burst_interval_s: 20, outage_interval_s: 60, "
+                      "outage_min_s: 2, outage_max_s: 4, outage_start_s: 30, outage_duration_s: 3}}"),
+      "bursts.yaml");
+  EXPECT_EQ(s.cosim.link.spells.burst_loss, 0.8);
+  EXPECT_EQ(s.cosim.link.spells.burst_mean_s, 0.3);
+  EXPECT_EQ(s.cosim.link.spells.burst_interval_s, 20.0);
+  EXPECT_EQ(s.cosim.link.spells.outage_interval_s, 60.0);
+  EXPECT_EQ(s.cosim.link.spells.outage_min_s, 2.0);
+  EXPECT_EQ(s.cosim.link.spells.outage_max_s, 4.0);
+  EXPECT_EQ(s.cosim.link.spells.outage_start_s, 30.0);
+  EXPECT_EQ(s.cosim.link.spells.outage_duration_s, 3.0);
+  EXPECT_EQ(parse_scenario(write_scenario(s), "again.yaml"), s);
+}
+
 TEST(Scenario, RefusesWrongType) {
   expect_refused(insert_line(11, "camera: {frame_rate_hz: fast}"), 11, "expected a number");
   expect_refused(replace_line(9, "        - {level: one, column: 1, marker_id: 3}"), 9,

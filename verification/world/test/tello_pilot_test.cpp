@@ -215,6 +215,30 @@ TEST(TelloPilot, BadCommandLineOrConfigExitsWith2) {
   EXPECT_EQ(run_to_exit({"--config", kConfig, "--pilot", (dir / "video.yaml").string()}, &err), 2);
   EXPECT_NE(err.find("video.yaml:3"), std::string::npos) << err;
   EXPECT_NE(err.find("damage_limit"), std::string::npos) << err;
+  EXPECT_EQ(run_to_exit({"--config", kConfig, "--mission-budget", "0"}, &err), 2);
+  EXPECT_NE(err.find("--mission-budget"), std::string::npos) << err;
+  if (!HasFailure()) fs::remove_all(dir);
+}
+
+// The mission's budget (--mission-budget, replacing the configuration's timeouts.mission_s)
+// spent while the flight software searches for a shelf that is not in view: it lands on its
+// own and the program ends with the flight software's named outcome (aborted: exit 1), before
+// any program failsafe.
+TEST(TelloPilot, MissionBudgetSpentLandsWithItsOutcome) {
+  const fs::path dir = temp_dir("budget");
+  FakeTello drone;
+  auto args = drone.args(dir);
+  args.insert(args.end(), {"--mission-budget", "3"});
+  Child pilot(args, dir);
+  ASSERT_TRUE(drone.step_until("takeoff")) << read_file(pilot.err);
+  ASSERT_TRUE(drone.step_until("land", 20000)) << read_file(pilot.err);
+  for (int i = 0; i < 500 && !pilot.poll_exit(); ++i) drone.step();
+  EXPECT_EQ(pilot.exit_code, 1) << read_file(pilot.err);
+  const fs::path log = dir / "log.jsonl";
+  EXPECT_EQ(log_lines(log, "end", "reason", "mission time limit reached"), 1) << read_file(log);
+  EXPECT_EQ(log_lines(log, "end", "outcome", "aborted"), 1);
+  EXPECT_EQ(log_lines(log, "failsafe"), 0) << "the flight software ended it, not a program failsafe";
+  drone.expect_all_valid();
   if (!HasFailure()) fs::remove_all(dir);
 }
 
