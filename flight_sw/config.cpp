@@ -220,10 +220,13 @@ void read_mission(const Map& m, MissionParams& p) {
   opt(m, "identity_confirm_s", p.target.identity_confirm_s, kPositive);
   opt(m, "identity_rereads", p.target.identity_rereads, within(0, 100));
   opt(m, "vertical_lag_s", p.crossing.vertical_lag_s, kNonNegative);
+  opt(m, "height_hold_range_blend", p.crossing.height_hold_range_blend, kFraction);
+  opt(m, "height_hold_time_constant_s", p.crossing.height_hold_time_constant_s, within(0.05, 10.0));
   opt(m, "line_hold_window_s", p.line_hold.line_hold_window_s, within(0.1, 10.0));
   opt(m, "line_hold_min_span_s", p.line_hold.line_hold_min_span_s, within(0.05, 10.0));
   opt(m, "calm_wait_s", p.line_hold.calm_wait_s, kNonNegative);
   opt(m, "give_up_clearance_m", p.line_hold.give_up_clearance_m, kNonNegative);
+  opt(m, "separation_min_m", p.line_hold.separation_min_m, within(0.0, 0.1));
   if (p.line_hold.line_hold_min_span_s > p.line_hold.line_hold_window_s) m.fail("line_hold_min_span_s", "must not exceed line_hold_window_s");
   m.finish();
 }
@@ -345,6 +348,11 @@ void validate_flight_config(const FlightConfig& c) {
               mp.line_hold.line_hold_window_s <= 10.0 && mp.line_hold.calm_wait_s >= 0.0 && mp.line_hold.give_up_clearance_m >= 0.0,
           "mission: 0.05 <= line_hold_min_span_s <= line_hold_window_s <= 10, calm_wait_s and "
           "give_up_clearance_m >= 0");
+  require(mp.line_hold.separation_min_m >= 0.0 && mp.line_hold.separation_min_m <= 0.1,
+          "mission: separation_min_m outside 0..0.1");
+  require(mp.crossing.height_hold_range_blend >= 0.0 && mp.crossing.height_hold_range_blend <= 1.0 &&
+              mp.crossing.height_hold_time_constant_s >= 0.05 && mp.crossing.height_hold_time_constant_s <= 10.0,
+          "mission: height_hold_range_blend outside 0..1 or height_hold_time_constant_s outside 0.05..10");
   require(c.layout.shelf_count >= 1 && c.layout.shelf_count <= 64, "layout.shelf_count must be 1..64");
   require(c.layout.shelf_count == 1 || c.layout.shelf_spacing_m > s.depth_m + c.mission.vehicle_size_m.x(),
           "layout.shelf_spacing_m must exceed the shelf depth plus the vehicle length");

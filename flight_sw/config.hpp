@@ -36,8 +36,9 @@
 //               beyond_distance_m edge_margin_px settle_s settle_z_m settle_psi_rad
 //               settle_heading_band_rad settle_hold_s pose_fresh_s pose_jump_m pose_jump_rad pose_jump_window_s coast_s
 //               identity_continuity_s identity_confirm_s identity_rereads stop_distance_m
-//               min_beyond_distance_m level_check vertical_lag_s line_hold_window_s
-//               line_hold_min_span_s calm_wait_s give_up_clearance_m
+//               min_beyond_distance_m level_check vertical_lag_s height_hold_range_blend
+//               height_hold_time_constant_s line_hold_window_s
+//               line_hold_min_span_s calm_wait_s give_up_clearance_m separation_min_m
 //   layout:     shelf_count shelf_spacing_m (required when shelf_count > 1)
 //   strategy:   mode (through_cells | over_tops | around_ends) top_clearance_m end_clearance_m
 //               transfer_speed_mps transfer_kp transfer_yaw_kp waypoint_tolerance_m transfer_leg_s
@@ -292,6 +293,16 @@ struct CrossingParams {
   /// gate adds it to the state height; the approach's height samples wait this long after the
   /// state last showed vertical motion (the picture is a video latency older than the record).
   double vertical_lag_s = 0.5;
+  /// The Tello's height hold as identified (`shelfcross identify`, docs/calibration.md): the
+  /// share of a step of the range reading it follows (0: a fused hold that ignores it; 1: it
+  /// climbs by the step) and the time constant it follows with. Inside a cell the range steps
+  /// from the floor to the cell's bottom beam and the box below, and a hold that follows it
+  /// climbs toward the beam above where no picture shows it: the crossing gate refuses a
+  /// crossing whose forecast climb leaves no room (line_hold.hpp, range_hold_climb_m). 0 by
+  /// default: a hold that follows the range must be identified to be flown around, and the
+  /// in-crossing watch reads the climb on the state record (docs/method.md section 7).
+  double height_hold_range_blend = 0.0;
+  double height_hold_time_constant_s = 0.5;
 };
 
 /// The line-hold gate (line_hold.hpp, docs/method.md section 7): the wander of the quiet
@@ -306,6 +317,11 @@ struct LineHoldParams {
   double line_hold_min_span_s = 0.5;
   double calm_wait_s = 8.0;
   double give_up_clearance_m = 1.0;
+  /// The separation minimum: no crossing is entered, or continued, where the forecast leaves
+  /// less than this plus the forecast's own error clear of the frame (line_hold.hpp). The
+  /// verifier's near miss (a scenario's cosim.near_miss_m) is the same 2 cm by default; the
+  /// flight software cannot read the scenario, so it has its own.
+  double separation_min_m = 0.02;
 };
 
 /// The mission's parameters (the YAML section `mission`, its keys flat: config.hpp's key list),

@@ -53,20 +53,33 @@ std::optional<std::string> crossing_refusal(const FlightConfig& config, CellInde
     return std::string(kLineCannotBeHeld) + " (calm for " + format_m(*input.calm_for_s) +
            " s since the air left no room, less than the blind crossing's " + format_m(blind_s) + " s)";
   }
-  // Offset plus wander past the room: the air's doing if even an arrival centred as the
-  // approach settles (within lateral_threshold_m across, settle_z_m up) would leave the wander
-  // no room, and then the crossing is given up at the last attempt; else the offset's, and the
-  // approach may mend it (a re-read at the last attempt, as for any off-centre arrival).
+  // Offset plus wander past the room less what the crossing keeps clear (the separation
+  // minimum plus the forecast's own error, never less than crossing_margin_m): the air's doing
+  // if even an arrival centred as the approach settles (within lateral_threshold_m across,
+  // settle_z_m up) would leave the wander no room, and then the crossing is given up at the
+  // last attempt; else the offset's, and the approach may mend it (a re-read at the last
+  // attempt, as for any off-centre arrival).
+  const double hold_tol_y = room.room_y_m - line_hold_keep_m(m, f.error_y_m);
+  const double hold_tol_z = room.room_z_m - line_hold_keep_m(m, f.error_z_m);
   const auto verdict = [&](double offset_m, double wander_m, double tol_m, double settled_offset_m, const char* axis) {
     const char* why = settled_offset_m + wander_m > tol_m ? kLineCannotBeHeld : kOffCentreForTheWander;
     return std::string(why) + " " + axis + " (offset " + centimetres_text(offset_m) + " + wander " +
            centimetres_text(wander_m) + " > " + centimetres_text(tol_m) + ")";
   };
-  if (room.offset_y_m() + f.y_m > tol_y) {
-    return verdict(room.offset_y_m(), f.y_m, tol_y, config.control.lateral_threshold_m, "across") + air_text(f);
+  if (room.offset_y_m() + f.y_m > hold_tol_y) {
+    return verdict(room.offset_y_m(), f.y_m, hold_tol_y, config.control.lateral_threshold_m, "across") + air_text(f);
   }
   const double offset_z = std::max(room.offset_z_m(), std::abs(z_now));
-  if (offset_z + f.z_m > tol_z) return verdict(offset_z, f.z_m, tol_z, m.approach.settle_z_m, "vertically");
+  if (offset_z + f.z_m > hold_tol_z) return verdict(offset_z, f.z_m, hold_tol_z, m.approach.settle_z_m, "vertically");
+  // A height hold that follows the range climbs over the shelf where nothing shows it in time
+  // to back out (docs/method.md section 7, "What the watch can and cannot catch"): its forecast
+  // climb must leave the same room above.
+  const double climb = input.cell_centre_h_m ? range_hold_climb_m(config, target, *input.cell_centre_h_m) : 0.0;
+  if (climb > 0.0 && z_now + climb + f.z_m > hold_tol_z) {
+    return std::string(kLineCannotBeHeld) + " vertically (the height hold follows the range: a climb of " +
+           centimetres_text(climb) + " from " + centimetres_text(z_now) + " + wander " + centimetres_text(f.z_m) +
+           " > " + centimetres_text(hold_tol_z) + ")";
+  }
   return std::nullopt;
 }
 

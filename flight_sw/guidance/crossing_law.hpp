@@ -30,6 +30,10 @@ struct CrossingGateInput {
   /// height h less the cell centre's height in h's frame, measured in the approach. Empty when
   /// that was never measured (never crossed then).
   std::optional<double> height_above_cell_m;
+  /// The cell centre's height in the state height's frame (above the take-off point), for the
+  /// climb a height hold that follows the range forecasts (range_hold_climb_m); empty: not
+  /// measured (then neither is height_above_cell_m).
+  std::optional<double> cell_centre_h_m;
   double vz_mps = 0.0;            ///< the state record's vertical speed (vgz), m/s, up positive
   /// What the blind crossing may add to the line's offsets (line_hold.hpp); not measured: the
   /// crossing is refused.

@@ -106,6 +106,7 @@ LineWander LineHoldMonitor::wander(TimeNs now_ns, double window_s) const {
   const TimeNs from_ns = now_ns - seconds_to_ns(window_s);
   LineWander w;
   w.air_rms_mps = air_.rms_mps(now_ns);
+  w.air_error_mps = air_.error_mps(now_ns);
   auto first = poses_.begin();
   while (first != poses_.end() && first->t_ns < from_ns) ++first;
   if (first == poses_.end()) return w;
@@ -127,8 +128,16 @@ LineWander LineHoldMonitor::wander(TimeNs now_ns, double window_s) const {
   w.half_spread_y_m = fy.half_spread;
   w.drift_y_mps = fy.slope;
   w.half_spread_z_m = fz.half_spread;
-  for (const auto& [ts, v] : across_mps_) {
-    if (ts >= first->t_ns) w.across_speed_mps = std::max(w.across_speed_mps, std::abs(v));
+  // The largest mean of kSpeedRecords consecutive quiet records (all of them, if fewer).
+  std::vector<double> v;
+  for (const auto& [ts, across] : across_mps_) {
+    if (ts >= first->t_ns) v.push_back(across);
+  }
+  const size_t n = std::min(v.size(), static_cast<size_t>(kSpeedRecords));
+  for (size_t i = 0; n > 0 && i + n <= v.size(); ++i) {
+    double sum = 0.0;
+    for (size_t j = i; j < i + n; ++j) sum += v[j];
+    w.across_speed_mps = std::max(w.across_speed_mps, std::abs(sum) / static_cast<double>(n));
   }
   return w;
 }
@@ -138,15 +147,41 @@ void AirMemory::on_state(TimeNs t_ns, double vy_H_mps) {
   while (ns_to_seconds(t_ns - vy_.front().first) > kAirMemory_s) vy_.pop_front();
 }
 
-double AirMemory::rms_mps(TimeNs now_ns) const {
-  double sum = 0.0;
-  int n = 0;
-  for (const auto& [t, v] : vy_) {
-    if (ns_to_seconds(now_ns - t) > kAirMemory_s) continue;
-    sum += v * v;
-    ++n;
+// The products of consecutive remembered records (file comment, "air"), their mean and its
+// standard error.
+AirMemory::Power AirMemory::power(TimeNs now_ns) const {
+  double sum = 0.0, sum_sq = 0.0;
+  int records = 0, pairs = 0;
+  const std::pair<TimeNs, double>* last = nullptr;
+  for (const auto& r : vy_) {
+    if (ns_to_seconds(now_ns - r.first) > kAirMemory_s) continue;
+    ++records;
+    if (last && ns_to_seconds(r.first - last->first) <= kAirPairGap_s) {
+      const double product = last->second * r.second;
+      sum += product;
+      sum_sq += product * product;
+      ++pairs;
+    }
+    last = &r;
   }
-  return n >= kAirMinRecords ? std::sqrt(sum / n) : 0.0;
+  Power p;
+  if (records < kAirMinRecords || pairs < 2) return p;
+  p.measured = true;
+  p.mean = sum / pairs;
+  const double variance = std::max(0.0, (sum_sq - pairs * p.mean * p.mean) / (pairs - 1));
+  p.standard_error = std::sqrt(variance / pairs);
+  return p;
+}
+
+double AirMemory::rms_mps(TimeNs now_ns) const {
+  const Power p = power(now_ns);
+  return p.measured ? std::sqrt(std::max(0.0, p.mean)) : 0.0;
+}
+
+double AirMemory::error_mps(TimeNs now_ns) const {
+  const Power p = power(now_ns);
+  if (!p.measured) return 0.0;
+  return std::sqrt(std::max(0.0, p.mean + p.standard_error)) - std::sqrt(std::max(0.0, p.mean));
 }
 
 LineHoldForecast forecast_line_hold(const MissionParams& m, const LineWander& w, double blind_s) {
@@ -162,12 +197,29 @@ LineHoldForecast forecast_line_hold(const MissionParams& m, const LineWander& w,
   if (air_y > wander_y) f.air_rms_mps = w.air_rms_mps;
   f.y_m = std::max(wander_y, air_y) + std::abs(w.drift_y_mps) * blind_s + w.across_speed_mps * kVelocityLag_s;
   f.z_m = w.half_spread_z_m * growth;
+  // Its own error: the pose's, and how much further the air's reach goes at one standard error
+  // more of the air's rms (where that decides the wander).
+  const double air_up_y = kAirReach_s * (w.air_rms_mps + w.air_error_mps);
+  f.error_y_m = kPoseError_m + std::max(wander_y, air_up_y) - std::max(wander_y, air_y);
+  f.error_z_m = kPoseError_m;
   return f;
+}
+
+double line_hold_keep_m(const MissionParams& m, double error_m) {
+  return std::max(m.crossing_margin_m, m.line_hold.separation_min_m + error_m);
 }
 
 double blind_crossing_s(const FlightConfig& config, double range_m) {
   const double flown_m = range_m + config.shelf.depth_m + config.mission.vehicle_size_m.x();
   return flown_m / config.control.crossing_speed_mps;
+}
+
+double range_hold_climb_m(const FlightConfig& config, CellIndex target, double cell_centre_h_m) {
+  const CrossingParams& c = config.mission.crossing;
+  if (c.height_hold_range_blend <= 0.0) return 0.0;
+  const double step_m = std::max(0.0, cell_centre_h_m - 0.5 * cell_opening_m(config.shelf, target).y());
+  const double over_s = (config.shelf.depth_m + config.mission.vehicle_size_m.x()) / config.control.crossing_speed_mps;
+  return c.height_hold_range_blend * step_m * (1.0 - std::exp(-over_s / c.height_hold_time_constant_s));
 }
 
 // ---- The room ----
@@ -179,8 +231,10 @@ LineRoom line_room(const FlightConfig& config, CellIndex target, const PoseEstim
   // Footprint across the opening of a vehicle turned by psi (its heading is held).
   const double footprint = m.vehicle_size_m.y() * std::cos(psi) + m.vehicle_size_m.x() * std::sin(psi);
   LineRoom room;
-  room.tol_y_m = 0.5 * (opening.x() - footprint) - m.crossing_margin_m;
-  room.tol_z_m = 0.5 * (opening.y() - m.vehicle_size_m.z()) - m.crossing_margin_m;
+  room.room_y_m = 0.5 * (opening.x() - footprint);
+  room.room_z_m = 0.5 * (opening.y() - m.vehicle_size_m.z());
+  room.tol_y_m = room.room_y_m - m.crossing_margin_m;
+  room.tol_z_m = room.room_z_m - m.crossing_margin_m;
   const Eigen::Vector3d p = pose.p_FB_m();
   const Eigen::Vector3d d = crossing_direction_K(config.shelf, pose);
   // Where the crossing line meets the front and back faces.
@@ -203,8 +257,11 @@ CrossingWatchPlan plan_crossing_watch(const FlightConfig& config, const LineRoom
   // Along the line's horizontal part, from the start to where the vehicle's front meets it.
   const double to_front_x = x_front_K - p_K_m.x() - 0.5 * m.vehicle_size_m.x();
   plan.stop_before_m = std::max(0.0, to_front_x / d_K.x() * d_K.head<2>().norm());
-  plan.slack_y_m = room.tol_y_m + 0.5 * m.crossing_margin_m - room.offset_y_m();
-  plan.slack_z_m = room.tol_z_m + 0.5 * m.crossing_margin_m;
+  // A stop is forecast from the odometry (a few state records): what it leaves must keep the
+  // separation minimum clear of the frame, beyond the error of the line it is measured from.
+  const double keep = m.line_hold.separation_min_m + kPoseError_m;
+  plan.slack_y_m = room.room_y_m - keep - room.offset_y_m();
+  plan.slack_z_m = room.room_z_m - keep;
   return plan;
 }
 

@@ -43,6 +43,20 @@
 //              its line to the sigma_v before it on four of five crossings in strong gusts
 //              (1.3 to 1.8 s); a lull over every quiet record reads 0 and is not caught
 //              (docs/method.md section 7, "The air remembered").
+//              The readings are the VPS's estimate, with its white noise (independent from one
+//              record to the next: the VPS samples at 50 Hz, the state comes at 10 Hz), while the
+//              air moves the vehicle over its correlation time (a second). So sigma_v^2 is the
+//              mean product of consecutive records, v_i v_(i+1): the noise's products average to
+//              0, the air's to its power (times its correlation over 0.1 s, 0.9 for a second's).
+//              The mean square itself would read the noise as air: 0.04 m/s of it makes one
+//              record in five read a 0.1 m/s step, sigma_v 0.046 m/s, a reach of 11.5 cm.
+//   speed'     for the same reason the across-line speed is the largest mean of kSpeedRecords
+//              consecutive quiet records (0.3 s, short against the air's second): one noisy
+//              record reads 1/kSpeedRecords of its step.
+//   error      the forecast's own error (LineHoldForecast::error_y_m): the pose's across the
+//              line at the commit range (kPoseError_m), and the air's reach at sigma_v plus one
+//              standard error of its estimate less its reach at sigma_v. The gate keeps
+//              separation_min_m plus it clear (never less than crossing_margin_m).
 //
 // The gate (crossing_refusal) then requires the line's offset at either face plus the
 // forecast to leave crossing_margin_m inside the opening; a quiet stretch shorter than
@@ -51,8 +65,9 @@
 //
 // During the crossing (crossing_watch) the state record alone tells where the vehicle is: the
 // odometry's offset from the line and its across-line speed, the height against the cell's.
-// While the vehicle can still stop short of the front face, a forecast position outside the
-// opening (less half the margin) stops it and backs it out; past that point stopping would
+// While the vehicle can still stop short of the front face, a forecast position that leaves
+// less than separation_min_m plus the line's own error (kPoseError_m) clear stops it and backs
+// it out; past that point stopping would
 // leave it inside the frame, and it flies on (flight_sw/README.md, "The in-crossing watch").
 
 #include <deque>
@@ -94,6 +109,7 @@ struct LineWander {
   double drift_y_mps = 0.0;      ///< the fitted slope of y'
   double across_speed_mps = 0.0;  ///< largest |across-line speed| of quiet state records
   double air_rms_mps = 0.0;       ///< the air remembered (AirMemory::rms_mps)
+  double air_error_mps = 0.0;     ///< its standard error (AirMemory::error_mps)
 };
 
 /// The forecast of what the blind crossing adds to the line's offset, m (file comment).
@@ -101,6 +117,8 @@ struct LineHoldForecast {
   bool measured = false;  ///< enough quiet samples and measured poses over line_hold_min_span_s
   double y_m = 0.0;
   double z_m = 0.0;
+  double error_y_m = 0.0;  ///< the forecast's own error across (file comment, "error")
+  double error_z_m = 0.0;  ///< and up: the pose's
   double span_s = 0.0;    ///< the quiet stretch it was measured on (at most line_hold_window_s)
   double air_rms_mps = 0.0;  ///< the air remembered, where its reach is the larger wander (else 0)
 };
@@ -113,15 +131,35 @@ constexpr int kAirMinRecords = 10;
 /// The air's reach: a vehicle whose quiet records show a sideways speed of rms sigma_v may be
 /// carried kAirReach_s sigma_v across in the blind crossing (file comment, "air").
 constexpr double kAirReach_s = 2.5;
+/// Two remembered records at most this far apart are consecutive (the state's 10 Hz, one lost
+/// between them at most): their product is a sample of the air's power (file comment, "air").
+constexpr double kAirPairGap_s = 0.25;
+/// The across-line speed is the largest mean of this many consecutive quiet records.
+constexpr int kSpeedRecords = 3;
+/// The pose's error across the line at the commit range (flight_sw/README.md, "Known
+/// limitation": 1 cm for frontal and mildly turned views at 0.6-0.9 m).
+constexpr double kPoseError_m = 0.01;
 
 class AirMemory {
  public:
   /// A quiet state record at t_ns: its sideways speed (heading frame), m/s.
   void on_state(TimeNs t_ns, double vy_H_mps);
-  /// The rms of the speeds of the kAirMemory_s before now_ns; 0 with fewer than kAirMinRecords.
+  /// The air's rms speed over the kAirMemory_s before now_ns: the root of the mean product of
+  /// consecutive records (no more than kAirPairGap_s apart), which the readings' white noise
+  /// does not enter (file comment, "air"); 0 with fewer than kAirMinRecords records or a
+  /// negative mean.
   double rms_mps(TimeNs now_ns) const;
+  /// The standard error of rms_mps: sqrt(P + se(P)) - sqrt(P), P the mean product and se(P)
+  /// its standard error over the pairs (taken as independent); 0 where rms_mps measures none.
+  double error_mps(TimeNs now_ns) const;
 
  private:
+  struct Power {
+    double mean = 0.0;    ///< of the products
+    double standard_error = 0.0;  ///< of that mean
+    bool measured = false;
+  };
+  Power power(TimeNs now_ns) const;
   std::deque<std::pair<TimeNs, double>> vy_;
 };
 
@@ -173,16 +211,32 @@ class LineHoldMonitor {
 /// The forecast from a wander, for a blind crossing lasting blind_s.
 LineHoldForecast forecast_line_hold(const MissionParams& m, const LineWander& w, double blind_s);
 
+/// What the crossing keeps clear of the frame on each side beyond a forecast whose own error is
+/// error_m: separation_min_m plus that error, and never less than crossing_margin_m.
+double line_hold_keep_m(const MissionParams& m, double error_m);
+
 /// The blind crossing's duration from a pose at range_m in front of the front face: until the
 /// vehicle's rear leaves the back face at crossing_speed_mps.
 double blind_crossing_s(const FlightConfig& config, double range_m);
+
+/// The climb that a height hold following the range reading (height_hold_range_blend beta, its
+/// time constant tau: config.hpp) forecasts in the crossing of `target`, whose centre is
+/// cell_centre_h_m above the take-off point (the state height's frame, measured in the
+/// approach): under the vehicle the range steps from the floor to the cell's bottom beam, at
+/// most s = cell_centre_h_m less half the clear opening above the floor, and to what lies lower
+/// behind it (the box of the cell below), for as long as the belly is over the shelf, T = (D +
+/// L) / v. Taken at the highest step for all of T: beta s (1 - exp(-T / tau)). 0 for a fused
+/// hold (beta 0).
+double range_hold_climb_m(const FlightConfig& config, CellIndex target, double cell_centre_h_m);
 
 /// The room the crossing's line leaves (the crossing gate's geometry): the tolerances on the
 /// line's offsets at the faces, each the clear opening's half less the footprint's half (the
 /// vehicle turned by its heading) less crossing_margin_m, and where the line meets the front
 /// and back faces (cell frame K).
 struct LineRoom {
-  double tol_y_m = 0.0;
+  double room_y_m = 0.0;  ///< the clear opening's half less the footprint's half, across
+  double room_z_m = 0.0;  ///< and up
+  double tol_y_m = 0.0;   ///< room_y_m less crossing_margin_m
   double tol_z_m = 0.0;
   Eigen::Vector3d front_K_m = Eigen::Vector3d::Zero();
   Eigen::Vector3d back_K_m = Eigen::Vector3d::Zero();
@@ -198,8 +252,10 @@ LineRoom line_room(const FlightConfig& config, CellIndex target, const PoseEstim
 /// Where the crossing may still be stopped and what it must keep clear of, fixed at its start.
 struct CrossingWatchPlan {
   double stop_before_m = 0.0;  ///< along the line: beyond this the vehicle's front would not stop short of the front face
-  double slack_y_m = 0.0;      ///< across the line: from it to contact with a post, less half the margin
-  double slack_z_m = 0.0;      ///< vertically: from the cell centre's height to a beam, less half the margin
+  /// Across the line: from it to contact with a post, less separation_min_m and the line's own
+  /// error (kPoseError_m).
+  double slack_y_m = 0.0;
+  double slack_z_m = 0.0;      ///< vertically: from the cell centre's height to a beam, less the same
 };
 
 /// The watch's plan from the crossing's room and its starting pose's body position p_K_m (in

@@ -32,6 +32,7 @@ void AirbornePhases::on_state(const StateRecord& s, AirborneTools t) {
   // The crossing holds the cell centre's height by the state height (no picture shows the cell
   // in there): a drift or a sink the open-loop command would carry into a beam is turned back.
   if (facts.phase.current() == Phase::Cross && crossing_.holding()) {
+    crossing_.on_state(s, facts);
     t.sticks.set_vz(crossing_.vz_mps(s.height_m));
     // A drift the watch sees while the vehicle can still stop short of the front face stops
     // the crossing and backs it out (the approach counts it as a refusal of the gate).
@@ -182,7 +183,7 @@ void AirbornePhases::follow(const ApproachStep& step, AirborneTools t) {
     case ApproachStep::Next::Reread: return t.mission.enter(Phase::FindShelf, step.event);
     case ApproachStep::Next::Land: return t.mission.land(Outcome::Aborted, step.event);
     case ApproachStep::Next::Cross:
-      crossing_.begin(*step.crossing);
+      crossing_.begin(*step.crossing, t.facts.now_ns);
       t.mission.enter(Phase::Cross, step.crossing->event);
       t.sticks.fly_line(step.crossing->velocity, t.facts.now_ns);
       return;

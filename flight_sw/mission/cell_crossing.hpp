@@ -3,14 +3,18 @@
 // along the line planned at the gate (guidance.hpp, plan_crossing), vertically the cell centre's
 // height held by the state height, ended by the distance the state odometry has flown
 // (odometry.hpp, crossing_flown); on each state record the in-crossing watch (line_hold.hpp)
-// may stop it while the vehicle can still stop short of the front face. The mission keeps the
-// phase and flies what this says.
+// may stop it while the vehicle can still stop short of the front face. The crossing's own
+// readings (crossing_readings.hpp) say where the Tello's hold has put it: a climb the height
+// hold hides from h is held and judged at h less the hold's range offset, and with the VPS lost
+// the odometry no longer measures the line (ended by its timing, never stopped on it). The
+// mission keeps the phase and flies what this says.
 
 #include <optional>
 #include <string>
 
 #include "flight_sw/config.hpp"
 #include "flight_sw/control/control.hpp"
+#include "flight_sw/guidance/crossing_readings.hpp"
 #include "flight_sw/guidance/line_hold.hpp"
 #include "flight_sw/mission/facts.hpp"
 #include "flight_sw/navigation/odometry.hpp"
@@ -40,14 +44,19 @@ class CellCrossing {
   explicit CellCrossing(const FlightConfig& config) : config_(config) {}
 
   /// The crossing `start` begins: its end, watch and height held from now on.
-  void begin(const CrossingStart& start);
+  void begin(const CrossingStart& start, TimeNs now_ns);
   /// True while a crossing holds its height (begun, not stopped).
   bool holding() const { return height_m_.has_value(); }
-  /// The vertical speed that holds the cell centre's height at the state height `height_m`;
+  /// Each state record of the crossing (requires holding()), before vz_mps and watch: the
+  /// crossing's own readings; announces the first hold offset and VPS loss it reads.
+  void on_state(const StateRecord& s, MissionFacts& facts);
+  /// The vertical speed that holds the cell centre's height at the state height `height_m`
+  /// less the hold's range offset read (its saturation widened by what that offset asks);
   /// requires holding().
   double vz_mps(double height_m) const;
   /// The watch on the state record `s` (requires holding()): the stop, counted in the
-  /// telemetry, when the drift it shows would leave the opening; else nothing.
+  /// telemetry, when the drift it shows would leave the opening; else nothing. Never with the
+  /// VPS lost (the odometry cannot tell how far in the vehicle is).
   std::optional<CrossingStop> watch(const StateRecord& s, MissionFacts& facts) const;
   /// The line flown (crossing_flown) `elapsed_ns` into the crossing.
   bool flown(TimeNs elapsed_ns, const MissionFacts& facts) const;
@@ -59,6 +68,9 @@ class CellCrossing {
   CrossingEnd end_;                  ///< crossing_flown (odometry.hpp)
   CrossingWatchPlan watch_;          ///< line_hold.hpp
   std::optional<double> height_m_;   ///< the height the crossing holds, h's frame
+  TimeNs started_ns_ = 0;
+  CrossingReadings readings_;        ///< crossing_readings.hpp
+  bool offset_told_ = false, vps_told_ = false;
 };
 
 }  // namespace shelfcross::flight_sw

@@ -110,11 +110,23 @@ RoughAir CrossingGate::too_rough(MissionFacts& facts, const TargetTracker& track
   // Not measured yet (the quiet stretch shorter than line_hold_min_span_s): hold short until
   // it is, or the settling's hold is given up (settle_hold_s).
   if (!f.measured) return {true, std::nullopt};
+  // A height hold that follows the range (as identified) would climb into the beam above even
+  // from the cell's centre: no wait for calmer air helps, the crossing is declined now.
+  if (const std::optional<double> cell_centre_h_m = cell_height_.measured_m()) {
+    const double climb = range_hold_climb_m(config_, *tracker.target(), *cell_centre_h_m);
+    const double room_z = room.room_z_m - line_hold_keep_m(m, f.error_z_m);
+    if (climb > 0.0 && climb + f.z_m > room_z) {
+      return {true, std::string(kCrossingDeclined) + kLineCannotBeHeld +
+                        " vertically (the height hold follows the range: a climb of " + centimetres_text(climb) +
+                        " forecast over the cell, " + centimetres_text(room_z) + " of room)"};
+    }
+  }
   // Rough: no room now, or calm for less than the blind crossing since a whole window left
   // none (crossing_refusal). A shorter quiet stretch (the hold just begun, the settling's
   // last motion in it) is scaled up by sqrt(T / s) and holds the vehicle short, but is too
   // short a sample of the air to be remembered.
-  const bool no_room = f.y_m > room.tol_y_m || f.z_m > room.tol_z_m;
+  const bool no_room = f.y_m > room.room_y_m - line_hold_keep_m(m, f.error_y_m) ||
+                       f.z_m > room.room_z_m - line_hold_keep_m(m, f.error_z_m);
   if (no_room && f.span_s >= kWholeWindow * m.line_hold.line_hold_window_s) rough_seen_ns_ = facts.now_ns;
   const bool rough = no_room || (rough_seen_ns_ && ns_to_seconds(facts.now_ns - *rough_seen_ns_) <
                                                        blind_crossing_s(config_, -pose_K.p_FB_m().x()));
@@ -148,6 +160,7 @@ GateVerdict CrossingGate::judge(MissionFacts& facts, const TargetTracker& tracke
   const std::optional<double> cell_centre_h_m = cell_height_.measured_m();
   if (cell_centre_h_m && facts.state_fresh()) {
     gate.height_above_cell_m = facts.state->height_m - *cell_centre_h_m;
+    gate.cell_centre_h_m = cell_centre_h_m;
     gate.vz_mps = facts.state->vz_H_mps;
   }
   if (rough_seen_ns_) gate.calm_for_s = ns_to_seconds(facts.now_ns - *rough_seen_ns_);

@@ -21,6 +21,9 @@ TEST(FlightConfigYaml, SampleFileReadsToTheDocumentedDefaults) {
   EXPECT_DOUBLE_EQ(c.control.psi_lateral_threshold_rad, d.control.psi_lateral_threshold_rad);
   EXPECT_DOUBLE_EQ(c.rc.rc_per_radps_yaw, d.rc.rc_per_radps_yaw);
   EXPECT_DOUBLE_EQ(c.timeouts.video_land_s, d.timeouts.video_land_s);
+  EXPECT_DOUBLE_EQ(c.mission.line_hold.separation_min_m, d.mission.line_hold.separation_min_m);
+  EXPECT_DOUBLE_EQ(c.mission.crossing.height_hold_range_blend, d.mission.crossing.height_hold_range_blend);
+  EXPECT_DOUBLE_EQ(c.mission.crossing.height_hold_time_constant_s, d.mission.crossing.height_hold_time_constant_s);
   EXPECT_EQ(c.mission.vehicle_size_m, d.mission.vehicle_size_m);
   EXPECT_EQ(c.perception.pipeline, PerceptionPipeline::fast);
   EXPECT_EQ(c.perception.tag_seed_stride_px, d.perception.tag_seed_stride_px);
@@ -48,6 +51,13 @@ TEST(FlightConfigYaml, BadInputIsRefusedWithFileAndLine) {
   expect_refused(shelf + "perception:\n  tag_hsv: {hue_min: 200}\n", 5, "hue_min");
   expect_refused(shelf + "perception:\n  pipeline: quick\n", 5, "unknown pipeline 'quick'");
   expect_refused(shelf + "perception:\n  tag_seed_stride_px: 0\n", 5, "tag_seed_stride_px");
+  expect_refused(shelf + "mission:\n  separation_min_m: 0.2\n", 5, "separation_min_m");
+  expect_refused(shelf + "mission:\n  separation_min_m: -0.01\n", 5, "separation_min_m");
+  expect_refused(shelf + "mission:\n  height_hold_range_blend: 1.5\n", 5, "height_hold_range_blend");
+  expect_refused(shelf + "mission:\n  height_hold_time_constant_s: 0\n", 5, "height_hold_time_constant_s");
+  EXPECT_DOUBLE_EQ(parse_flight_config(shelf + "mission:\n  separation_min_m: 0.03\n", "test.yaml")
+                       .mission.line_hold.separation_min_m,
+                   0.03);
   EXPECT_EQ(parse_flight_config(shelf + "perception:\n  pipeline: reference\n", "test.yaml").perception.pipeline,
             PerceptionPipeline::reference);
   expect_refused("shelf:\n  column_pitch_m: [0.34, -1]\n  row_pitch_m: [0.34]\n", 2, "column_pitch_m");
@@ -61,6 +71,12 @@ TEST(FlightConfigCode, InvalidConfigBuiltByCodeIsRefused) {
   FlightConfig d;
   d.timeouts.video_land_s = 0.1;
   EXPECT_THROW(validate_flight_config(d), std::invalid_argument);
+  FlightConfig e;
+  e.mission.line_hold.separation_min_m = -0.01;
+  EXPECT_THROW(validate_flight_config(e), std::invalid_argument);
+  FlightConfig b;
+  b.mission.crossing.height_hold_range_blend = 1.2;
+  EXPECT_THROW(validate_flight_config(b), std::invalid_argument);
 }
 
 // ---- The mission layout and the guidance strategy ----

@@ -140,7 +140,7 @@ TEST(CellCrossing, HoldsTheCellsHeightByTheStateHeight) {
   const FlightConfig c;
   CellCrossing crossing(c);
   EXPECT_FALSE(crossing.holding());
-  crossing.begin(straight_crossing());
+  crossing.begin(straight_crossing(), 0);
   ASSERT_TRUE(crossing.holding());
   EXPECT_GT(crossing.vz_mps(0.9), 0.0);
   EXPECT_LT(crossing.vz_mps(1.1), 0.0);
@@ -152,7 +152,7 @@ TEST(CellCrossing, HoldsTheCellsHeightByTheStateHeight) {
 TEST(CellCrossing, StopsADriftSeenBeforeTheCellAndFliesOnPastThatPoint) {
   const FlightConfig c;
   CellCrossing crossing(c);
-  crossing.begin(straight_crossing());
+  crossing.begin(straight_crossing(), 0);
   MissionFacts facts;
   // Straight along the line at 0.4 m/s: no stop.
   facts.on_state(state_at(0, 0.4, 0.0, 1.0));
@@ -175,7 +175,7 @@ TEST(CellCrossing, StopsADriftSeenBeforeTheCellAndFliesOnPastThatPoint) {
 TEST(CellCrossing, EndsWhenTheOdometryHasFlownTheLine) {
   const FlightConfig c;
   CellCrossing crossing(c);
-  crossing.begin(straight_crossing());
+  crossing.begin(straight_crossing(), 0);
   MissionFacts facts;
   for (int k = 0; k <= 19; ++k) facts.on_state(state_at(k * 100 * kMs, 1.0, 0.0, 1.0));
   facts.now_ns = 1900 * kMs;
@@ -184,6 +184,58 @@ TEST(CellCrossing, EndsWhenTheOdometryHasFlownTheLine) {
   facts.on_state(state_at(2100 * kMs, 1.0, 0.0, 1.0));
   facts.now_ns = 2100 * kMs;
   EXPECT_TRUE(crossing.flown(facts.now_ns, facts));  // 2.1 m
+}
+
+// A height hold that follows the range: 0.5 s into the crossing the range steps from 1.0 m to
+// 0.4 m (the box of the cell below) and the vehicle climbs 5 cm a record, which the range and
+// the vertical speed show and h does not. Held at h, the crossing would ask nothing; held at
+// h less the offset read, it asks the climb back and more, and the event names the hold.
+TEST(CellCrossing, HoldsTheHeightAHoldFollowingTheRangeHidesFromH) {
+  const FlightConfig c;
+  CellCrossing crossing(c);
+  crossing.begin(straight_crossing(), 0);
+  MissionFacts facts;
+  double climb = 0.0;
+  for (int k = 0; k <= 9; ++k) {
+    StateRecord s = state_at(k * 100 * kMs, 0.4, 0.0, 1.0);
+    if (k > 5) climb += 0.05;
+    s.vz_H_mps = k > 5 ? 0.5 : 0.0;
+    s.tof_m = (k >= 5 ? 0.4 : 1.0) + climb;
+    facts.on_state(s);
+    crossing.on_state(s, facts);
+  }
+  EXPECT_LT(crossing.vz_mps(1.0), -c.control.crossing_z_speed_max_mps - 0.1);  // the climb's rate asked back, and its error
+  EXPECT_NE(facts.telemetry.event.find("the height hold follows the range"), std::string::npos) << facts.telemetry.event;
+  // The same records with a fused hold (the range steps, nothing climbs): held at h.
+  CellCrossing fused(c);
+  fused.begin(straight_crossing(), 0);
+  for (int k = 0; k <= 9; ++k) {
+    StateRecord s = state_at(k * 100 * kMs, 0.4, 0.0, 1.0);
+    s.tof_m = k >= 5 ? 0.4 : 1.0;
+    fused.on_state(s, facts);
+  }
+  EXPECT_EQ(fused.vz_mps(1.0), 0.0);
+}
+
+// The VPS lost in the crossing (vgx = vgy = 0 exactly while flying, over the box below its
+// range): the odometry stands still, so the crossing ends by its timing, not its line, and
+// the watch never stops it on the odometry's word.
+TEST(CellCrossing, WithTheVpsLostEndsByItsTimingAndIsNeverStopped) {
+  const FlightConfig c;
+  CellCrossing crossing(c);
+  crossing.begin(straight_crossing(), 0);
+  MissionFacts facts;
+  for (int k = 0; k <= 12; ++k) {
+    const StateRecord s = state_at(k * 100 * kMs, k < 8 ? 0.4 : 0.0, 0.0, 1.0);
+    facts.on_state(s);
+    crossing.on_state(s, facts);
+  }
+  EXPECT_NE(facts.telemetry.event.find("VPS lost"), std::string::npos) << facts.telemetry.event;
+  EXPECT_FALSE(crossing.watch(state_at(1300 * kMs, 0.0, 0.3, 1.2), facts));
+  facts.now_ns = 9 * kNsPerSecond;
+  EXPECT_FALSE(crossing.flown(facts.now_ns, facts));
+  facts.on_state(state_at(10 * kNsPerSecond, 0.0, 0.0, 1.0));
+  EXPECT_TRUE(crossing.flown(10 * kNsPerSecond, facts));  // its timing (10 s), the line unflown
 }
 
 }  // namespace
