@@ -17,7 +17,6 @@ namespace {
 
 using Channel = DatagramFaults::Channel;
 
-constexpr TimeNs kMs = 1'000'000;
 
 TEST(DatagramFaults, SameSeedSameFatesAndEachChannelKeepsItsOrder) {
   EmulatorFaults f;

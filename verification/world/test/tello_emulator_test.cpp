@@ -23,7 +23,6 @@ using tello::Datagram;
 using tello::Endpoint;
 using tello::UdpSocket;
 
-constexpr TimeNs kMs = 1'000'000;
 
 const Scenario& default_scenario() {
   static const Scenario s = load_scenario(std::string(SHELFCROSS_SOURCE_DIR) + "/" + kDefaultScenarioFile);
