@@ -35,19 +35,23 @@ struct Bounds {
 };
 
 /// One mapping of a document. Remembers which keys were read so finish() can refuse the rest.
+/// Every refusal below throws ConfigError ("file:line: reason").
 class Map {
  public:
+  /// Throws ConfigError when `node` is not a mapping or holds a key twice.
   Map(YAML::Node node, std::shared_ptr<const std::string> file);
 
   bool has(const std::string& key) const;
 
-  /// Scalars: T is bool, int, std::int64_t, std::uint64_t, double or std::string.
+  /// Scalars: T is bool, int, std::int64_t, std::uint64_t, double or std::string. Throws
+  /// ConfigError on a missing required key, a value of another type or outside `bounds`.
   template <class T>
   T required(const std::string& key, const Bounds<T>& bounds = {}) const;
   template <class T>
   T optional(const std::string& key, const T& fallback, const Bounds<T>& bounds = {}) const;
 
-  /// A sequence of scalars; `size` (if given) is the exact length required.
+  /// A sequence of scalars; `size` (if given) is the exact length required. Throws ConfigError
+  /// as the scalars do, and on a value that is no list or a list of another length.
   template <class T>
   std::vector<T> required_list(const std::string& key, const Bounds<T>& bounds = {},
                                std::optional<size_t> size = std::nullopt) const;
@@ -56,20 +60,25 @@ class Map {
                                const Bounds<T>& bounds = {},
                                std::optional<size_t> size = std::nullopt) const;
 
-  /// A nested mapping (required, or optional: empty when absent).
+  /// A nested mapping (required, or optional: empty when absent). Throws ConfigError on a
+  /// missing required one or a value that is no mapping.
   Map map(const std::string& key) const;
   std::optional<Map> optional_map(const std::string& key) const;
-  /// A sequence of mappings (required, or empty when absent).
+  /// A sequence of mappings (required, or empty when absent). Throws ConfigError on a missing
+  /// required one or an element that is no mapping.
   std::vector<Map> map_list(const std::string& key) const;
   std::vector<Map> optional_map_list(const std::string& key) const;
 
-  /// Refuse every key of this mapping that was never read, naming it and its line.
+  /// Refuse every key of this mapping that was never read, naming it and its line: throws
+  /// ConfigError on the first.
   void finish() const;
 
   /// The line of `key` (or of this mapping when the key is absent), for callers' own checks.
   int line_of(const std::string& key) const;
   int line() const;
   const std::string& file() const { return *file_; }
+  /// Always throws ConfigError at `key`'s line (this mapping's when absent): a caller's own
+  /// refusal.
   [[noreturn]] void fail(const std::string& key, const std::string& reason) const;
 
  private:
@@ -82,6 +91,8 @@ class Map {
 /// A parsed YAML document with its file name for messages.
 class Document {
  public:
+  /// Throw ConfigError on a file that cannot be read, an empty document or a YAML syntax error
+  /// (`name` stands for the file in messages).
   static Document from_file(const std::string& path);
   static Document from_string(const std::string& text, const std::string& name);
   Map root() const;

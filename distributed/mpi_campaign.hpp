@@ -47,6 +47,7 @@ bool launched_by_mpi();
 /// MPI for the life of one command: MPI_Init_thread (MPI_THREAD_FUNNELED) to MPI_Finalize.
 class MpiSession {
  public:
+  /// Throws std::runtime_error when the MPI library does not support MPI_THREAD_FUNNELED.
   MpiSession();
   ~MpiSession();
   MpiSession(const MpiSession&) = delete;

@@ -76,7 +76,8 @@ struct AxisRecord {
 
 /// The vehicle's response to the input at unit gain (at rest before the first input), at the
 /// times `t_s` (ascending): its velocity, or its position counted from the first time on.
-/// With Kind::none: tau x' = u(t - d) - x and x's integral.
+/// With Kind::none: tau x' = u(t - d) - x and x's integral. tau_s must be > 0 and the input's
+/// times and values of one length (asserted).
 std::vector<double> unit_response(const PiecewiseInput& input, double tau_s, double delay_s,
                                   const std::vector<double>& t_s, Observation observation,
                                   const TrackingLoop& loop = {});

@@ -133,7 +133,7 @@ class CollisionWorld {
   CollisionWorld& operator=(const CollisionWorld&) = delete;
 
   /// The first contact along the motion from X_WB_from (at t_from_ns) to X_WB_to (at t_to_ns),
-  /// t_to_ns >= t_from_ns; nullopt when the vehicle touches nothing during the step. Its time is
+  /// t_to_ns >= t_from_ns (a precondition, asserted); nullopt when the vehicle touches nothing during the step. Its time is
   /// t_from_ns + floor(s * (t_to_ns - t_from_ns)) for the first-touch fraction s. Ties between
   /// elements are broken by the lower element id.
   std::optional<Contact> sweep(const Eigen::Isometry3d& X_WB_from, TimeNs t_from_ns,
@@ -156,11 +156,13 @@ class CollisionWorld {
 
   /// The first element (shelf part, floor, wall or ceiling) met by the ray from origin_W_m along
   /// direction_W (any length > 0; normalised here) within max_range_m, or nullopt. Ties between
-  /// elements at the same distance go to the lower element id.
+  /// elements at the same distance go to the lower element id. Preconditions (asserted): a
+  /// direction of length > 0, max_range_m >= 0.
   std::optional<RayHit> ray_cast(const Eigen::Vector3d& origin_W_m, const Eigen::Vector3d& direction_W,
                                  double max_range_m) const;
 
-  /// Signed distance from the vehicle at X_WB to one element (see the header comment).
+  /// Signed distance from the vehicle at X_WB to one element (see the header comment);
+  /// element_id must index elements() (asserted).
   double distance_to(const Eigen::Isometry3d& X_WB, int element_id) const;
 
   const std::vector<Element>& elements() const;

@@ -89,7 +89,7 @@ class Quadrotor {
   /// like the commands until the next call.
   void set_rotor_thrust_factors(const Eigen::Vector4d& factors);
   const Eigen::Vector4d& rotor_thrust_factors() const;
-  /// Integrates to t_ns >= time_ns(). Throws NumericalFailure.
+  /// Integrates to t_ns, which must be >= time_ns() (asserted). Throws NumericalFailure.
   void advance_to(TimeNs t_ns);
 
   const RigidBodyState& state() const;

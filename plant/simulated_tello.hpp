@@ -42,7 +42,8 @@ class SimulatedTello {
   /// Advances to t_ns (>= time_ns()), then gives the command text to the firmware. Returns
   /// its immediate reply, if any. Throws NumericalFailure.
   std::optional<std::string> submit(TimeNs t_ns, std::string_view text);
-  /// Advances plant and autopilot to t_ns (>= time_ns()). Throws NumericalFailure.
+  /// Advances plant and autopilot to t_ns, which must be >= time_ns() (asserted). Throws
+  /// NumericalFailure.
   void step_to(TimeNs t_ns);
   /// Deferred replies produced so far (oldest first), removed from the queue.
   std::vector<SdkReply> take_replies();

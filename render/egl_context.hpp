@@ -23,7 +23,8 @@ class EglContext {
   EglContext(const EglContext&) = delete;
   EglContext& operator=(const EglContext&) = delete;
 
-  /// Makes this context current on the calling thread (no-op if it already is).
+  /// Makes this context current on the calling thread (no-op if it already is). Throws
+  /// RenderError with the EGL error when EGL refuses.
   void make_current();
   /// Releases the context from the calling thread if it is current there.
   void release();

@@ -25,18 +25,20 @@ class SensorNoise {
   /// Fields for images of `rows` x `cols` x `channels` bytes, noise of `stddev` grey levels.
   SensorNoise(int rows, int cols, int channels, double stddev, std::uint64_t table_seed = 0);
 
-  /// Adds one frame's noise to an 8-bit image of the size given at construction.
+  /// Adds one frame's noise to an 8-bit image, which must be of the size and channels given at
+  /// construction (asserted).
   void apply(cv::Mat& image, std::uint64_t frame_seed) const;
 
   /// The renderer's last pass: `bgr` = RGBA -> BGR of `rgba` with this frame's noise added,
   /// byte-identical to cv::cvtColor(rgba, bgr, COLOR_RGBA2BGR) followed by apply(bgr,
-  /// frame_seed), in one pass over memory (SIMD). Needs channels = 3 at construction, `rgba`
-  /// CV_8UC4 of the constructed size; `bgr` is (re)allocated CV_8UC3.
+  /// frame_seed), in one pass over memory (SIMD). Preconditions (asserted): channels = 3 at
+  /// construction, `rgba` CV_8UC4 of the constructed size; `bgr` is (re)allocated CV_8UC3.
   void apply_rgba_to_bgr(const cv::Mat& rgba, cv::Mat& bgr, std::uint64_t frame_seed) const;
   /// The same for a band of the frame: `rgba_rows` (CV_8UC4, the constructed width) holds the
   /// frame's rows first_row .. first_row + rgba_rows.rows - 1, which are written to the same
   /// rows of `bgr` (CV_8UC3 of the constructed size, allocated by the caller) with the same
-  /// bytes apply_rgba_to_bgr gives them; the other rows of `bgr` are untouched.
+  /// bytes apply_rgba_to_bgr gives them; the other rows of `bgr` are untouched. The sizes and
+  /// types named must hold (asserted).
   void apply_rgba_rows_to_bgr(const cv::Mat& rgba_rows, int first_row, cv::Mat& bgr,
                               std::uint64_t frame_seed) const;
 

@@ -29,6 +29,7 @@ struct GridLimits {
 ///   w >= h: dx_lim = h^2 / sqrt(w^2+h^2), dy_lim = w h / sqrt(w^2+h^2)
 ///   w <  h: dx_lim = w h / sqrt(w^2+h^2), dy_lim = w^2 / sqrt(w^2+h^2)
 ///   theta_L = atan(min(w,h) / max(w,h)).
+/// w and h must be > 0 (asserted).
 GridLimits grid_limits(double w, double h);
 
 /// Limits for the known (possibly non-uniform) shelf at `px_per_m`: eq. 3-4 generalised,

@@ -33,6 +33,7 @@ struct BoxEntry {
 class Inventory {
  public:
   Inventory() = default;
+  /// levels, columns and min_agreeing_frames must be >= 1 (asserted).
   Inventory(int shelf_index, int levels, int columns, int min_agreeing_frames);
 
   /// One full-view frame: the (cell, marker id) sightings it produced; `whole` is false for

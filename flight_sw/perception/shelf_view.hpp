@@ -59,7 +59,7 @@ std::vector<std::pair<CellIndex, int>> assign_markers(const ShelfView& view,
                                                       const FlightConfig& config);
 
 /// Image quadrilateral of a cell of a full view (bottom-left, bottom-right, top-right,
-/// top-left tag centres).
+/// top-left tag centres). The view must be full and the cell on its grid (asserted).
 std::array<cv::Point2d, 4> cell_quad(const ShelfView& view, CellIndex cell);
 
 

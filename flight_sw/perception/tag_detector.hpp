@@ -46,7 +46,7 @@ class TagDetector {
   explicit TagDetector(const PerceptionParams& params);
   /// Appends to `out` the tags found inside `roi` of `bgr` (clipped to the image), in image
   /// coordinates. `stride` (fast pipeline only; 0: params.tag_seed_stride_px) is the seed
-  /// sampling step.
+  /// sampling step. `bgr` must be CV_8UC3 (asserted).
   void detect(const cv::Mat& bgr, cv::Rect roi, std::vector<TagBlob>& out, int stride = 0);
   /// The fused colour test of one BGR pixel (fast pipeline's; exposed for tests).
   bool is_tag_colour(const std::uint8_t* bgr) const;

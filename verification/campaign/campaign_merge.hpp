@@ -18,7 +18,8 @@ struct MergeCounts {
 /// sources' campaign; runs_requested the largest of theirs). Every source (and an existing
 /// target) must be the same scenario and seed, else ResultsMismatch. A run index stored twice
 /// must have the same run hash (same scenario, seed and index give the same run); differing
-/// hashes mean the builds that made them disagree, and are refused with ResultsMismatch.
+/// hashes mean the builds that made them disagree, and are refused: throws ResultsMismatch
+/// (so on no source, or a source of another campaign).
 /// Every check comes before the runs are written, in one transaction: on any error, no run is
 /// added to the target.
 MergeCounts merge_campaigns(const std::vector<std::filesystem::path>& sources, const std::filesystem::path& target);

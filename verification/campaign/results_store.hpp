@@ -91,9 +91,11 @@ class ResultsStore {
   /// holds an exclusive lock on `db_path` + ".lock" (flock, released when the process ends,
   /// even by SIGKILL) for the store's lifetime: a second writer is refused with ResultsBusy,
   /// naming the holder's pid, instead of racing the first to the same run indices. A
-  /// version-2 database is migrated to version 3 (see the file comment).
+  /// version-2 database is migrated to version 3 (see the file comment). Throws ResultsMismatch
+  /// on a database of another scenario, seed or format version.
   static ResultsStore open_or_create(const std::filesystem::path& db_path, const CampaignMeta& meta);
   /// Opens an existing database read-write (report, replay, merge), version 2 or 3 as it is.
+  /// Throws ResultsMismatch when there is none or its format version is unknown.
   static ResultsStore open_existing(const std::filesystem::path& db_path);
 
   ResultsStore(ResultsStore&&) noexcept;
@@ -103,7 +105,8 @@ class ResultsStore {
   const CampaignMeta& meta() const { return meta_; }
   std::vector<std::int64_t> finished_indices() const;
   /// Commits one run in its own transaction; a run index already present is refused, and so
-  /// is any run into a version-2 database (open_existing's, not migrated): ResultsMismatch.
+  /// is any run into a version-2 database (open_existing's, not migrated): throws
+  /// ResultsMismatch; std::invalid_argument on an unknown outcome.
   void insert(const RunRecord& run);
   /// Commits several runs in one transaction (all or none); a run index already present is refused.
   void insert(const std::vector<RunRecord>& runs);

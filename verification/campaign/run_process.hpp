@@ -64,6 +64,7 @@ class ProcessRunWorker : public RunWorker {
   ProcessRunWorker(const ProcessRunWorker&) = delete;
   ProcessRunWorker& operator=(const ProcessRunWorker&) = delete;
 
+  /// Throws std::invalid_argument when the child answers with another run's record.
   RunRecord run(std::int64_t index, std::uint64_t seed) override;
   /// The child's process id (0 when none runs): for tests.
   pid_t child_pid() const { return pid_; }

@@ -14,6 +14,7 @@ namespace shelfcross::verification {
 
 class RunHasher {
  public:
+  /// Throws std::runtime_error when XXH3's state cannot be made.
   RunHasher();
   ~RunHasher();
   RunHasher(const RunHasher&) = delete;

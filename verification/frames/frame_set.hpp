@@ -129,11 +129,13 @@ double range_to_tags_m(const verification::Scenario& sc, const flight_sw::Flight
                        const Eigen::Vector3d& p_WB_m, double yaw_rad);
 
 /// The target cell: among shelf 0's empty cells the vehicle fits through, the one whose
-/// corner tags' centroid projects nearest the principal point from camera pose X_WC.
+/// corner tags' centroid projects nearest the principal point from camera pose X_WC. Throws
+/// std::runtime_error when shelf 0 has no crossable empty cell.
 CellIndex expected_target(const verification::Scenario& sc, const flight_sw::FlightConfig& config,
                           const Eigen::Isometry3d& X_WC);
 
-/// The frame list for a scenario (no rendering).
+/// The frame list for a scenario (no rendering). Throws std::runtime_error on a scenario
+/// without a shelf.
 std::vector<FrameSpec> frame_specs(const verification::Scenario& sc);
 
 // ---- Files ----
@@ -145,6 +147,7 @@ std::optional<std::string> frame_set_stale(const std::filesystem::path& dir, con
 
 /// Renders the set of `sc` into `dir` (created). `only_condition` non-empty: that condition's
 /// sequence only (and the far stills if nominal). Returns the number of frames written.
+/// Throws std::runtime_error when a frame cannot be written.
 int generate_frame_set(const verification::Scenario& sc, const std::filesystem::path& dir,
                        const std::string& only_condition = "");
 
@@ -153,6 +156,7 @@ FrameSet load_frame_set(const std::filesystem::path& dir, const verification::Sc
 
 /// A folder of recorded images (png, jpg, jpeg, bmp; sorted by name) as one sequence of
 /// condition and group "recorded"; images of another size are resized to width x height.
+/// Throws std::runtime_error on an unreadable image or a folder without images.
 FrameSet load_image_folder(const std::filesystem::path& dir, int width_px, int height_px);
 
 // ---- Driving the flight software with a sequence ----

@@ -21,7 +21,8 @@ struct RunSetup {
   CameraIntrinsics believed_camera;
 };
 
-/// The nominal scenario with one run's draws applied.
+/// The nominal scenario with one run's draws applied. Throws std::invalid_argument on draws
+/// that do not fit the scenario's dispersions (a value outside its range, a name not dispersed).
 RunSetup disperse(const Scenario& nominal, std::uint64_t run_seed);
 
 /// The nominal scenario with the given draws applied instead of the seed's own (a rare-event

@@ -192,7 +192,8 @@ CeFit ce_refit(const ParameterDistributions& nominal, const RoundProposal& curre
                const std::vector<CeSample>& samples, const CeSettings& settings);
 
 /// The next round after `rounds` (in order, the runs of all of them in `samples`, by run
-/// index), or nullopt when the budget is spent or the estimation round is done.
+/// index), or nullopt when the budget is spent or the estimation round is done. `samples` must
+/// hold every run of `rounds` (asserted).
 std::optional<CeRound> next_ce_round(const ParameterDistributions& nominal, const CeSettings& settings,
                                      std::int64_t budget, const std::vector<CeRound>& rounds,
                                      const std::vector<CeSample>& samples);
@@ -235,22 +236,24 @@ std::string estimate_doubts(const IsEstimate& e);
 /// estimator is unbiased for fixed proposals; here each q_k was fitted to the runs before it,
 /// which makes it consistent but not exactly unbiased (Cornuet et al.; the toy of
 /// rare_event_test.cpp measures the coverage). `runs_per_round[k]` is round k's run count in
-/// the estimate (its stored runs).
+/// the estimate (its stored runs); the two must have one entry per round (asserted).
 double mixture_log_weight(const ParameterDistributions& nominal, const std::vector<CeRound>& rounds,
                           const std::vector<std::int64_t>& runs_per_round, const DrawnValues& x);
 
 /// sum_k c_k n_k, c_k = rounds[k].proposal.least_ratio(), n_k = runs_per_round[k]: the
-/// search's worth in nominal runs for the zero-failure bound (file comment).
+/// search's worth in nominal runs for the zero-failure bound (file comment). One entry per
+/// round in each (asserted).
 double nominal_worth(const std::vector<CeRound>& rounds, const std::vector<std::int64_t>& runs_per_round);
 
 /// The zero-failure upper bound on a class probability under the nominal (file comment) from
 /// `rounds` with `runs_per_round[k]` runs each (stored runs with a result), at one-sided
-/// `confidence`: 1 when no run was made.
+/// `confidence`: 1 when no run was made. One entry per round in each (asserted).
 double zero_failure_upper_bound(const std::vector<CeRound>& rounds, const std::vector<std::int64_t>& runs_per_round,
                                 double confidence = 0.95);
 
 /// The estimate from i.i.d. draws of one proposal: log_weight_i = log f(x_i) - log q(x_i),
-/// failed_i = g(x_i) < 0. See the file comment for the interval.
+/// failed_i = g(x_i) < 0. See the file comment for the interval. The two must be of one
+/// length (asserted).
 IsEstimate importance_estimate(const std::vector<double>& log_weights, const std::vector<bool>& failed,
                                double confidence = 0.95);
 

@@ -10,14 +10,16 @@ namespace shelfcross::verification {
 /// One-sided lower confidence bound of a binomial success probability (Clopper-Pearson):
 /// the largest p_L with P(X >= successes | p_L) <= 1 - confidence, i.e. the (1 - confidence)
 /// quantile of Beta(successes, trials - successes + 1). 0 when successes == 0.
-/// Example: 299 successes in 299 trials at 95 % gives 0.05^(1/299) = 0.99003.
+/// Example: 299 successes in 299 trials at 95 % gives 0.05^(1/299) = 0.99003. Throws
+/// std::invalid_argument unless 0 <= successes <= trials, trials > 0.
 double clopper_pearson_lower(std::int64_t successes, std::int64_t trials, double confidence = 0.95);
 
 /// One-sided upper confidence bound of a binomial event probability (Clopper-Pearson): the
 /// smallest p_U with P(X <= events | p_U) <= 1 - confidence, i.e. the confidence quantile of
 /// Beta(events + 1, trials - events). 1 when events == trials; with no event it is
 /// 1 - (1 - confidence)^(1 / trials): 0 contacts in 2,995 runs bound the contact probability
-/// below 0.1 % at 95 %, 0 in 299 below 1 %.
+/// below 0.1 % at 95 %, 0 in 299 below 1 %. Throws std::invalid_argument unless
+/// 0 <= events <= trials, trials > 0.
 double clopper_pearson_upper(std::int64_t events, std::int64_t trials, double confidence = 0.95);
 
 /// Safety apart from mission success: what each run outcome (cosim.hpp's names)
@@ -80,6 +82,7 @@ struct McNemarTest {
   double p_two_sided = 1.0;
   double p_new_worse = 1.0;
 };
+/// Throws std::invalid_argument on a negative count.
 McNemarTest mcnemar_exact(const PairedTable& table);
 
 /// A two-sided confidence interval.
@@ -91,6 +94,7 @@ struct Interval {
 
 /// Wilson's score interval for a binomial proportion k / n (no continuity correction):
 /// (p + z^2/2n -+ z sqrt(p(1-p)/n + z^2/4n^2)) / (1 + z^2/n), z the normal (1+confidence)/2 quantile.
+/// Throws std::invalid_argument unless 0 <= k <= n, n > 0 and 0 < confidence < 1.
 Interval wilson_interval(std::int64_t k, std::int64_t n, double confidence = 0.95);
 
 /// The difference of the event's rates, NEW - BASE = (new_only - base_only) / n, with Newcombe's

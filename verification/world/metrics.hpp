@@ -33,6 +33,7 @@ struct StepResponse {
 };
 
 /// Analyses e(t) from the first sample (t0) to the last. Samples must be in time order.
+/// Throws std::invalid_argument when t_s and error differ in length.
 /// The settling time is t_first - t0 where t_first is the earliest sample after which every
 /// sample is inside the band; empty when the last sample is outside (never settled).
 StepResponse analyse_step_response(const std::vector<double>& t_s, const std::vector<double>& error,

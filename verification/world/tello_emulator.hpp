@@ -92,8 +92,8 @@ class TelloEmulator {
   TelloEmulator& operator=(const TelloEmulator&) = delete;
 
   /// Reads every pending command datagram (stamped now_ns), advances the simulation to the
-  /// last autopilot tick <= now_ns handling everything due, sends what is due. now_ns never
-  /// decreases.
+  /// last autopilot tick <= now_ns handling everything due, sends what is due. now_ns must
+  /// never decrease (asserted).
   void advance(TimeNs now_ns);
   /// The earliest time something is due after the last advance: the next tick, or a queued
   /// outgoing datagram (incoming commands are handled at ticks).
