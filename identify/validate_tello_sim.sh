@@ -10,7 +10,8 @@
 # `cmake --build --preset release --target shelfcross tello_pilot` (or with BIN=DIR holding copies
 # of both programs). SENSES_BOARD="DISTANCE HEIGHT" flies the senses block too, over the
 # scenario's board (tello_pilot --senses-board DISTANCE, identify --board-height HEIGHT): with
-# scenarios/calibration/senses_board.yaml, SENSES_BOARD="1.5 0.29".
+# scenarios/calibration/senses_board.yaml, SENSES_BOARD="1.5 0.29". IDENTIFY_OPTS adds options to
+# each `identify` (e.g. "--bootstrap 60": fewer refits, faster on a loaded machine).
 set -uo pipefail
 out=${1:?usage: validate_tello_sim.sh OUT_DIR SCENARIO LOSS SEED...}
 scenario=${2:?scenario}
@@ -51,8 +52,9 @@ for seed in "$@"; do
   kill -TERM $emu 2>/dev/null || true
   wait $emu 2>/dev/null || true
   echo "seed $seed: tello_pilot exit $status"
+  # shellcheck disable=SC2086  # IDENTIFY_OPTS is split into options on purpose
   "$shelfcross" identify --log "$dir/flight_log.jsonl" --scenario "$scenario" --truth "$dir/report.json" "${identify_senses[@]}" \
-    --out "$dir/identify" > "$dir/identify.txt" 2>&1 || echo "seed $seed: identify failed (see $dir/identify.txt)"
+    ${IDENTIFY_OPTS:-} --out "$dir/identify" > "$dir/identify.txt" 2>&1 || echo "seed $seed: identify failed (see $dir/identify.txt)"
 done
 python3 "$(dirname "$0")/summarize_validation.py" "$out" "$scenario" > "$out/summary.md"
 cat "$out/summary.md"
