@@ -15,15 +15,17 @@ constexpr double kLandRefusedWait_s = 0.5;
 constexpr double kTakeoffShowsWithin_s = 3.0;
 }  // namespace
 
-void CommandPhases::on_reply(const SdkReply& reply, MissionFacts& facts, Mission& mission) {
-  if (auto c = commands_.on_reply(reply)) on_completion(*c, facts, mission);
+std::optional<Transition> CommandPhases::on_reply(const SdkReply& reply, MissionFacts& facts) {
+  if (auto c = commands_.on_reply(reply)) return on_completion(*c, facts);
+  return std::nullopt;
 }
 
-void CommandPhases::check_timeout(MissionFacts& facts, Mission& mission) {
-  if (auto c = commands_.check_timeout(facts.now_ns)) on_completion(*c, facts, mission);
+std::optional<Transition> CommandPhases::check_timeout(MissionFacts& facts) {
+  if (auto c = commands_.check_timeout(facts.now_ns)) return on_completion(*c, facts);
+  return std::nullopt;
 }
 
-void CommandPhases::on_completion(const MissionCommands::Completion& c, MissionFacts& facts, Mission& mission) {
+std::optional<Transition> CommandPhases::on_completion(const MissionCommands::Completion& c, MissionFacts& facts) {
   // Asked again while retries remain (MissionCommands::retry), the event saying why.
   auto retried = [&](double timeout_s) {
     if (!commands_.retry(c.command, timeout_s)) return false;
@@ -33,21 +35,18 @@ void CommandPhases::on_completion(const MissionCommands::Completion& c, MissionF
   };
   if (c.command == "command" || c.command == "streamon") {
     if (c.ok) {
-      if (c.command == "command") {
-        mission.enter(Phase::StartVideo, "SDK mode; starting video");
-      } else {
-        mission.enter(Phase::WaitVideo, "video on; waiting for the first frame");
-      }
-    } else if (!retried(config_.timeouts.command_reply_s)) {
-      abort_on_ground("'" + c.command + "' failed: " + (c.timed_out ? "no reply" : c.reply), mission);
+      if (c.command == "command") return Transition{Phase::StartVideo, "SDK mode; starting video"};
+      return Transition{Phase::WaitVideo, "video on; waiting for the first frame"};
+    }
+    if (!retried(config_.timeouts.command_reply_s)) {
+      return abort_on_ground("'" + c.command + "' failed: " + (c.timed_out ? "no reply" : c.reply));
     }
   } else if (c.command == "takeoff") {
     const bool airborne_anyway = c.timed_out && facts.state &&
                                  facts.state->height_m > config_.mission.airborne_height_m;
-    if (c.ok || airborne_anyway) {
-      mission.enter(Phase::FindShelf, c.ok ? "airborne" : "airborne (takeoff reply lost)");
-    } else if (!retried(config_.timeouts.takeoff_reply_s)) {
-      if (c.timed_out) return abort_on_ground("takeoff failed: no reply", mission);
+    if (c.ok || airborne_anyway) return Transition{Phase::FindShelf, c.ok ? "airborne" : "airborne (takeoff reply lost)"};
+    if (!retried(config_.timeouts.takeoff_reply_s)) {
+      if (c.timed_out) return abort_on_ground("takeoff failed: no reply");
       // Every attempt refused. A Tello refuses `takeoff` while it is taking off, so a
       // duplicated datagram that started the takeoff has its `error` taken for this one's
       // reply and every retry refused too, while the drone climbs. Watch the state height
@@ -62,8 +61,9 @@ void CommandPhases::on_completion(const MissionCommands::Completion& c, MissionF
     // the last height in flight, so it can only keep the flight software trying.)
     const bool down_anyway = !c.ok && facts.state && facts.state->height_m <= config_.mission.airborne_height_m;
     if (c.ok || down_anyway) {
-      finish_landing(true, c.ok ? "landed" : "landed (no `ok`: the state height says on the ground)", mission);
-    } else if (!c.timed_out && !land_given_up(facts)) {
+      return finish_landing(true, c.ok ? "landed" : "landed (no `ok`: the state height says on the ground)");
+    }
+    if (!c.timed_out && !land_given_up(facts)) {
       // Refused in the air: the Tello refuses `land` while it is already landing (a duplicated
       // datagram started the landing, and its `error` was taken for this `land`'s reply) and,
       // now and then, with `error Not joystick`. Retrying at once would spend the retries in a
@@ -74,38 +74,40 @@ void CommandPhases::on_completion(const MissionCommands::Completion& c, MissionF
       facts.telemetry.event = "'land' refused in the air (" + c.reply + "): waiting for the state height";
     } else if (!(c.timed_out && retried(config_.timeouts.land_reply_s))) {
       result_.reason += "; land not acknowledged";
-      finish_landing(false, "land not acknowledged", mission);
+      return finish_landing(false, "land not acknowledged");
     }
   }
+  return std::nullopt;
 }
 
-void CommandPhases::take_off_if_ready(const MissionFacts& facts, Mission& mission) {
+Transition CommandPhases::take_off_if_ready(const MissionFacts& facts) {
   if (facts.state && facts.state->battery_pct < config_.mission.takeoff_min_battery_pct) {
-    abort_on_ground("battery " + std::to_string(facts.state->battery_pct) + "% below the take-off minimum", mission);
-  } else {
-    mission.enter(Phase::TakeOff, "taking off");
+    return abort_on_ground("battery " + std::to_string(facts.state->battery_pct) + "% below the take-off minimum");
   }
+  return Transition{Phase::TakeOff, "taking off"};
 }
 
-void CommandPhases::supervise(const MissionFacts& facts, Mission& mission) {
+std::optional<Transition> CommandPhases::supervise(const MissionFacts& facts) {
   switch (facts.phase.current()) {
     case Phase::WaitVideo:
       if (facts.phase.elapsed_s(facts.now_ns) > config_.timeouts.video_start_s) {
-        abort_on_ground("no video after streamon", mission);
+        return abort_on_ground("no video after streamon");
       }
-      return;
+      return std::nullopt;
     case Phase::TakeOff: {
       // After every `takeoff` was refused (on_completion): up and vertically still on a fresh
       // state record, the takeoff that was under way has ended; still low after
       // kTakeoffShowsWithin_s, none was. Up but still climbing, wait on (a climb ends).
-      if (!takeoff_refused_) return;
+      if (!takeoff_refused_) return std::nullopt;
       const bool up = facts.state && facts.state->height_m > config_.mission.airborne_height_m;
       if (up && facts.state_fresh() && std::abs(facts.state->vz_H_mps) <= kVerticallyStill_mps) {
-        mission.enter(Phase::FindShelf, "airborne (every `takeoff` refused, but the state height says up: a takeoff was under way)");
-      } else if (!up && ns_to_seconds(facts.now_ns - takeoff_refused_->since_ns) > kTakeoffShowsWithin_s) {
-        abort_on_ground("takeoff failed: " + takeoff_refused_->reply, mission);
+        return Transition{Phase::FindShelf,
+                          "airborne (every `takeoff` refused, but the state height says up: a takeoff was under way)"};
       }
-      return;
+      if (!up && ns_to_seconds(facts.now_ns - takeoff_refused_->since_ns) > kTakeoffShowsWithin_s) {
+        return abort_on_ground("takeoff failed: " + takeoff_refused_->reply);
+      }
+      return std::nullopt;
     }
     case Phase::Land:
       // Once `land` went out: down by a fresh state record (low and vertically still: a
@@ -116,13 +118,13 @@ void CommandPhases::supervise(const MissionFacts& facts, Mission& mission) {
       if ((commands_.waiting() || commands_.outstanding()) && facts.state_fresh() &&
           facts.state->height_m <= config_.mission.airborne_height_m &&
           std::abs(facts.state->vz_H_mps) <= kVerticallyStill_mps) {
-        finish_landing(true, commands_.waiting() ? "landed (`land` refused while landing; the state height says on the ground)"
-                                                 : "landed (no `ok` yet: the state height says on the ground)",
-                       mission);
+        return finish_landing(true, commands_.waiting()
+                                        ? "landed (`land` refused while landing; the state height says on the ground)"
+                                        : "landed (no `ok` yet: the state height says on the ground)");
       }
-      return;
+      return std::nullopt;
     default:
-      return;
+      return std::nullopt;
   }
 }
 
@@ -131,11 +133,11 @@ void CommandPhases::landing(Outcome outcome, const std::string& reason) {
   result_.reason = reason;
 }
 
-void CommandPhases::finish_landing(bool landed, const std::string& why, Mission& mission) {
+Transition CommandPhases::finish_landing(bool landed, const std::string& why) {
   result_.outcome = pending_outcome_;
   result_.landed = landed;
   commands_.cancel_wait();
-  mission.enter(Phase::Done, why);
+  return Transition{Phase::Done, why};
 }
 
 bool CommandPhases::land_given_up(const MissionFacts& facts) const {
@@ -143,9 +145,9 @@ bool CommandPhases::land_given_up(const MissionFacts& facts) const {
   return facts.phase.elapsed_s(facts.now_ns) > config_.timeouts.land_reply_s;
 }
 
-void CommandPhases::abort_on_ground(const std::string& reason, Mission& mission) {
+Transition CommandPhases::abort_on_ground(const std::string& reason) {
   result_ = {Outcome::Aborted, reason, false};
-  mission.enter(Phase::Done, "gave up on the ground: " + reason);
+  return Transition{Phase::Done, "gave up on the ground: " + reason};
 }
 
 }  // namespace shelfcross::flight_sw

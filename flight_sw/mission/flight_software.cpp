@@ -46,7 +46,7 @@ std::vector<SdkCommand> FlightSoftware::step(const Input& input) {
       [this](const auto& m) {
         using T = std::decay_t<decltype(m)>;
         if constexpr (std::is_same_v<T, SdkReply>) {
-          commands_.on_reply(m, facts_, *this);
+          take(commands_.on_reply(m, facts_));
         } else if constexpr (std::is_same_v<T, StateRecord>) {
           facts_.on_state(m);
           sticks_.on_state(m);
@@ -62,7 +62,7 @@ std::vector<SdkCommand> FlightSoftware::step(const Input& input) {
         // ClockTick: only the timers below.
       },
       input);
-  commands_.check_timeout(facts_, *this);
+  take(commands_.check_timeout(facts_));
   if (facts_.phase.current() != Phase::Done) supervise();
   commands_.poll(facts_.now_ns, out_);
   facts_.telemetry.phase = facts_.phase.current();
@@ -81,11 +81,11 @@ void FlightSoftware::on_frame(const CameraFrame& f) {
   if (!pic.decides && pic.damage_events > config_->perception.steer_max_damage_events) {
     ++facts_.telemetry.link.unflown_frames;
     if (vision_phase(facts_.phase.current())) shelves_.hold_or_hover(facts_, sticks_);
-    if (facts_.phase.current() == Phase::WaitVideo) commands_.take_off_if_ready(facts_, *this);
+    if (facts_.phase.current() == Phase::WaitVideo) take(commands_.take_off_if_ready(facts_));
     else emit_rc(false);
     return;
   }
-  if (facts_.phase.current() == Phase::WaitVideo) return commands_.take_off_if_ready(facts_, *this);
+  if (facts_.phase.current() == Phase::WaitVideo) return take(commands_.take_off_if_ready(facts_));
   shelves_.on_picture(pic, {facts_, sticks_, *this});
   sticks_.controlled(facts_.now_ns);
   emit_rc(false);
@@ -95,7 +95,7 @@ void FlightSoftware::on_frame(const CameraFrame& f) {
 
 void FlightSoftware::supervise() {
   // WaitVideo's and Land's timers; the other ground phases have none but their commands'.
-  if (!airborne(facts_.phase.current())) return commands_.supervise(facts_, *this);
+  if (!airborne(facts_.phase.current())) return take(commands_.supervise(facts_));
   // The airborne phases' own timers, then the mission's failsafes.
   if (shelves_.supervise({facts_, sticks_, *this})) return;
   // Low battery: land now, except in the crossing (finish it, then land beyond the shelf).
@@ -138,6 +138,10 @@ void FlightSoftware::enter(Phase p, const std::string& event) {
     case Phase::Land: return commands_.ask("land", to.land_reply_s);
     default: return;
   }
+}
+
+void FlightSoftware::take(const std::optional<Transition>& t) {
+  if (t) enter(t->phase, t->event);
 }
 
 void FlightSoftware::land(Outcome outcome, const std::string& reason) {

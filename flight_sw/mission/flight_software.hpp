@@ -98,6 +98,7 @@
 // sent as d = -yaw_rate * rc_per_radps_yaw, the SDK's d being clockwise).
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -158,6 +159,8 @@ class FlightSoftware final : private Mission {
   void enter(Phase phase, const std::string& event) override;
   void land(Outcome outcome, const std::string& reason) override;
   void emit_rc(bool force) override;
+  /// A unit's decided transition, if any, entered (`enter`).
+  void take(const std::optional<Transition>& t);
   // Pictures and timers (replies and state records: `step` hands them to the units)
   void on_frame(const CameraFrame& frame);
   void supervise();

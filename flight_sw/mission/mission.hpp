@@ -1,8 +1,10 @@
 #pragma once
-// How the mission ends (Outcome, MissionResult) and what its units ask of it in the middle of
-// a step (Mission: a phase entered, a landing, the rc sent). FlightSoftware is the mission
-// (flight_software.hpp): every phase is entered in one place, FlightSoftware::enter; the units
-// (command_phases.hpp, airborne_phases.hpp) call it where their step changes the phase.
+// How the mission ends (Outcome, MissionResult), the transition a unit's step decides
+// (Transition), and what the airborne units still ask of the mission in the middle of a step
+// (Mission: a phase entered, a landing, the rc sent). FlightSoftware is the mission
+// (flight_software.hpp): every phase is entered in one place, FlightSoftware::enter. The command
+// phases (command_phases.hpp) return their transition and the mission takes it; the airborne
+// phases (airborne_phases.hpp) call the mission where their step changes the phase.
 
 #include <string>
 
@@ -18,6 +20,14 @@ enum class Outcome {
   Aborted       ///< gave up (reason says why); landed if it had taken off
 };
 const char* outcome_name(Outcome outcome);
+
+/// A phase to enter and the event the telemetry writes for it: what a unit's step decided,
+/// taken by the mission (FlightSoftware::enter).
+struct Transition {
+  Phase phase = Phase::Idle;
+  std::string event;
+  bool operator==(const Transition&) const = default;
+};
 
 struct MissionResult {
   Outcome outcome = Outcome::Running;
