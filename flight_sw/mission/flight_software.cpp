@@ -11,6 +11,11 @@ FlightConfig validated(FlightConfig c) {
   return c;
 }
 
+// A unit's decided transition, if any, entered through the mission's one `enter`.
+void take(Mission& mission, const std::optional<Transition>& t) {
+  if (t) mission.enter(t->phase, t->event);
+}
+
 }  // namespace
 
 FlightSoftware::FlightSoftware(FlightConfig config)
@@ -46,7 +51,7 @@ std::vector<SdkCommand> FlightSoftware::step(const Input& input) {
       [this](const auto& m) {
         using T = std::decay_t<decltype(m)>;
         if constexpr (std::is_same_v<T, SdkReply>) {
-          take(commands_.on_reply(m, facts_));
+          take(*this, commands_.on_reply(m, facts_));
         } else if constexpr (std::is_same_v<T, StateRecord>) {
           facts_.on_state(m);
           sticks_.on_state(m);
@@ -62,7 +67,7 @@ std::vector<SdkCommand> FlightSoftware::step(const Input& input) {
         // ClockTick: only the timers below.
       },
       input);
-  take(commands_.check_timeout(facts_));
+  take(*this, commands_.check_timeout(facts_));
   if (facts_.phase.current() != Phase::Done) supervise();
   commands_.poll(facts_.now_ns, out_);
   facts_.telemetry.phase = facts_.phase.current();
@@ -81,11 +86,11 @@ void FlightSoftware::on_frame(const CameraFrame& f) {
   if (!pic.decides && pic.damage_events > config_->perception.steer_max_damage_events) {
     ++facts_.telemetry.link.unflown_frames;
     if (vision_phase(facts_.phase.current())) shelves_.hold_or_hover(facts_, sticks_);
-    if (facts_.phase.current() == Phase::WaitVideo) take(commands_.take_off_if_ready(facts_));
+    if (facts_.phase.current() == Phase::WaitVideo) take(*this, commands_.take_off_if_ready(facts_));
     else emit_rc(false);
     return;
   }
-  if (facts_.phase.current() == Phase::WaitVideo) return take(commands_.take_off_if_ready(facts_));
+  if (facts_.phase.current() == Phase::WaitVideo) return take(*this, commands_.take_off_if_ready(facts_));
   shelves_.on_picture(pic, {facts_, sticks_, *this});
   sticks_.controlled(facts_.now_ns);
   emit_rc(false);
@@ -95,7 +100,7 @@ void FlightSoftware::on_frame(const CameraFrame& f) {
 
 void FlightSoftware::supervise() {
   // WaitVideo's and Land's timers; the other ground phases have none but their commands'.
-  if (!airborne(facts_.phase.current())) return take(commands_.supervise(facts_));
+  if (!airborne(facts_.phase.current())) return take(*this, commands_.supervise(facts_));
   // The airborne phases' own timers, then the mission's failsafes.
   if (shelves_.supervise({facts_, sticks_, *this})) return;
   // Low battery: land now, except in the crossing (finish it, then land beyond the shelf).
@@ -138,10 +143,6 @@ void FlightSoftware::enter(Phase p, const std::string& event) {
     case Phase::Land: return commands_.ask("land", to.land_reply_s);
     default: return;
   }
-}
-
-void FlightSoftware::take(const std::optional<Transition>& t) {
-  if (t) enter(t->phase, t->event);
 }
 
 void FlightSoftware::land(Outcome outcome, const std::string& reason) {

@@ -159,8 +159,6 @@ class FlightSoftware final : private Mission {
   void enter(Phase phase, const std::string& event) override;
   void land(Outcome outcome, const std::string& reason) override;
   void emit_rc(bool force) override;
-  /// A unit's decided transition, if any, entered (`enter`).
-  void take(const std::optional<Transition>& t);
   // Pictures and timers (replies and state records: `step` hands them to the units)
   void on_frame(const CameraFrame& frame);
   void supervise();
