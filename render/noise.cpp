@@ -64,7 +64,8 @@ void rgba_to_bgr_noise_tail(const std::uint8_t* rgba, const std::int8_t* n, std:
 
 #if defined(__x86_64__)
 // The same, 16 pixels per step with SSSE3 (every x86-64 CPU since 2006; checked at run time):
-// returns the number of pixels done (a multiple of 16), the rest is left to the scalar tail.
+// returns the number of pixels done (a multiple of 16), the rest is left to the scalar tail
+// (after the AVX-512 steps, where the CPU has them, the rows' last pixels only).
 // Per 4 pixels, PSHUFB picks bytes 2 1 0, 6 5 4, 10 9 8, 14 13 12 of the RGBA quad (B G R of
 // each pixel; the alpha bytes dropped) into the low 12 bytes; the four 12-byte pieces are
 // joined into three 16-byte vectors by byte shifts. Saturating u8 + s8: with p' = p - 128 (the
@@ -99,8 +100,8 @@ __attribute__((target("ssse3"))) int rgba_to_bgr_noise_ssse3(const std::uint8_t*
 // of 64 pixels in four registers, and VPERMT2B picks each of the 192 BGR bytes from the two
 // registers that hold its pixel: output byte j (pixel j / 3, channel k = j % 3) is input byte
 // 4 (j / 3) + 2 - k, and output register m (bytes 64 m .. 64 m + 63) draws on input registers
-// m and m + 1 only (input bytes 85 m - 1 .. 85 m + 84 at most). The noise as above: one signed
-// saturating add with the top bits flipped.
+// m and m + 1 only (input bytes 0..86, 85..169 and 168..254 for m = 0, 1, 2, inside
+// 64 m .. 64 m + 127). The noise as above: one signed saturating add with the top bits flipped.
 __attribute__((target("avx512f,avx512bw,avx512vbmi"))) int rgba_to_bgr_noise_avx512(const std::uint8_t* rgba,
                                                                                     const std::int8_t* n,
                                                                                     std::uint8_t* bgr, int cols) {
