@@ -3,6 +3,10 @@
 // frame, the link: one run of scenarios/paper_test_shelf.yaml per iteration, with the `ideal`
 // link (whole frames) and the `sdk` link (the Tello's H.264 stream encoded, cut into
 // datagrams, decoded by tello_pilot's receiver; the pilot loop's driver), same seeds.
+// BM_WholeRunSenses is the same on scenarios/senses/paper_test_shelf_senses.yaml, the world
+// with every effect on: the Tello's own senses (VPS, range, barometer: a downward ray cast per
+// sensor sample), ground and ceiling effect per rotor (8 ray casts per autopilot tick) and the
+// camera's rolling shutter.
 //
 // Run (one core's worth of work; see also bench/README.md):
 //   taskset -c 1 build/release/bench/shelfcross_bench --benchmark_filter=WholeRun
@@ -29,10 +33,9 @@ namespace {
 using namespace shelfcross;
 using namespace shelfcross::verification;
 
-void BM_WholeRun(benchmark::State& state) {
+void whole_run(benchmark::State& state, const Scenario& shipped) {
   ::setenv("LP_NUM_THREADS", "1", 1);
   cv::setNumThreads(1);
-  static const Scenario shipped = load_scenario(SHELFCROSS_SOURCE_DIR "/scenarios/paper_test_shelf.yaml");
   Scenario nominal = shipped;
   nominal.cosim.link.model = state.range(1) ? "sdk" : "ideal";
   // A fixed run of the default campaign (campaign seed 1, run index from the argument).
@@ -53,7 +56,20 @@ void BM_WholeRun(benchmark::State& state) {
   state.counters["frames"] = benchmark::Counter(frames / runs);
   state.counters["sim_s"] = benchmark::Counter(simulated_s / runs);
 }
+
+void BM_WholeRun(benchmark::State& state) {
+  static const Scenario shipped = load_scenario(SHELFCROSS_SOURCE_DIR "/scenarios/paper_test_shelf.yaml");
+  whole_run(state, shipped);
+}
 BENCHMARK(BM_WholeRun)->ArgsProduct({{0, 1, 2}, {0, 1}})->ArgNames({"run", "sdk"})->Iterations(1)->MeasureProcessCPUTime()
     ->Unit(benchmark::kSecond);
+
+void BM_WholeRunSenses(benchmark::State& state) {
+  static const Scenario shipped =
+      load_scenario(SHELFCROSS_SOURCE_DIR "/scenarios/senses/paper_test_shelf_senses.yaml");
+  whole_run(state, shipped);
+}
+BENCHMARK(BM_WholeRunSenses)->ArgsProduct({{0, 1, 2}, {0, 1}})->ArgNames({"run", "sdk"})->Iterations(1)
+    ->MeasureProcessCPUTime()->Unit(benchmark::kSecond);
 
 }  // namespace

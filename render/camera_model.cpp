@@ -2,14 +2,6 @@
 
 namespace shelfcross::render {
 
-Eigen::Vector2d distort_normalized(const CameraIntrinsics& K, const Eigen::Vector2d& xy) {
-  const double x = xy.x(), y = xy.y();
-  const double r2 = x * x + y * y;
-  const double radial = 1.0 + r2 * (K.k1 + r2 * (K.k2 + r2 * K.k3));
-  return {x * radial + 2.0 * K.p1 * x * y + K.p2 * (r2 + 2.0 * x * x),
-          y * radial + K.p1 * (r2 + 2.0 * y * y) + 2.0 * K.p2 * x * y};
-}
-
 bool undistort_normalized(const CameraIntrinsics& K, const Eigen::Vector2d& xy_d,
                           Eigen::Vector2d& xy) {
   // Fixed point of x = (x_d - tangential(x)) / radial(x), started at x_d; then a check that
@@ -27,11 +19,6 @@ bool undistort_normalized(const CameraIntrinsics& K, const Eigen::Vector2d& xy_d
   }
   xy = p;
   return (distort_normalized(K, p) - xy_d).norm() < 1e-9;
-}
-
-Eigen::Vector2d pixel_of_normalized(const CameraIntrinsics& K, const Eigen::Vector2d& xy) {
-  const Eigen::Vector2d d = distort_normalized(K, xy);
-  return {K.fx_px * d.x() + K.cx_px, K.fy_px * d.y() + K.cy_px};
 }
 
 Eigen::Vector2d project_camera_point(const CameraIntrinsics& K, const Eigen::Vector3d& p_C) {

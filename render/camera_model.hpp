@@ -14,8 +14,19 @@
 
 namespace shelfcross::render {
 
+// distort_normalized and pixel_of_normalized run several times for every vertex of every
+// frame (the lens mesher, the rolling shutter's moves): inline, so that a call costs no more
+// than its few multiplications. Inlined or not, the same operations run in the same order
+// (no fast-math, no fused multiply-adds on the baseline x86-64 target): the same bits.
+
 /// Plumb-bob distortion of normalised coordinates (x, y) -> (x_d, y_d).
-Eigen::Vector2d distort_normalized(const CameraIntrinsics& K, const Eigen::Vector2d& xy);
+inline Eigen::Vector2d distort_normalized(const CameraIntrinsics& K, const Eigen::Vector2d& xy) {
+  const double x = xy.x(), y = xy.y();
+  const double r2 = x * x + y * y;
+  const double radial = 1.0 + r2 * (K.k1 + r2 * (K.k2 + r2 * K.k3));
+  return {x * radial + 2.0 * K.p1 * x * y + K.p2 * (r2 + 2.0 * x * x),
+          y * radial + K.p1 * (r2 + 2.0 * y * y) + 2.0 * K.p2 * x * y};
+}
 
 /// Inverse of distort_normalized by fixed-point iteration (as cv::undistortPoints, but run to
 /// convergence: |distort(result) - xy_d| < 1e-13 or 200 iterations). Returns false if it did
@@ -24,7 +35,10 @@ bool undistort_normalized(const CameraIntrinsics& K, const Eigen::Vector2d& xy_d
                           Eigen::Vector2d& xy);
 
 /// Pixel of normalised coordinates (x, y) = (X/Z, Y/Z): distortion then K.
-Eigen::Vector2d pixel_of_normalized(const CameraIntrinsics& K, const Eigen::Vector2d& xy);
+inline Eigen::Vector2d pixel_of_normalized(const CameraIntrinsics& K, const Eigen::Vector2d& xy) {
+  const Eigen::Vector2d d = distort_normalized(K, xy);
+  return {K.fx_px * d.x() + K.cx_px, K.fy_px * d.y() + K.cy_px};
+}
 
 /// Pixel of a camera-frame point (Z must be > 0): pixel_of_normalized(X/Z, Y/Z).
 Eigen::Vector2d project_camera_point(const CameraIntrinsics& K, const Eigen::Vector3d& p_C);

@@ -343,16 +343,6 @@ LensProjection::LensProjection(const CameraIntrinsics& K, int supersample, doubl
                                             supersample * K.width_px, supersample * K.height_px,
                                             near_m, far_m)) {}
 
-Eigen::Vector2d LensProjection::pixel_of(const Vec2& xy) const {
-  return s_ * pixel_of_normalized(K_, xy) + Vec2::Constant(0.5 * (s_ - 1));
-}
-
-Eigen::Vector4d LensProjection::clip_of(const Vec2& px, double Z) const {
-  const double fx_s = s_ * K_.fx_px, fy_s = s_ * K_.fy_px;
-  const double cx_s = s_ * K_.cx_px + 0.5 * (s_ - 1), cy_s = s_ * K_.cy_px + 0.5 * (s_ - 1);
-  return clip_from_camera_ * Eigen::Vector4d((px.x() - cx_s) / fx_s * Z, (px.y() - cy_s) / fy_s * Z, Z, 1.0);
-}
-
 LensMesher::LensMesher(const CameraIntrinsics& K, int supersample, double near_m, double far_m,
                        double tolerance_px, double margin_px)
     : projection_(K, supersample, near_m, far_m),

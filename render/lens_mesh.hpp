@@ -64,6 +64,7 @@
 
 #include <Eigen/Geometry>
 
+#include "render/camera_model.hpp"
 #include "render/lens_stats.hpp"
 #include "shelfcross/camera.hpp"
 
@@ -168,11 +169,18 @@ class LensProjection {
   LensProjection(const CameraIntrinsics& K, int supersample, double near_m, double far_m);
 
   /// The pixel (at the rasterised size) of a normalised point: exact, double precision.
-  Eigen::Vector2d pixel_of(const Eigen::Vector2d& xy) const;
+  /// (This and clip_of run for every vertex of every frame: inline, like the lens formula.)
+  Eigen::Vector2d pixel_of(const Eigen::Vector2d& xy) const {
+    return s_ * pixel_of_normalized(K_, xy) + Eigen::Vector2d::Constant(0.5 * (s_ - 1));
+  }
   /// GL's clip coordinates of a vertex at pixel px (rasterised size) with depth Z: the point
   /// with that depth that the x s pinhole camera of gl_clip_from_camera sees at px, so x_ndc =
   /// 2 (u_s + 0.5) / W - 1 as for any pinhole point and w = Z (perspective-correct interpolation).
-  Eigen::Vector4d clip_of(const Eigen::Vector2d& px, double Z) const;
+  Eigen::Vector4d clip_of(const Eigen::Vector2d& px, double Z) const {
+    const double fx_s = s_ * K_.fx_px, fy_s = s_ * K_.fy_px;
+    const double cx_s = s_ * K_.cx_px + 0.5 * (s_ - 1), cy_s = s_ * K_.cy_px + 0.5 * (s_ - 1);
+    return clip_from_camera_ * Eigen::Vector4d((px.x() - cx_s) / fx_s * Z, (px.y() - cy_s) / fy_s * Z, Z, 1.0);
+  }
   int supersample() const { return s_; }
   const CameraIntrinsics& intrinsics() const { return K_; }
   double near_m() const { return near_m_; }
