@@ -1,7 +1,6 @@
 #include "render/noise.hpp"
 
 #include <algorithm>
-#include <array>
 #include <cassert>
 #include <cmath>
 
@@ -64,8 +63,7 @@ void rgba_to_bgr_noise_tail(const std::uint8_t* rgba, const std::int8_t* n, std:
 
 #if defined(__x86_64__)
 // The same, 16 pixels per step with SSSE3 (every x86-64 CPU since 2006; checked at run time):
-// returns the number of pixels done (a multiple of 16), the rest is left to the scalar tail
-// (after the AVX-512 steps, where the CPU has them, the rows' last pixels only).
+// returns the number of pixels done (a multiple of 16), the rest is left to the scalar tail.
 // Per 4 pixels, PSHUFB picks bytes 2 1 0, 6 5 4, 10 9 8, 14 13 12 of the RGBA quad (B G R of
 // each pixel; the alpha bytes dropped) into the low 12 bytes; the four 12-byte pieces are
 // joined into three 16-byte vectors by byte shifts. Saturating u8 + s8: with p' = p - 128 (the
@@ -95,52 +93,14 @@ __attribute__((target("ssse3"))) int rgba_to_bgr_noise_ssse3(const std::uint8_t*
   }
   return i;
 }
-
-// The same, 64 pixels per step with AVX-512 VBMI (checked at run time): the 256 RGBA bytes
-// of 64 pixels in four registers, and VPERMT2B picks each of the 192 BGR bytes from the two
-// registers that hold its pixel: output byte j (pixel j / 3, channel k = j % 3) is input byte
-// 4 (j / 3) + 2 - k, and output register m (bytes 64 m .. 64 m + 63) draws on input registers
-// m and m + 1 only (input bytes 0..86, 85..169 and 168..254 for m = 0, 1, 2, inside
-// 64 m .. 64 m + 127). The noise as above: one signed saturating add with the top bits flipped.
-__attribute__((target("avx512f,avx512bw,avx512vbmi"))) int rgba_to_bgr_noise_avx512(const std::uint8_t* rgba,
-                                                                                    const std::int8_t* n,
-                                                                                    std::uint8_t* bgr, int cols) {
-  alignas(64) static const std::array<std::array<std::uint8_t, 64>, 3> picks = [] {
-    std::array<std::array<std::uint8_t, 64>, 3> t{};
-    for (int m = 0; m < 3; ++m)
-      for (int b = 0; b < 64; ++b) {
-        const int j = 64 * m + b;
-        t[static_cast<std::size_t>(m)][static_cast<std::size_t>(b)] =
-            static_cast<std::uint8_t>(4 * (j / 3) + 2 - j % 3 - 64 * m);
-      }
-    return t;
-  }();
-  const __m512i bias = _mm512_set1_epi8(static_cast<char>(0x80));
-  __m512i pick[3];
-  for (int m = 0; m < 3; ++m) pick[m] = _mm512_load_si512(picks[static_cast<std::size_t>(m)].data());
-  int i = 0;
-  for (; i + 64 <= cols; i += 64) {
-    __m512i in[4];
-    for (int q = 0; q < 4; ++q) in[q] = _mm512_loadu_si512(rgba + 4 * i + 64 * q);
-    for (int m = 0; m < 3; ++m) {
-      const __m512i p = _mm512_permutex2var_epi8(in[m], pick[m], in[m + 1]);
-      const __m512i sum = _mm512_adds_epi8(_mm512_xor_si512(p, bias), _mm512_loadu_si512(n + 3 * i + 64 * m));
-      _mm512_storeu_si512(bgr + 3 * i + 64 * m, _mm512_xor_si512(sum, bias));
-    }
-  }
-  return i;
-}
 #endif
 
 void rgba_to_bgr_noise_row(const std::uint8_t* rgba, const std::int8_t* n, std::uint8_t* bgr,
                            int cols) {
   int done = 0;
 #if defined(__x86_64__)
-  static const bool avx512 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
-                             __builtin_cpu_supports("avx512vbmi");
   static const bool ssse3 = __builtin_cpu_supports("ssse3");
-  if (avx512) done = rgba_to_bgr_noise_avx512(rgba, n, bgr, cols);
-  if (ssse3) done += rgba_to_bgr_noise_ssse3(rgba + 4 * done, n + 3 * done, bgr + 3 * done, cols - done);
+  if (ssse3) done = rgba_to_bgr_noise_ssse3(rgba, n, bgr, cols);
 #endif
   rgba_to_bgr_noise_tail(rgba, n, bgr, done, cols);
 }

@@ -285,9 +285,9 @@ TEST(SensorNoise, IsSeededWithTheRequestedSpread) {
 }
 
 TEST(SensorNoise, FusedConversionEqualsConvertThenAdd) {
-  // The renderer's fused pass (each SIMD width and the scalar tail) against the two-step
-  // definition, on random bytes (so both saturations occur), whole and in bands: widths of 64
-  // pixel steps alone (960), of 16 pixel steps and a tail (37), and of all three (100).
+  // The renderer's fused pass (SIMD and scalar tail) against the two-step definition, on
+  // random bytes (so both saturations occur), whole and in bands: widths of SIMD steps alone
+  // (960) and of SIMD steps and a tail (37, 100).
   for (int cols : {37, 100, 960}) {
     const SensorNoise noise(45, cols, 3, 40.0);
     cv::Mat rgba(45, cols, CV_8UC4);
