@@ -166,6 +166,35 @@ TEST(SdkLink, LostFirstLandIsSentAgainBeforeTheFlightSoftwaresTimeout) {
   EXPECT_LT(late_s, 2.5) << "not an attempt's 5 s";
 }
 
+// An outage of every channel, both ways (a Wi-Fi re-association), in the approach of the nominal
+// default scenario (12 s in; the approach begins at 8.4 s). Of 3 s: tello_pilot's loop hovers
+// through it (the Tello flies its last sticks meanwhile; nothing sent reaches it), the flight
+// software's video stall only hovers while the state records are gone too, and on the link's
+// return the mission re-acquires from the pictures and crosses. Of 12 s, past the ride-through's
+// bound (Failsafes::link_outage_s, 10 s: the Tello's 15 s watchdog less the 5 s keep-alive):
+// the program gives up and lands, the run a named abort. Nothing touched either way.
+TEST(SdkLink, AThreeSecondOutageIsRiddenThroughAndOnePastTheBoundLands) {
+  Scenario s = load_scenario(kDefault);
+  s.dispersions.clear();
+  s.cosim.link.spells.outage_start_s = 12.0;
+  s.cosim.link.spells.outage_duration_s = 3.0;
+  const RunResult ridden = run_once(s, 1);
+  s.cosim.link.spells.outage_duration_s = 12.0;
+  const RunResult lost = run_once(s, 1);
+
+  const std::string log = events_text(ridden);
+  EXPECT_EQ(ridden.outcome, RunOutcome::success) << ridden.detail << "\n" << log;
+  EXPECT_TRUE(ridden.metrics.crossed_target);
+  EXPECT_FALSE(ridden.metrics.truth.contact.has_value()) << log;
+  EXPECT_NE(log.find("video stalled: hovering"), std::string::npos) << "the outage fell in flight" << log;
+  EXPECT_EQ(log.find("pilot loop ended (exit 1)"), std::string::npos) << log;
+
+  EXPECT_EQ(lost.outcome, RunOutcome::mission_aborted) << lost.detail << "\n" << events_text(lost);
+  EXPECT_EQ(lost.detail, "tello_pilot failsafe: no state record for 10 s: the link is lost");
+  EXPECT_FALSE(lost.metrics.truth.contact.has_value()) << events_text(lost);
+  EXPECT_FALSE(lost.metrics.crossed_target);
+}
+
 // Run 98 of the grid_5x3_yellow stress campaign (seed 1; the run's own seed below): backed off
 // for a sideways drift, it came back to the view's edge before the line-hold monitor had
 // measured enough quiet poses, and its last refusal was "line hold not measured". That used to
