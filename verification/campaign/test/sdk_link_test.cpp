@@ -166,19 +166,22 @@ TEST(SdkLink, LostFirstLandIsSentAgainBeforeTheFlightSoftwaresTimeout) {
   EXPECT_LT(late_s, 2.5) << "not an attempt's 5 s";
 }
 
-// An outage of every channel, both ways (a Wi-Fi re-association), in the approach of the nominal
-// default scenario (12 s in; the approach begins at 8.4 s). Of 3 s: tello_pilot's loop hovers
-// through it (the Tello flies its last sticks meanwhile; nothing sent reaches it), the flight
-// software's video stall only hovers while the state records are gone too, and on the link's
-// return the mission re-acquires from the pictures and crosses. Of 12 s, past the ride-through's
-// bound (Failsafes::link_outage_s, 10 s: the Tello's 15 s watchdog less the 5 s keep-alive):
-// the program gives up and lands, the run a named abort. Nothing touched either way.
+// An outage of every channel, both ways (a Wi-Fi re-association), in the nominal default
+// scenario. Of 3 s in the approach (12 s in; the approach begins at 8.4 s): tello_pilot's loop
+// hovers through it (the Tello flies its last sticks meanwhile, 0.75 m on toward the shelf;
+// nothing sent reaches it), the flight software's video stall only hovers while the state
+// records are gone too, and on the link's return the mission re-acquires from the pictures and
+// crosses. Of 12 s from the inventory's hover (7.8 s in), past the ride-through's bound
+// (Failsafes::link_outage_s, 10 s: the Tello's 15 s watchdog less the 5 s keep-alive): the
+// program gives up and lands, the run a named abort. (12 s in the approach would end on the
+// shelf whatever the program does: the Tello flies the approach's last sticks all that time.)
 TEST(SdkLink, AThreeSecondOutageIsRiddenThroughAndOnePastTheBoundLands) {
   Scenario s = load_scenario(kDefault);
   s.dispersions.clear();
   s.cosim.link.spells.outage_start_s = 12.0;
   s.cosim.link.spells.outage_duration_s = 3.0;
   const RunResult ridden = run_once(s, 1);
+  s.cosim.link.spells.outage_start_s = 7.8;
   s.cosim.link.spells.outage_duration_s = 12.0;
   const RunResult lost = run_once(s, 1);
 
