@@ -233,10 +233,10 @@ class PilotLoop::Impl {
       if (safe_.landing || (rc && hover) || blind_takeoff) {
         log_.write(now, "fsw_command_ignored",
                    {{"text", c.text},
-                    {"why", safe_.landing    ? "program failsafe landing"
-                            : blind_takeoff ? "no recent state record: takeoff withheld"
-                            : safe_.link.out()   ? "program failsafe hover: link out"
-                                            : "program failsafe hover"}});
+                    {"why", safe_.landing      ? "program failsafe landing"
+                            : blind_takeoff    ? "no recent state record: takeoff withheld"
+                            : safe_.link.out() ? "program failsafe hover: link out"
+                                               : "program failsafe hover"}});
         continue;
       }
       log_.write(clock_.now_ns(), "fsw_command", {{"text", c.text}, {"fsw_t_ns", c.t_ns}});
