@@ -43,7 +43,9 @@
 // band_margin_px clear of the rows the decision rests on; those rows are blanked first. Only
 // whole pictures count toward an empty cell.
 // Failsafes: no frame for video_hover_s: hover (rc 0 0 0 0); for video_land_s: land (not while
-// crossing: the crossing is open loop and stopping inside the shelf is worse). Target lost:
+// crossing: the crossing is open loop and stopping inside the shelf is worse; not while the
+// state records are gone too: the whole link is out, which the ground station rides through and
+// bounds, and the video has video_land_s from the link's return). Target lost:
 // hover and re-acquire from the tags; after target_lost_s re-read the shelf from the viewpoint
 // if its grid is still in view on nearly whole pictures, else land. Battery below
 // low_battery_pct: land (after the crossing if crossing). Corner tags leaving the view while

@@ -58,11 +58,22 @@ bool VideoIntake::damage_clear_of_decision(const CameraFrame& f, const DecisionR
   return !rows_touch(f.damaged_rows, rows->y - margin, rows->y + rows->height + margin);
 }
 
-// The timers run on whatever input arrives (state records at 10 Hz).
+// The timers run on whatever input arrives (state records at 10 Hz). With the state records
+// gone too, the whole link is out (a Wi-Fi re-association), not the video: nothing sent reaches
+// the drone until the link returns, so a `land` gains nothing, and the ground station rides the
+// outage through and bounds it (tello_pilot: failsafes.link_outage_s). The stall then only
+// hovers, and from the link's return the video has video_land_s to come back (a key frame first).
 VideoStall VideoIntake::stall(MissionFacts& facts) {
   const Timeouts& to = config_.timeouts;
-  const TimeNs since_ns = facts.now_ns - std::max(last_frame_ns_.value_or(0), airborne_since_ns_);
-  if (ns_to_seconds(since_ns) > to.video_land_s) return VideoStall::Land;
+  const bool link_live = !facts.state || facts.state_fresh();  // state records came, then stopped: out
+  if (!link_live) {
+    link_out_ = true;
+  } else if (link_out_) {
+    link_out_ = false;
+    link_back_ns_ = facts.now_ns;
+  }
+  const TimeNs since_ns = facts.now_ns - std::max({last_frame_ns_.value_or(0), airborne_since_ns_, link_back_ns_});
+  if (link_live && ns_to_seconds(since_ns) > to.video_land_s) return VideoStall::Land;
   if (ns_to_seconds(since_ns) > to.video_hover_s && !video_stalled_) {
     video_stalled_ = true;
     facts.telemetry.event = "video stalled: hovering";

@@ -3,7 +3,8 @@
 // wrong size refused; a picture's worth settled once (its lost bands since the key frame,
 // whether it decides), a damaged one deciding after all, its damaged rows blanked, when they
 // lie perception.band_margin_px clear of the rows the decision rests on; and the video's stall
-// (no frame for video_hover_s: hover; for video_land_s: land).
+// (no frame for video_hover_s: hover; for video_land_s: land, unless the state records are
+// gone too: the whole link is out, and the stall only hovers until it returns).
 
 #include <functional>
 #include <optional>
@@ -21,7 +22,7 @@ namespace shelfcross::flight_sw {
 enum class VideoStall {
   None,   ///< frames come, or the hover is already flown
   Hover,  ///< no frame for video_hover_s: hover (once per stall)
-  Land    ///< no frame for video_land_s: land
+  Land    ///< no frame for video_land_s, the state records fresh: land
 };
 
 class VideoIntake {
@@ -49,6 +50,8 @@ class VideoIntake {
   cv::Mat masked_bgr_;  ///< a damaged picture with its damaged rows blanked
   std::optional<TimeNs> last_frame_ns_;
   TimeNs airborne_since_ns_ = 0;  ///< video-stall timer floor: frames are needed from here
+  TimeNs link_back_ns_ = 0;       ///< ... and from the state records' return after the link was out
+  bool link_out_ = false;         ///< no fresh state record at the last stall check
   bool video_stalled_ = false;
 };
 

@@ -8,6 +8,7 @@
 
 #include "flight_sw/control/stick_response.hpp"
 #include "flight_sw/tello/drone_watch.hpp"
+#include "flight_sw/tello/link_watch.hpp"
 #include "flight_sw/tello/pilot_log.hpp"
 #include "flight_sw/tello/stick_program.hpp"
 
@@ -39,6 +40,13 @@ CommandOptions fsw_command_options(const std::string& text, const flight_sw::Tim
     opt.timeout_ns = seconds_to_ns(t.land_reply_s / attempts);
   }
   return opt;
+}
+
+// Seconds for people and reasons: "10", "2.5".
+std::string seconds_text(double s) {
+  std::ostringstream os;
+  os << s;
+  return os.str();
 }
 
 DriverConfig driver_config(const PilotLoopConfig& c) {
@@ -92,7 +100,24 @@ struct FailsafeState {
   bool land_ok = false;         ///< ... with the drone down
   int exit_code = 0;            ///< the loop's exit code once landed
   std::string reason;           ///< why the program landed (empty when it did not)
+  LinkWatch link{0.0, 0.0};     ///< the link's outages in the air (set from the Failsafes)
 };
+
+// The link's verdict on a pass in the air, its loss and return written to the log.
+LinkVerdict watch_link(LinkWatch& link, TimeNs now, TimeNs last_state_ns, const Failsafes& f, PilotLog& log,
+                       std::ostream* console) {
+  const LinkVerdict verdict = link.check(now, last_state_ns);
+  if (verdict == LinkVerdict::Lost) {
+    log.write(now, "failsafe",
+              {{"event", "link lost: hovering"}, {"silent_s", ns_to_seconds(now - last_state_ns)}, {"give_up_s", f.link_outage_s}});
+    if (console) *console << "tello_pilot: link lost: hovering (up to " << f.link_outage_s << " s)" << std::endl;
+  } else if (verdict == LinkVerdict::Back) {
+    log.write(now, "failsafe",
+              {{"event", "link back: control returned to the flight software"}, {"outage_s", link.last_outage_s()}});
+    if (console) *console << "tello_pilot: link back after " << link.last_outage_s() << " s" << std::endl;
+  }
+  return verdict;
+}
 
 }  // namespace
 
@@ -111,6 +136,7 @@ class PilotLoop::Impl {
     } else {
       driver_ = std::make_unique<SdkDriver>(driver_config(o_), clock_);
     }
+    safe_.link = LinkWatch(o.failsafes.state_timeout_s, o.failsafes.link_outage_s);
     video_ = channels.video ? std::make_unique<VideoReceiver>(o_.video, clock_, std::move(channels.video))
                             : std::make_unique<VideoReceiver>(o_.video, clock_);
   }
@@ -203,12 +229,14 @@ class PilotLoop::Impl {
           c.text == "takeoff" &&
           (!last_state_ns || now - *last_state_ns > seconds_to_ns(o_.failsafes.state_timeout_s));
       if (rc && program_.flying()) continue;  // the stick program flies (its rc lines say what)
-      if (safe_.landing || (rc && safe_.hover_override) || blind_takeoff) {
+      const bool hover = safe_.hover_override || safe_.link.out();
+      if (safe_.landing || (rc && hover) || blind_takeoff) {
         log_.write(now, "fsw_command_ignored",
                    {{"text", c.text},
-                    {"why", safe_.landing    ? "program failsafe landing"
-                            : blind_takeoff ? "no recent state record: takeoff withheld"
-                                            : "program failsafe hover"}});
+                    {"why", safe_.landing      ? "program failsafe landing"
+                            : blind_takeoff    ? "no recent state record: takeoff withheld"
+                            : safe_.link.out() ? "program failsafe hover: link out"
+                                               : "program failsafe hover"}});
         continue;
       }
       log_.write(clock_.now_ns(), "fsw_command", {{"text", c.text}, {"fsw_t_ns", c.t_ns}});
@@ -293,13 +321,19 @@ class PilotLoop::Impl {
     return safe_.exit_code;
   }
 
-  // The failsafes of the air: state, battery, flight time, video (hover, then land); then the
-  // stick program's pass (its sticks, unless hovering). True when a landing began.
+  // The failsafes of the air: the link (ride through an outage, hovering, then land), battery,
+  // flight time, video (hover, then land); then the stick program's pass (its sticks, unless
+  // hovering). True when a landing began.
   bool supervise_airborne(TimeNs now) {
     const Failsafes& f = o_.failsafes;
+    const auto pilot_rc = [this](const std::string& text) {
+      CommandOptions opt;
+      opt.tag = kTagPilot;
+      driver_->submit(text, opt);
+    };
     const std::optional<TimeNs> last_state_ns = drone_.last_state_ns();
-    if (last_state_ns && now - *last_state_ns > seconds_to_ns(f.state_timeout_s)) {
-      begin_land("no state record for " + std::to_string(f.state_timeout_s) + " s", 1);
+    if (last_state_ns && watch_link(safe_.link, now, *last_state_ns, f, log_, o_.console) == LinkVerdict::GiveUp) {
+      begin_land("no state record for " + seconds_text(f.link_outage_s) + " s: the link is lost", 1);
       return true;
     }
     const int battery_pct = drone_.battery_pct();
@@ -311,7 +345,15 @@ class PilotLoop::Impl {
       begin_land("maximum flight time reached", 1);
       return true;
     }
-    const TimeNs since_frame = now - std::max(drone_.last_frame_ns().value_or(0), drone_.airborne_since_ns());
+    // The link out (link_watch.hpp): hover while it lasts, so that the first datagram through
+    // stops the drone; the video's timers wait for the link.
+    if (safe_.link.out()) {
+      pilot_rc("rc 0 0 0 0");
+      return false;
+    }
+    // The video comes back after the link (a key frame first): its timers run from the return.
+    const TimeNs since_frame = now - std::max({drone_.last_frame_ns().value_or(0), drone_.airborne_since_ns(),
+                                               safe_.link.back_ns().value_or(0)});
     if (since_frame > seconds_to_ns(f.video_land_s)) {
       begin_land("no video frame for " + std::to_string(f.video_land_s) + " s", 1);
       return true;
@@ -321,20 +363,14 @@ class PilotLoop::Impl {
         safe_.hover_override = true;
         log_.write(now, "failsafe", {{"event", "video stalled: hovering"}});
       }
-      CommandOptions opt;
-      opt.tag = kTagPilot;
-      driver_->submit("rc 0 0 0 0", opt);
+      pilot_rc("rc 0 0 0 0");
     }
     const StickProgramRun::Pass pass = program_.step(now, fsw_);
     if (pass.land_reason) {
       begin_land(*pass.land_reason, pass.exit_code);
       return true;
     }
-    if (pass.rc && !safe_.hover_override) {
-      CommandOptions opt;
-      opt.tag = kTagPilot;
-      driver_->submit(*pass.rc, opt);
-    }
+    if (pass.rc && !safe_.hover_override) pilot_rc(*pass.rc);
     return false;
   }
 

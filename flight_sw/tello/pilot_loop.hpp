@@ -11,11 +11,12 @@
 //           failsafes -> driver.service()
 //
 // The failsafes do not rely on the flight software: a signal (Ctrl-C, SIGTERM), no state
-// record for state_timeout_s, the battery at critical_battery_pct, no frame for video_hover_s
+// record for link_outage_s, the battery at critical_battery_pct, no frame for video_hover_s
 // (hover) then video_land_s (land), airborne longer than max_flight_s, and the flight software
 // ending while airborne, all send `land` (urgent: displacing any command), wait for its reply
-// or its last retry, and end the loop. "Airborne" = a takeoff was sent and no land has been
-// acknowledged since.
+// or its last retry, and end the loop. No state record for state_timeout_s is a link outage,
+// ridden through hovering until link_outage_s (link_watch.hpp). "Airborne" = a takeoff was sent
+// and no land has been acknowledged since.
 
 #include <functional>
 #include <iosfwd>
@@ -35,7 +36,10 @@ namespace shelfcross::tello {
 
 /// The program's last-line failsafes, independent of the flight software's own.
 struct Failsafes {
-  double state_timeout_s = 2.0;        ///< airborne and no state record this long: land
+  double state_timeout_s = 2.0;        ///< airborne and no state record this long: the link is out, hover
+  /// ... and no state record this long: land (link_watch.hpp: at most the Tello's watchdog,
+  /// 15 s, less the driver's keep-alive period, 5 s)
+  double link_outage_s = 10.0;
   double state_start_timeout_s = 10.0; ///< no state record at all this long after start: give up
   double video_hover_s = 5.0;          ///< airborne and no frame this long: hover (rc 0 0 0 0)
   double video_land_s = 8.0;           ///< airborne and no frame this long: land

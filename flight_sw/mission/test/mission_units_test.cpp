@@ -83,6 +83,39 @@ TEST(VideoIntake, NoFrameHoversOnceThenLands) {
   EXPECT_EQ(facts.telemetry.event, "video back");
 }
 
+// A link outage (a Wi-Fi re-association): the state records stop with the frames. Nothing sent
+// reaches the drone before the link returns, so the stall hovers and never lands meanwhile; from
+// the first state record after it the video has video_land_s to come back.
+TEST(VideoIntake, ALinkOutageOnlyHoversAndTheVideoGetsItsTimeFromTheReturn) {
+  const FlightConfig c;
+  VideoIntake intake(c);
+  MissionFacts facts;
+  intake.airborne_from(0);
+  StateRecord s;
+  s.t_ns = seconds_to_ns(1.0);  // the last record before the outage, the last frame at 0
+  facts.state = s;
+  facts.now_ns = seconds_to_ns(1.1 * c.timeouts.video_hover_s);
+  EXPECT_EQ(intake.stall(facts), VideoStall::Hover);
+  const double back_s = 1.0 + 2.0 * c.timeouts.video_land_s;
+  for (double t = 1.0; t < back_s; t += 0.05) {
+    facts.now_ns = seconds_to_ns(t);
+    EXPECT_NE(intake.stall(facts), VideoStall::Land) << t << " s: the link is out, not the video";
+  }
+  s.t_ns = seconds_to_ns(back_s);  // the link back: the first state record
+  facts.state = s;
+  facts.now_ns = s.t_ns;
+  EXPECT_EQ(intake.stall(facts), VideoStall::None);
+  EXPECT_TRUE(intake.stalled()) << "still no frame: the hover holds";
+  for (double t = back_s; t < back_s + 0.9 * c.timeouts.video_land_s; t += 0.1) {
+    s.t_ns = facts.now_ns = seconds_to_ns(t);
+    facts.state = s;
+    EXPECT_EQ(intake.stall(facts), VideoStall::None) << t;
+  }
+  s.t_ns = facts.now_ns = seconds_to_ns(back_s + 1.1 * c.timeouts.video_land_s);
+  facts.state = s;
+  EXPECT_EQ(intake.stall(facts), VideoStall::Land) << "the state records come, the frames do not: the video is lost";
+}
+
 TEST(TransferFlight, FliesItsWaypointsOneLegAtATimeAndArrivesAtTheLast) {
   FlightConfig c;
   c.strategy.mode = Strategy::over_tops;

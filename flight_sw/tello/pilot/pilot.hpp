@@ -8,7 +8,7 @@
 //         -> the program's own failsafes -> driver.service()
 //
 // The program's failsafes do not rely on the flight software: a signal (Ctrl-C, SIGTERM),
-// no state record for state_timeout_s, the battery at critical_battery_pct, no frame for
+// no state record for link_outage_s (for state_timeout_s: the link is out, hover), the battery at critical_battery_pct, no frame for
 // video_hover_s (hover) then video_land_s (land), airborne longer than max_flight_s, and the
 // flight software ending while airborne, all send `land` (urgent: displacing any command),
 // wait for its reply or its last retry, and exit. "Airborne" = a takeoff was sent and no land

@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 
 #include "config/strict_yaml.hpp"
+#include "flight_sw/tello/link_watch.hpp"
 
 namespace shelfcross::tello::pilot {
 namespace {
@@ -20,6 +21,10 @@ Bounds<T> within(T lo, T hi) {
 }
 const Bounds<double> kPositive{.min = 0.0, .max = std::nullopt, .min_exclusive = true, .max_exclusive = false};
 const Bounds<int> kPort = within(0, 65535);
+// A link outage is ridden through for at most the Tello's watchdog less the driver's keep-alive
+// period (link_watch.hpp): 10 s.
+const double kLongestOutage_s = LinkWatch::longest_outage_s(ns_to_seconds(DriverConfig{}.keepalive_ns));
+const Bounds<double> kLinkOutage{.min = 0.0, .max = kLongestOutage_s, .min_exclusive = true, .max_exclusive = false};
 
 std::uint16_t port(int p) { return static_cast<std::uint16_t>(p); }
 
@@ -59,6 +64,7 @@ void read_pilot_file(const std::string& path, PilotOptions& o) {
   if (auto f = root.optional_map("failsafes")) {
     Failsafes& s = o.failsafes;
     s.state_timeout_s = f->optional<double>("state_timeout_s", s.state_timeout_s, kPositive);
+    s.link_outage_s = f->optional<double>("link_outage_s", s.link_outage_s, kLinkOutage);
     s.state_start_timeout_s = f->optional<double>("state_start_timeout_s", s.state_start_timeout_s, kPositive);
     s.video_hover_s = f->optional<double>("video_hover_s", s.video_hover_s, kPositive);
     s.video_land_s = f->optional<double>("video_land_s", s.video_land_s, kPositive);
@@ -66,6 +72,7 @@ void read_pilot_file(const std::string& path, PilotOptions& o) {
     s.max_flight_s = f->optional<double>("max_flight_s", s.max_flight_s, kPositive);
     s.land_reply_s = f->optional<double>("land_reply_s", s.land_reply_s, kPositive);
     if (s.video_land_s < s.video_hover_s) f->fail("video_land_s", "must not be shorter than video_hover_s");
+    if (s.link_outage_s < s.state_timeout_s) f->fail("link_outage_s", "must not be shorter than state_timeout_s");
     f->finish();
   }
   if (auto v = root.optional_map("video")) {
@@ -140,7 +147,7 @@ struct CommandLine {
   CLI::Option *ip = nullptr, *cport = nullptr, *lip = nullptr, *lcport = nullptr, *sport = nullptr,
               *vport = nullptr, *ssport = nullptr, *vsport = nullptr, *log = nullptr, *inv = nullptr,
               *damaged_video = nullptr;
-  CLI::Option *st = nullptr, *sst = nullptr, *vh = nullptr, *vl = nullptr, *bat = nullptr, *max = nullptr;
+  CLI::Option *st = nullptr, *lo = nullptr, *sst = nullptr, *vh = nullptr, *vl = nullptr, *bat = nullptr, *max = nullptr;
   double mission_s = 0.0;
   CLI::Option* budget = nullptr;
 };
@@ -178,7 +185,12 @@ void add_flight_options(CLI::App& app, PilotOptions& o, CommandLine& c) {
 
 void add_failsafe_options(CLI::App& app, CommandLine& c) {
   Failsafes& fs = c.fs;
-  c.st = app.add_option("--state-timeout", fs.state_timeout_s, "airborne without state this long (s): land")->check(CLI::PositiveNumber);
+  c.st = app.add_option("--state-timeout", fs.state_timeout_s,
+                        "airborne without state this long (s): the link is out, hover and wait for it")
+             ->check(CLI::PositiveNumber);
+  c.lo = app.add_option("--link-outage", fs.link_outage_s,
+                        "airborne without state this long (s, at most the Tello's 15 s watchdog less the 5 s keep-alive): land")
+             ->check(CLI::PositiveNumber & CLI::Range(0.0, kLongestOutage_s));
   c.sst = app.add_option("--state-start-timeout", fs.state_start_timeout_s, "no state at all this long after start (s): give up")->check(CLI::PositiveNumber);
   c.vh = app.add_option("--video-hover", fs.video_hover_s, "airborne without frames this long (s): hover")->check(CLI::PositiveNumber);
   c.vl = app.add_option("--video-land", fs.video_land_s, "airborne without frames this long (s): land")->check(CLI::PositiveNumber);
@@ -216,6 +228,7 @@ void apply_command_line(const CommandLine& c, PilotOptions& o) {
     o.video.damaged = parse_damaged(c.damaged, [](const std::string& why) -> void { throw UsageError("--damaged-video: " + why); });
   }
   if (c.st->count()) o.failsafes.state_timeout_s = c.fs.state_timeout_s;
+  if (c.lo->count()) o.failsafes.link_outage_s = c.fs.link_outage_s;
   if (c.sst->count()) o.failsafes.state_start_timeout_s = c.fs.state_start_timeout_s;
   if (c.vh->count()) o.failsafes.video_hover_s = c.fs.video_hover_s;
   if (c.vl->count()) o.failsafes.video_land_s = c.fs.video_land_s;
@@ -299,6 +312,9 @@ std::optional<PilotOptions> parse_options(int argc, char** argv) {
   apply_command_line(c, o);
   if (o.failsafes.video_land_s < o.failsafes.video_hover_s) {
     throw UsageError("--video-land must not be shorter than --video-hover");
+  }
+  if (o.failsafes.link_outage_s < o.failsafes.state_timeout_s) {
+    throw UsageError("--link-outage must not be shorter than --state-timeout");
   }
   try {
     parse_ipv4(o.driver.drone_ip);

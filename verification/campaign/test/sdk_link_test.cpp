@@ -166,6 +166,38 @@ TEST(SdkLink, LostFirstLandIsSentAgainBeforeTheFlightSoftwaresTimeout) {
   EXPECT_LT(late_s, 2.5) << "not an attempt's 5 s";
 }
 
+// An outage of every channel, both ways (a Wi-Fi re-association), in the nominal default
+// scenario. Of 3 s in the approach (12 s in; the approach begins at 8.4 s): tello_pilot's loop
+// hovers through it (the Tello flies its last sticks meanwhile, 0.75 m on toward the shelf;
+// nothing sent reaches it), the flight software's video stall only hovers while the state
+// records are gone too, and on the link's return the mission re-acquires from the pictures and
+// crosses. Of 12 s from the inventory's hover (7.8 s in), past the ride-through's bound
+// (Failsafes::link_outage_s, 10 s: the Tello's 15 s watchdog less the 5 s keep-alive): the
+// program gives up and lands, the run a named abort. (12 s in the approach would end on the
+// shelf whatever the program does: the Tello flies the approach's last sticks all that time.)
+TEST(SdkLink, AThreeSecondOutageIsRiddenThroughAndOnePastTheBoundLands) {
+  Scenario s = load_scenario(kDefault);
+  s.dispersions.clear();
+  s.cosim.link.spells.outage_start_s = 12.0;
+  s.cosim.link.spells.outage_duration_s = 3.0;
+  const RunResult ridden = run_once(s, 1);
+  s.cosim.link.spells.outage_start_s = 7.8;
+  s.cosim.link.spells.outage_duration_s = 12.0;
+  const RunResult lost = run_once(s, 1);
+
+  const std::string log = events_text(ridden);
+  EXPECT_EQ(ridden.outcome, RunOutcome::success) << ridden.detail << "\n" << log;
+  EXPECT_TRUE(ridden.metrics.crossed_target);
+  EXPECT_FALSE(ridden.metrics.truth.contact.has_value()) << log;
+  EXPECT_NE(log.find("video stalled: hovering"), std::string::npos) << "the outage fell in flight" << log;
+  EXPECT_EQ(log.find("pilot loop ended (exit 1)"), std::string::npos) << log;
+
+  EXPECT_EQ(lost.outcome, RunOutcome::mission_aborted) << lost.detail << "\n" << events_text(lost);
+  EXPECT_EQ(lost.detail, "tello_pilot failsafe: no state record for 10 s: the link is lost");
+  EXPECT_FALSE(lost.metrics.truth.contact.has_value()) << events_text(lost);
+  EXPECT_FALSE(lost.metrics.crossed_target);
+}
+
 // Run 98 of the grid_5x3_yellow stress campaign (seed 1; the run's own seed below): backed off
 // for a sideways drift, it came back to the view's edge before the line-hold monitor had
 // measured enough quiet poses, and its last refusal was "line hold not measured". That used to

@@ -217,6 +217,19 @@ TEST(TelloPilot, BadCommandLineOrConfigExitsWith2) {
   EXPECT_NE(err.find("damage_limit"), std::string::npos) << err;
   EXPECT_EQ(run_to_exit({"--config", kConfig, "--mission-budget", "0"}, &err), 2);
   EXPECT_NE(err.find("--mission-budget"), std::string::npos) << err;
+  // The link's ride-through bound: at most the Tello's watchdog less the keep-alive (10 s), and
+  // not shorter than the state timeout that starts it.
+  EXPECT_EQ(run_to_exit({"--config", kConfig, "--link-outage", "12"}, &err), 2);
+  EXPECT_NE(err.find("--link-outage"), std::string::npos) << err;
+  EXPECT_EQ(run_to_exit({"--config", kConfig, "--state-timeout", "3", "--link-outage", "2"}, &err), 2);
+  EXPECT_NE(err.find("--link-outage must not be shorter than --state-timeout"), std::string::npos) << err;
+  std::ofstream(dir / "outage.yaml") << "failsafes:\n  state_timeout_s: 2.0\n  link_outage_s: 15.0\n";
+  EXPECT_EQ(run_to_exit({"--config", kConfig, "--pilot", (dir / "outage.yaml").string()}, &err), 2);
+  EXPECT_NE(err.find("outage.yaml:3"), std::string::npos) << err;
+  EXPECT_NE(err.find("link_outage_s"), std::string::npos) << err;
+  std::ofstream(dir / "short.yaml") << "failsafes:\n  state_timeout_s: 4.0\n  link_outage_s: 3.0\n";
+  EXPECT_EQ(run_to_exit({"--config", kConfig, "--pilot", (dir / "short.yaml").string()}, &err), 2);
+  EXPECT_NE(err.find("must not be shorter than state_timeout_s"), std::string::npos) << err;
   if (!HasFailure()) fs::remove_all(dir);
 }
 
@@ -270,18 +283,26 @@ TEST(TelloPilot, SignalLandsAndExits) {
   if (!HasFailure()) fs::remove_all(dir);
 }
 
-TEST(TelloPilot, NoStateWhileAirborneLands) {
+// The state records stop in the air: after --state-timeout the link is out and the program
+// hovers (its rc 0 0 0 0, the flight software's sticks withheld); after --link-outage it lands.
+TEST(TelloPilot, NoStateWhileAirborneHoversThenLands) {
   const fs::path dir = temp_dir("nostate");
   FakeTello drone;
   auto args = drone.args(dir);
-  args.insert(args.end(), {"--state-timeout", "0.5"});
+  args.insert(args.end(), {"--state-timeout", "0.5", "--link-outage", "1.5"});
   Child pilot(args, dir);
   ASSERT_TRUE(drone.step_until("takeoff")) << read_file(pilot.err);
   drone.send_state = false;
   ASSERT_TRUE(drone.step_until("land"));
   for (int i = 0; i < 500 && !pilot.poll_exit(); ++i) drone.step();
   EXPECT_EQ(pilot.exit_code, 1);
-  EXPECT_EQ(log_lines(dir / "log.jsonl", "failsafe", "reason", "no state record for 0.500000 s"), 1);
+  const fs::path log = dir / "log.jsonl";
+  EXPECT_EQ(log_lines(log, "failsafe", "event", "link lost: hovering"), 1) << read_file(log);
+  EXPECT_GT(log_lines(log, "fsw_command_ignored", "why", "program failsafe hover: link out"), 0);
+  EXPECT_EQ(log_lines(log, "failsafe", "reason", "no state record for 1.5 s: the link is lost"), 1);
+  const size_t land = drone.index_of("land");
+  ASSERT_GT(land, 0u);
+  EXPECT_EQ(drone.received[land - 1], "rc 0 0 0 0") << "hovering when the land went";
   if (!HasFailure()) fs::remove_all(dir);
 }
 
