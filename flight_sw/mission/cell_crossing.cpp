@@ -58,7 +58,7 @@ std::optional<CrossingStop> CellCrossing::watch(const StateRecord& s, MissionFac
   ++facts.telemetry.control.crossings_backed_out;
   return CrossingStop{"drift seen before the cell (" + centimetres_text(v.across_m) + " across, " +
                           centimetres_text(v.height_m) + " up)",
-                      (facts.odometry.p_O_m().head<2>() - end_.start_O_m).dot(end_.axis_O)};
+                      crossing_progress_m(end_, facts.odometry.p_O_m())};
 }
 
 // The line's progress: the odometry's, plus what was flown blind while the VPS read nothing
