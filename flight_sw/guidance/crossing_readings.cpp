@@ -30,9 +30,24 @@ void CrossingReadings::on_state(const StateRecord& s, bool flying) {
   if (range_stepped_ && std::abs(o) >= kHoldOffsetSeen_m) offset_seen_ = true;
   offsets_.emplace_back(s.t_ns, o);
   if (offsets_.size() > static_cast<size_t>(kRateRecords) + 1) offsets_.pop_front();
-  vps_zero_records_ = flying && s.vx_H_mps == 0.0 && s.vy_H_mps == 0.0 ? vps_zero_records_ + 1 : 0;
+  const bool vps_reads_nothing = s.vx_H_mps == 0.0 && s.vy_H_mps == 0.0;
+  vps_zero_records_ = flying && vps_reads_nothing ? vps_zero_records_ + 1 : 0;
   if (vps_zero_records_ >= kVpsLostRecords) vps_lost_ = true;
+  // Flown blind: the interval the odometry adds nothing for, at the speed last read.
+  if (flying && vps_reads_nothing) {
+    if (const std::optional<double> v = speed_mps()) blind_m_ += *v * dt;
+  } else if (flying) {
+    speeds_mps_.push_back(std::hypot(s.vx_H_mps, s.vy_H_mps));
+    if (speeds_mps_.size() > static_cast<size_t>(kBlindSpeedRecords)) speeds_mps_.pop_front();
+  }
   last_ = s;
+}
+
+std::optional<double> CrossingReadings::speed_mps() const {
+  if (speeds_mps_.size() < static_cast<size_t>(kBlindSpeedRecords)) return std::nullopt;
+  double sum = 0.0;
+  for (double v : speeds_mps_) sum += v;
+  return sum / static_cast<double>(speeds_mps_.size());
 }
 
 double CrossingReadings::hold_offset_rate_mps() const {

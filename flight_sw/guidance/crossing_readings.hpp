@@ -22,9 +22,14 @@
 //                the position hold is lost, the vehicle drifts with the air, and the odometry
 //                stands still. kVpsLostRecords records in a row reading 0 exactly while the
 //                crossing flies at crossing_speed_mps (every record of a flying VPS reads its
-//                0.4 m/s as 0.3-0.5) say the VPS is lost, for the rest of the crossing (the
-//                odometry missed what was flown meanwhile): the crossing is then ended by its
-//                timing, not by the odometry, and a stop is judged by the time flown.
+//                0.4 m/s as 0.3-0.5) say the VPS is lost, for the rest of the crossing: the
+//                watch no longer judges the line on the odometry. What the odometry misses is
+//                flown blind: each record reading 0 while flying adds its interval at the
+//                speed the VPS read on the crossing's last kBlindSpeedRecords flying records
+//                (the vehicle's own speed in this crossing, not the approach's speed gain:
+//                with the hold gone the Tello tilts for the sticks' speed in still air and
+//                keeps about it), and the line's progress is the odometry's plus that. Once
+//                the VPS reads again (the floor behind the shelf), the odometry goes on.
 
 #include <deque>
 #include <optional>
@@ -44,6 +49,9 @@ constexpr double kHoldOffsetSeen_m = 0.06;
 constexpr int kVpsLostRecords = 2;
 /// The hold offset's rate is taken over this many records.
 constexpr int kRateRecords = 3;
+/// The speed flown blind is the mean horizontal speed of this many flying records (0.5 s:
+/// the VPS's noise and its 0.1 m/s steps averaged to a few centimetres a second).
+constexpr int kBlindSpeedRecords = 5;
 
 class CrossingReadings {
  public:
@@ -61,6 +69,11 @@ class CrossingReadings {
   /// Since kVpsLostRecords records in a row read no horizontal speed while flying: for the rest
   /// of the crossing, since the odometry missed what the vehicle flew meanwhile.
   bool vps_lost() const { return vps_lost_; }
+  /// How far the vehicle flew while the VPS read nothing, m (file comment): 0 while it reads.
+  double blind_m() const { return blind_m_; }
+  /// The horizontal speed the VPS read on the last kBlindSpeedRecords flying records, m/s;
+  /// empty before there are that many.
+  std::optional<double> speed_mps() const;
 
  private:
   std::optional<StateRecord> first_, last_;
@@ -70,6 +83,8 @@ class CrossingReadings {
   bool offset_seen_ = false;
   int vps_zero_records_ = 0;
   bool vps_lost_ = false;
+  std::deque<double> speeds_mps_;  ///< the last kBlindSpeedRecords flying records' read speeds
+  double blind_m_ = 0.0;
 };
 
 }  // namespace shelfcross::flight_sw

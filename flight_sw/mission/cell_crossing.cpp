@@ -28,7 +28,7 @@ void CellCrossing::on_state(const StateRecord& s, MissionFacts& facts) {
   }
   if (!vps_told_ && readings_.vps_lost()) {
     vps_told_ = true;
-    facts.telemetry.event = "VPS lost in the crossing (no horizontal speed read): the crossing ends by its timing";
+    facts.telemetry.event = "VPS lost in the crossing (no horizontal speed read): the rest flown at the speed last read";
   }
 }
 
@@ -58,11 +58,21 @@ std::optional<CrossingStop> CellCrossing::watch(const StateRecord& s, MissionFac
   ++facts.telemetry.control.crossings_backed_out;
   return CrossingStop{"drift seen before the cell (" + centimetres_text(v.across_m) + " across, " +
                           centimetres_text(v.height_m) + " up)",
-                      (facts.odometry.p_O_m().head<2>() - end_.start_O_m).dot(end_.axis_O)};
+                      crossing_progress_m(end_, facts.odometry.p_O_m())};
 }
 
+// The line's progress: the odometry's, plus what was flown blind while the VPS read nothing
+// (crossing_readings.hpp), plus, while the records are late, the time since the last one at
+// the speed last read. Where no speed has been read in this crossing and the VPS is lost or
+// the records late, nothing tells the progress: the crossing is timed.
 bool CellCrossing::flown(TimeNs elapsed_ns, const MissionFacts& facts) const {
-  return crossing_flown(end_, elapsed_ns, facts.state_fresh() && !readings_.vps_lost(), facts.odometry.p_O_m());
+  const std::optional<double> v_mps = readings_.speed_mps();
+  std::optional<double> progress_m;
+  if (facts.state && (v_mps || (facts.state_fresh() && !readings_.vps_lost()))) {
+    progress_m = crossing_progress_m(end_, facts.odometry.p_O_m()) + readings_.blind_m();
+    if (!facts.state_fresh()) *progress_m += *v_mps * ns_to_seconds(facts.now_ns - facts.state->t_ns);
+  }
+  return crossing_flown(end_, elapsed_ns, progress_m);
 }
 
 }  // namespace shelfcross::flight_sw

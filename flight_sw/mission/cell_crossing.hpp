@@ -6,8 +6,9 @@
 // may stop it while the vehicle can still stop short of the front face. The crossing's own
 // readings (crossing_readings.hpp) say where the Tello's hold has put it: a climb the height
 // hold hides from h is held and judged at h less the hold's range offset, and with the VPS lost
-// the odometry no longer measures the line (ended by its timing, never stopped on it). The
-// mission keeps the phase and flies what this says.
+// the odometry no longer measures the line: what it misses is flown blind at the speed the VPS
+// read in this crossing, and the crossing is never stopped on it. The mission keeps the phase
+// and flies what this says.
 
 #include <optional>
 #include <string>
@@ -58,7 +59,8 @@ class CellCrossing {
   /// telemetry, when the drift it shows would leave the opening; else nothing. Never with the
   /// VPS lost (the odometry cannot tell how far in the vehicle is).
   std::optional<CrossingStop> watch(const StateRecord& s, MissionFacts& facts) const;
-  /// The line flown (crossing_flown) `elapsed_ns` into the crossing.
+  /// The line flown (crossing_flown) `elapsed_ns` into the crossing: by the odometry and what
+  /// was flown blind (cell_crossing.cpp), timed where nothing tells.
   bool flown(TimeNs elapsed_ns, const MissionFacts& facts) const;
   /// The height hold ends (the crossing stopped, or the next shelf).
   void stop() { height_m_.reset(); }

@@ -32,10 +32,14 @@ void StateOdometry::on_state(const StateRecord& s) {
   p_O_m_.z() = s.height_m;
 }
 
-bool crossing_flown(const CrossingEnd& end, TimeNs elapsed_ns, bool state_fresh, const Eigen::Vector3d& p_O_m) {
+double crossing_progress_m(const CrossingEnd& end, const Eigen::Vector3d& p_O_m) {
+  return (p_O_m.head<2>() - end.start_O_m).dot(end.axis_O);
+}
+
+bool crossing_flown(const CrossingEnd& end, TimeNs elapsed_ns, std::optional<double> progress_m) {
   if (elapsed_ns >= static_cast<TimeNs>(kCrossMaxOverTime * static_cast<double>(end.timed_ns))) return true;
-  if (!state_fresh) return elapsed_ns >= end.timed_ns;
-  return (p_O_m.head<2>() - end.start_O_m).dot(end.axis_O) >= end.line_m;
+  if (!progress_m) return elapsed_ns >= end.timed_ns;
+  return *progress_m >= end.line_m;
 }
 
 // ---- The forward speed gain ----

@@ -46,8 +46,8 @@ class StateOdometry {
   Eigen::Vector3d p_O_m_ = Eigen::Vector3d::Zero();
 };
 
-/// The crossing's end: the line flown by the state odometry, timed only while the state
-/// records are stale.
+/// The crossing's end: the line flown by the state odometry, timed only where nothing tells
+/// how far it has flown.
 struct CrossingEnd {
   TimeNs timed_ns = 0;  ///< timed: at the measured speed gain, plus the autopilot's lag
   double line_m = 0.0;  ///< the line's horizontal length, m
@@ -55,11 +55,16 @@ struct CrossingEnd {
   Eigen::Vector2d axis_O = Eigen::Vector2d::UnitX();    ///< the line's direction in O, unit
 };
 
-/// The crossing is over when the state odometry has flown the line (p_O_m advances on each
-/// state record by R_z(yaw) v_H dt); while the records are stale (`state_fresh` false), when
-/// its timed duration has passed; and at kCrossMaxOverTime times that in any case.
+/// How far along the crossing's line the state odometry's `p_O_m` is from its start, m (p_O_m
+/// advances on each state record by R_z(yaw) v_H dt).
+double crossing_progress_m(const CrossingEnd& end, const Eigen::Vector3d& p_O_m);
+
+/// The crossing is over when `progress_m`, the line flown as far as the state records tell
+/// (the odometry's progress, and what the crossing's own readings add where the VPS read
+/// nothing or the records are late: cell_crossing.hpp), has reached the line; with no progress
+/// known, when its timed duration has passed; and at kCrossMaxOverTime times that in any case.
 /// `elapsed_ns`: time since the crossing began.
-bool crossing_flown(const CrossingEnd& end, TimeNs elapsed_ns, bool state_fresh, const Eigen::Vector3d& p_O_m);
+bool crossing_flown(const CrossingEnd& end, TimeNs elapsed_ns, std::optional<double> progress_m);
 
 /// The vehicle's forward speed per nominal stick speed, from the visual poses of the approach:
 /// the distance flown along x_K since the first pose of the approach over the forward

@@ -2,7 +2,7 @@
 // height hold that follows the range climbs over the cell's bottom beam while h stays put, and
 // the climb is read from the vertical speed once the range has stepped; a fused hold, or a
 // climb the vertical speed and h both show, reads none; vgx = vgy = 0 exactly while flying
-// says the VPS is lost.
+// says the VPS is lost, and what is flown meanwhile is counted at the speed last read.
 
 #include <cmath>
 #include <optional>
@@ -81,6 +81,28 @@ TEST(CrossingReadings, ZeroSpeedsWhileFlyingSayTheVpsIsLost) {
   r.on_state(record(0.9, 0.81, 0.28, 0.0, 0.0), true);
   r.on_state(record(1.0, 0.81, 0.28, 0.0, 0.0, 0.0), true);
   EXPECT_TRUE(r.vps_lost());
+}
+
+// The VPS lost over the cell's bottom beam after 0.6 s of flight at 0.4 m/s (read 0.3-0.5 in
+// its steps): each record reading nothing adds its 0.1 s at the mean of the last five speeds
+// read, not at a speed gain from elsewhere; the records before the crossing flies (the
+// autopilot's lag) and a record that reads again add nothing blind.
+TEST(CrossingReadings, WhatTheVpsMissesIsFlownAtTheSpeedItLastRead) {
+  CrossingReadings r;
+  r.on_state(record(0.0, 0.81, 0.81, 0.0, 0.0), false);
+  r.on_state(record(0.1, 0.81, 0.81, 0.0, 0.0), false);  // not yet flying: nothing read, nothing blind
+  EXPECT_FALSE(r.speed_mps());
+  const double read[] = {0.3, 0.4, 0.5, 0.4, 0.4, 0.5};
+  for (int k = 0; k < 6; ++k) r.on_state(record(0.2 + 0.1 * k, 0.81, 0.81, 0.0, read[k]), true);
+  ASSERT_TRUE(r.speed_mps());
+  EXPECT_NEAR(*r.speed_mps(), 0.44, 1e-9);  // the last five: 0.4 0.5 0.4 0.4 0.5
+  EXPECT_EQ(r.blind_m(), 0.0);
+  for (int k = 0; k < 4; ++k) r.on_state(record(0.8 + 0.1 * k, 0.81, 0.16, 0.0, 0.0), true);
+  EXPECT_TRUE(r.vps_lost());
+  EXPECT_NEAR(r.blind_m(), 4 * 0.1 * 0.44, 1e-9);
+  r.on_state(record(1.2, 0.81, 0.81, 0.0, 0.4), true);  // the floor behind: read again
+  EXPECT_NEAR(r.blind_m(), 4 * 0.1 * 0.44, 1e-9);
+  EXPECT_NEAR(*r.speed_mps(), 0.44, 1e-9);  // the speeds read before the loss, and this one
 }
 
 }  // namespace

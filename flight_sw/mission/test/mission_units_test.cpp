@@ -251,24 +251,60 @@ TEST(CellCrossing, HoldsTheHeightAHoldFollowingTheRangeHidesFromH) {
 }
 
 // The VPS lost in the crossing (vgx = vgy = 0 exactly while flying, over the box below its
-// range): the odometry stands still, so the crossing ends by its timing, not its line, and
-// the watch never stops it on the odometry's word.
-TEST(CellCrossing, WithTheVpsLostEndsByItsTimingAndIsNeverStopped) {
+// range) after 1 s at 0.4 m/s: the odometry stands still at 0.4 m, and the rest of the 2 m
+// line is flown blind at the 0.4 m/s the VPS read, 4 s more, neither at the timing from the
+// approach's gain (10 s here) nor cut short by it. The watch never stops it on the odometry's
+// word. Records late: the time since the last one counts at that speed too.
+TEST(CellCrossing, WithTheVpsLostFliesTheRestAtTheSpeedItReadAndIsNeverStopped) {
   const FlightConfig c;
   CellCrossing crossing(c);
   crossing.begin(straight_crossing(), 0);
   MissionFacts facts;
-  for (int k = 0; k <= 12; ++k) {
-    const StateRecord s = state_at(k * 100 * kMs, k < 8 ? 0.4 : 0.0, 0.0, 1.0);
+  const auto record = [&](int k) {
+    const StateRecord s = state_at(k * 100 * kMs, k <= 10 ? 0.4 : 0.0, 0.0, 1.0);
+    facts.on_state(s);
+    crossing.on_state(s, facts);
+    facts.now_ns = s.t_ns;
+  };
+  for (int k = 0; k <= 12; ++k) record(k);
+  EXPECT_NE(facts.telemetry.event.find("VPS lost"), std::string::npos) << facts.telemetry.event;
+  EXPECT_FALSE(crossing.watch(state_at(1300 * kMs, 0.0, 0.3, 1.2), facts));
+  for (int k = 13; k <= 48; ++k) record(k);
+  EXPECT_FALSE(crossing.flown(facts.now_ns, facts));  // 0.4 + 3.8 s x 0.4 = 1.92 m
+  for (int k = 49; k <= 51; ++k) record(k);
+  EXPECT_TRUE(crossing.flown(facts.now_ns, facts));  // 2.04 m, 5.1 s in
+  // The same crossing whose records stop 3 s in (1.2 m flown): flown 2 s after the last one.
+  CellCrossing late(c);
+  late.begin(straight_crossing(), 0);
+  MissionFacts f;
+  for (int k = 0; k <= 30; ++k) {
+    const StateRecord s = state_at(k * 100 * kMs, k <= 10 ? 0.4 : 0.0, 0.0, 1.0);
+    f.on_state(s);
+    late.on_state(s, f);
+  }
+  f.now_ns = 4900 * kMs;
+  EXPECT_FALSE(late.flown(f.now_ns, f));
+  f.now_ns = 5100 * kMs;
+  EXPECT_TRUE(late.flown(f.now_ns, f));
+}
+
+// The VPS reads nothing from the start of the crossing: no speed read, nothing tells how far
+// it has flown, and the crossing ends by its timing (10 s), as with no state at all.
+TEST(CellCrossing, WithTheVpsNeverReadEndsByItsTiming) {
+  const FlightConfig c;
+  CellCrossing crossing(c);
+  crossing.begin(straight_crossing(), 0);
+  MissionFacts facts;
+  for (int k = 0; k <= 99; ++k) {
+    const StateRecord s = state_at(k * 100 * kMs, 0.0, 0.0, 1.0);
     facts.on_state(s);
     crossing.on_state(s, facts);
   }
-  EXPECT_NE(facts.telemetry.event.find("VPS lost"), std::string::npos) << facts.telemetry.event;
-  EXPECT_FALSE(crossing.watch(state_at(1300 * kMs, 0.0, 0.3, 1.2), facts));
-  facts.now_ns = 9 * kNsPerSecond;
+  facts.now_ns = 9900 * kMs;
   EXPECT_FALSE(crossing.flown(facts.now_ns, facts));
   facts.on_state(state_at(10 * kNsPerSecond, 0.0, 0.0, 1.0));
-  EXPECT_TRUE(crossing.flown(10 * kNsPerSecond, facts));  // its timing (10 s), the line unflown
+  facts.now_ns = 10 * kNsPerSecond;
+  EXPECT_TRUE(crossing.flown(facts.now_ns, facts));
 }
 
 }  // namespace

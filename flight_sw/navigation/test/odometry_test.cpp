@@ -40,19 +40,21 @@ TEST(StateOdometry, AnOlderRecordMovesNothingAndAGapCountsAtMostOneSecond) {
   EXPECT_NEAR(o.p_O_m().x(), 1.0, 1e-12);
 }
 
-TEST(CrossingFlown, ByDistanceWhileTheStateIsFreshOtherwiseByTime) {
+TEST(CrossingFlown, ByItsProgressWhereKnownOtherwiseByTime) {
   CrossingEnd end;
   end.timed_ns = 4 * kNsPerSecond;
   end.line_m = 1.5;
   end.start_O_m = {1.0, 1.0};
   end.axis_O = {0.0, 1.0};
-  EXPECT_FALSE(crossing_flown(end, kNsPerSecond, true, {1.0, 2.4, 1.0}));
-  EXPECT_TRUE(crossing_flown(end, kNsPerSecond, true, {1.0, 2.5, 1.0}));
-  EXPECT_FALSE(crossing_flown(end, 3 * kNsPerSecond, false, {1.0, 1.0, 1.0}));
-  EXPECT_TRUE(crossing_flown(end, 4 * kNsPerSecond, false, {1.0, 1.0, 1.0}));
-  // An odometry that under-reads is bounded: 1.5 times the timed duration ends it.
-  EXPECT_FALSE(crossing_flown(end, 5 * kNsPerSecond, true, {1.0, 1.0, 1.0}));
-  EXPECT_TRUE(crossing_flown(end, 6 * kNsPerSecond, true, {1.0, 1.0, 1.0}));
+  EXPECT_NEAR(crossing_progress_m(end, {1.0, 2.4, 1.0}), 1.4, 1e-12);
+  EXPECT_NEAR(crossing_progress_m(end, {3.0, 0.5, 1.0}), -0.5, 1e-12);  // across the line counts nothing
+  EXPECT_FALSE(crossing_flown(end, kNsPerSecond, 1.4));
+  EXPECT_TRUE(crossing_flown(end, kNsPerSecond, 1.5));
+  EXPECT_FALSE(crossing_flown(end, 3 * kNsPerSecond, std::nullopt));
+  EXPECT_TRUE(crossing_flown(end, 4 * kNsPerSecond, std::nullopt));
+  // A progress that under-reads is bounded: 1.5 times the timed duration ends it.
+  EXPECT_FALSE(crossing_flown(end, 5 * kNsPerSecond, 0.0));
+  EXPECT_TRUE(crossing_flown(end, 6 * kNsPerSecond, 0.0));
 }
 
 TEST(ForwardGainEstimator, TheMeasuredAdvanceOverTheCommandedOneAfterTheLag) {
