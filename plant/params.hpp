@@ -22,6 +22,7 @@
 
 #include <Eigen/Core>
 
+#include "sdk/command.hpp"
 #include "shelfcross/gravity.hpp"
 
 namespace shelfcross::plant {
@@ -174,7 +175,7 @@ struct AutopilotParams {
   double takeoff_height_m = 1.0;        ///< docs/tello_sdk.md: 0.8..1.2 m
   double takeoff_reply_delay_s = 0.5;   ///< hold after reaching height before "ok"
   double land_speed_mps = 0.5;          ///< 1 m in ~2 s: docs/tello_sdk.md's "land about 2 s"
-  double watchdog_s = 15.0;             ///< auto-land without any command
+  double watchdog_s = sdk::kCommandWatchdog_s;  ///< auto-land without any command
   // --- added by the plant's author ---
   /// Speed mode: false = slow (the Tello's default; 9 deg), true = fast (25 deg, horizontal
   /// rc speed times fast_mode_speed_factor). The SDK has no command for it (the Tello app

@@ -1,5 +1,8 @@
 #include "render/rolling_shutter.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 namespace shelfcross::render {
 
 Eigen::Isometry3d interpolate_pose(const Eigen::Isometry3d& X0, const Eigen::Isometry3d& X1, double s) {
@@ -16,6 +19,14 @@ ReadoutPoses::ReadoutPoses(const Eigen::Isometry3d& X_WC_start, const Eigen::Iso
     X_CW_[static_cast<std::size_t>(k)] = X_WC.inverse(Eigen::Isometry);
     if (2 * k == kSteps) X_WC_middle_ = X_WC;
   }
+}
+
+Eigen::Vector3d ReadoutPoses::point_C(const Eigen::Vector3d& p_W, double tau) const {
+  const double a = std::clamp(tau, -kBeyond, 1.0 + kBeyond) * kSteps;
+  const int k = std::clamp(static_cast<int>(std::floor(a)), 0, kSteps - 1);
+  const double f = a - k;
+  const auto i = static_cast<std::size_t>(k);
+  return (1.0 - f) * (X_CW_[i] * p_W) + f * (X_CW_[i + 1] * p_W);
 }
 
 }  // namespace shelfcross::render

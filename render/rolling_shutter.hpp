@@ -27,10 +27,7 @@
 // with RenderOptions::rolling_shutter_margin_px, at least the largest shift of the picture
 // between the middle pose and the readout's ends.
 
-#include <algorithm>
 #include <array>
-#include <cmath>
-#include <cstddef>
 
 #include <Eigen/Geometry>
 
@@ -52,14 +49,7 @@ class ReadoutPoses {
   /// camera-frame points are interpolated linearly, which differs from the interpolated pose
   /// by |p| dtheta^2 / 8 for a table step of dtheta radians; beyond the readout, extrapolated
   /// linearly from the table's first or last step.
-  /// (Defined here, so that the lens mesher's per-vertex loop may inline it.)
-  Eigen::Vector3d point_C(const Eigen::Vector3d& p_W, double tau) const {
-    const double a = std::clamp(tau, -kBeyond, 1.0 + kBeyond) * kSteps;
-    const int k = std::clamp(static_cast<int>(std::floor(a)), 0, kSteps - 1);
-    const double f = a - k;
-    const auto i = static_cast<std::size_t>(k);
-    return (1.0 - f) * (X_CW_[i] * p_W) + f * (X_CW_[i + 1] * p_W);
-  }
+  Eigen::Vector3d point_C(const Eigen::Vector3d& p_W, double tau) const;
   static constexpr int kSteps = 32;
   static constexpr double kBeyond = 0.5;
 

@@ -160,6 +160,19 @@ def scan(path):
     return functions, classes
 
 
+def sources(folder, suffixes):
+    """The files of FOLDER (relative to the root) and its sub-folders but test/ ending in one of
+    `suffixes`, in a fixed order; None when the folder does not exist."""
+    base = os.path.join(ROOT, folder)
+    if not os.path.isdir(base):
+        return None
+    found = []
+    for dirpath, dirnames, filenames in os.walk(base):
+        dirnames[:] = sorted(d for d in dirnames if d != "test")
+        found += [os.path.join(dirpath, fn) for fn in sorted(filenames) if fn.endswith(suffixes)]
+    return found
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("folders", nargs="*", default=CHECKED)
@@ -168,23 +181,18 @@ def main():
     a = ap.parse_args()
     over = 0
     for folder in a.folders:
-        base = os.path.join(ROOT, folder)
-        if not os.path.isdir(base):
+        paths = sources(folder, (".cpp", ".hpp"))
+        if paths is None:
             print(f"size_limits: no folder {folder}", file=sys.stderr)
             return 2
         files, functions, classes = [], [], []
-        for dirpath, dirnames, filenames in os.walk(base):
-            dirnames[:] = sorted(d for d in dirnames if d != "test")
-            for fn in sorted(filenames):
-                if not fn.endswith((".cpp", ".hpp")):
-                    continue
-                p = os.path.join(dirpath, fn)
-                rel = os.path.relpath(p, ROOT)
-                with open(p, encoding="utf-8", errors="replace") as f:
-                    files.append((rel, sum(1 for _ in f)))
-                fs, cs = scan(p)
-                functions += [(f"{rel}:{start} {name}", n) for name, n, start in fs]
-                classes += [(f"{rel}:{start} {name}", n) for name, n, start in cs]
+        for p in paths:
+            rel = os.path.relpath(p, ROOT)
+            with open(p, encoding="utf-8", errors="replace") as f:
+                files.append((rel, sum(1 for _ in f)))
+            fs, cs = scan(p)
+            functions += [(f"{rel}:{start} {name}", n) for name, n, start in fs]
+            classes += [(f"{rel}:{start} {name}", n) for name, n, start in cs]
         print(f"{folder}/ ({len(files)} files, {len(functions)} functions, {len(classes)} classes)")
         for what, items, limit, unit in (("file", files, FILE_LINES, "lines"),
                                          ("function", functions, FUNCTION_LINES, "lines"),

@@ -57,10 +57,10 @@ def private_member(blanked, n):
     return False
 
 
-def declaration_comments(header_lines, name):
+def declaration_comments(header_lines, blanked, name):
     """The comment text of each declaration of `name` in a header (the `//` lines above it up to
-    a blank line, the declaration's own lines up to its `;` or `{`, a trailing `///<`)."""
-    blanked = size_limits.blank_comments_and_literals("\n".join(header_lines)).split("\n")
+    a blank line, the declaration's own lines up to its `;` or `{`, a trailing `///<`);
+    `blanked` is the header with its comments and literals blanked, line for line."""
     pattern = re.compile(r"(?<![\w:.>])" + re.escape(name) + r"\s*\(")
     found = []
     for n, code in enumerate(blanked):
@@ -96,13 +96,15 @@ def check_file(source):
         text = f.read()
     code = size_limits.blank_comments_and_literals(text).split("\n")
     with open(header, encoding="utf-8", errors="replace") as f:
-        header_lines = f.read().split("\n")
+        header_text = f.read()
+    header_lines = header_text.split("\n")
+    header_blanked = size_limits.blank_comments_and_literals(header_text).split("\n")
     functions, _ = size_limits.scan(source)
     findings = []
     for name, length, start in functions:
         body = "\n".join(code[start - 1:start - 1 + length])
         short = name.split("::")[-1]
-        declarations = declaration_comments(header_lines, short)
+        declarations = declaration_comments(header_lines, header_blanked, short)
         if not declarations:
             continue  # not declared in its header: not public
         rel = os.path.relpath(header, size_limits.ROOT)
@@ -120,15 +122,12 @@ def main():
     folders = sys.argv[1:] or size_limits.CHECKED
     findings = []
     for folder in folders:
-        top = os.path.join(size_limits.ROOT, folder)
-        if not os.path.isdir(top):
+        paths = size_limits.sources(folder, (".cpp",))
+        if paths is None:
             print(f"throws_documented: no folder {folder}", file=sys.stderr)
             return 2
-        for dirpath, dirnames, filenames in os.walk(top):
-            dirnames[:] = sorted(d for d in dirnames if d != "test")
-            for fn in sorted(filenames):
-                if fn.endswith(".cpp"):
-                    findings += check_file(os.path.join(dirpath, fn))
+        for p in paths:
+            findings += check_file(p)
     for f in findings:
         print(f)
     print(f"throws_documented: {len(findings)} finding(s)")

@@ -88,6 +88,11 @@ std::optional<CommandKind> classify_command(std::string_view text, std::string* 
 /// "rc a b c d" for sticks already in range (asserted).
 std::string rc_text(int a, int b, int c, int d);
 
+/// A flying Tello that hears no command at all for this long lands by itself, s
+/// (docs/tello_sdk.md): the simulated Tello's watchdog and the bound on tello_pilot's riding
+/// through a link outage.
+inline constexpr double kCommandWatchdog_s = 15.0;
+
 /// How long to wait for a command's reply, s: the one table of reply timeouts, which the
 /// driver, the flight software's configuration and tello_pilot's own landing take their
 /// defaults from. Clients wait about 7 s (docs/tello_sdk.md); `takeoff` is answered once its

@@ -4,7 +4,7 @@
 // A Wi-Fi re-association silences every channel, both ways, for seconds. Nothing the program
 // sends reaches the drone meanwhile: the Tello flies the last sticks it heard until it hears
 // others (in a crossing, the forward stick flies on, blind, toward the next shelf) and lands by
-// itself kWatchdog_s after the last command it heard (docs/tello_sdk.md). A `land` sent in the
+// itself sdk::kCommandWatchdog_s after the last command it heard (docs/tello_sdk.md). A `land` sent in the
 // silence waits for the link like every other datagram, so landing at the first seconds of
 // silence gains nothing in the air and loses the mission to every outage longer than that.
 //
@@ -18,12 +18,13 @@
 // The bound follows from the Tello. The driver sends a command at least every keep-alive period
 // (DriverConfig::keepalive_ns, 5 s; the rc stream every 0.1 s while the sticks are live), so the
 // last command the drone heard may be that old when the link went, and its watchdog may land it
-// kWatchdog_s - keep-alive = 10 s after the last state record. Past that, a mission resumed
+// kCommandWatchdog_s - keep-alive = 10 s after the last state record. Past that, a mission resumed
 // might find the drone descending on its own wherever it is: longest_outage_s().
 
 #include <optional>
 
 #include "flight_sw/tello/clock.hpp"
+#include "sdk/command.hpp"
 
 namespace shelfcross::tello {
 
@@ -38,10 +39,8 @@ enum class LinkVerdict {
 
 class LinkWatch {
  public:
-  /// The Tello lands by itself this long after the last command it heard (docs/tello_sdk.md).
-  static constexpr double kWatchdog_s = 15.0;
-  /// The longest a ride through may last: the watchdog less the driver's keep-alive period.
-  static double longest_outage_s(double keepalive_s) { return kWatchdog_s - keepalive_s; }
+  /// The longest a ride through may last: the Tello's watchdog less the driver's keep-alive period.
+  static double longest_outage_s(double keepalive_s) { return sdk::kCommandWatchdog_s - keepalive_s; }
 
   /// lost_after_s <= give_up_after_s, both positive (the pilot file's checks).
   LinkWatch(double lost_after_s, double give_up_after_s)

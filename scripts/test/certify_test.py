@@ -35,6 +35,14 @@ def stand_in(path, mark):
     os.chmod(path, 0o755)
 
 
+def stand_ins(d, program_mark):
+    """Both programs' stand-ins in folder d (the pilot's marked "pilot"), and an OUT there."""
+    program, pilot = os.path.join(d, "shelfcross"), os.path.join(d, "tello_pilot")
+    stand_in(program, program_mark)
+    stand_in(pilot, "pilot")
+    return program, pilot, os.path.join(d, "out")
+
+
 def certify(out, *steps, program=None, pilot=None):
     env = dict(os.environ, JOBS="3")
     if program:
@@ -63,10 +71,7 @@ class Certify(unittest.TestCase):
 
     def test_flies_the_steps_in_order_with_one_copy_of_the_program(self):
         with tempfile.TemporaryDirectory() as d:
-            program, pilot = os.path.join(d, "shelfcross"), os.path.join(d, "tello_pilot")
-            stand_in(program, "first")
-            stand_in(pilot, "pilot")
-            out = os.path.join(d, "out")
+            program, pilot, out = stand_ins(d, "first")
             r = certify(out, "table2", "search", "default", program=program, pilot=pilot)
             self.assertEqual(r.returncode, 0, r.stderr)
             with open(os.path.join(out, "calls.txt")) as f:
@@ -97,10 +102,7 @@ class Certify(unittest.TestCase):
 
     def test_the_pilot_step_flies_twenty_flights_once_and_summarises_them(self):
         with tempfile.TemporaryDirectory() as d:
-            program, pilot = os.path.join(d, "shelfcross"), os.path.join(d, "tello_pilot")
-            stand_in(program, "emulator")
-            stand_in(pilot, "pilot")
-            out = os.path.join(d, "out")
+            program, pilot, out = stand_ins(d, "emulator")
             r = certify(out, "pilot", program=program, pilot=pilot)
             self.assertEqual(r.returncode, 0, r.stderr)
             with open(os.path.join(out, "calls.txt")) as f:

@@ -38,6 +38,14 @@ class CommandPhasesTest : public ::testing::Test {
     return phases_.on_reply({facts_.now_ns, text}, facts_);
   }
   void later(double s) { facts_.now_ns += seconds_to_ns(s); }
+  /// The outstanding command and each of its retries refused with `text`.
+  void refuse_every_attempt(const std::string& text) {
+    for (int attempt = 0; attempt <= config_.timeouts.command_retries; ++attempt) {
+      EXPECT_EQ(reply(text), std::nullopt) << attempt;
+      later(config_.timeouts.command_gap_s);
+      poll();
+    }
+  }
   void state(double height_m, double vz_mps = 0.0, int battery_pct = 80) {
     StateRecord s;
     s.t_ns = facts_.now_ns;
@@ -110,14 +118,9 @@ TEST_F(CommandPhasesTest, ALostTakeoffReplyWithTheStateHeightUpIsAirborne) {
   EXPECT_EQ(phases_.check_timeout(facts_), (Transition{Phase::FindShelf, "airborne (takeoff reply lost)"}));
 }
 
-TEST_F(CommandPhasesTest, EveryTakeoffRefusedWatchesTheStateHeightBeforeSayingWhere) {
-  // Up and still: a takeoff was under way.
+TEST_F(CommandPhasesTest, EveryTakeoffRefusedThenUpAndStillIsAirborne) {
   in_phase(kToTakeOff, "takeoff", config_.timeouts.takeoff_reply_s);
-  for (int attempt = 0; attempt <= config_.timeouts.command_retries; ++attempt) {
-    EXPECT_EQ(reply("error"), std::nullopt);
-    later(config_.timeouts.command_gap_s);
-    poll();
-  }
+  refuse_every_attempt("error");
   EXPECT_EQ(phases_.supervise(facts_), std::nullopt);  // no state record yet
   state(config_.mission.airborne_height_m + 0.2, 0.3);  // still climbing
   EXPECT_EQ(phases_.supervise(facts_), std::nullopt);
@@ -126,26 +129,15 @@ TEST_F(CommandPhasesTest, EveryTakeoffRefusedWatchesTheStateHeightBeforeSayingWh
   const std::optional<Transition> up = phases_.supervise(facts_);
   ASSERT_TRUE(up);
   EXPECT_EQ(up->phase, Phase::FindShelf);
+}
 
-  // Low after the wait: it stayed on the ground.
-  CommandPhases ground(config_);
-  MissionFacts f;
-  f.now_ns = kNsPerSecond;
-  for (Phase p : kToTakeOff) f.phase.enter(p, f.now_ns);
-  ground.ask("takeoff", config_.timeouts.takeoff_reply_s);
-  std::vector<SdkCommand> out;
-  for (int attempt = 0; attempt <= config_.timeouts.command_retries; ++attempt) {
-    ground.poll(f.now_ns, out);
-    f.now_ns += 50 * kMs;
-    EXPECT_EQ(ground.on_reply({f.now_ns, "error Motor stop"}, f), std::nullopt);
-    f.now_ns += seconds_to_ns(config_.timeouts.command_gap_s);
-  }
-  StateRecord low;
-  low.t_ns = f.now_ns;
-  f.on_state(low);
-  EXPECT_EQ(ground.supervise(f), std::nullopt);
-  f.now_ns += seconds_to_ns(3.1);
-  EXPECT_EQ(ground.supervise(f), (Transition{Phase::Done, "gave up on the ground: takeoff failed: error Motor stop"}));
+TEST_F(CommandPhasesTest, EveryTakeoffRefusedAndStillLowAfterTheWaitStayedOnTheGround) {
+  in_phase(kToTakeOff, "takeoff", config_.timeouts.takeoff_reply_s);
+  refuse_every_attempt("error Motor stop");
+  state(0.0);
+  EXPECT_EQ(phases_.supervise(facts_), std::nullopt);
+  later(3.1);
+  EXPECT_EQ(phases_.supervise(facts_), (Transition{Phase::Done, "gave up on the ground: takeoff failed: error Motor stop"}));
 }
 
 TEST_F(CommandPhasesTest, LandOkEndsTheMissionInThePendingOutcome) {
