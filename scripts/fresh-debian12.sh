@@ -2,11 +2,14 @@
 # Times the README's two commands on a fresh Debian 12, as docs/results.md reports them: a minimal
 # `debootstrap bookworm` tree per command (its base system only), a clean clone of this
 # repository's HEAD inside it, entered with chroot as root. Needs root and Debian's mirror.
-#   bash scripts/fresh-debian12.sh WORKDIR       (WORKDIR: an empty folder with ~10 GB free)
-# Writes WORKDIR/main.log and WORKDIR/tests.log, each ending with `time`'s figures. The trees
+#   bash scripts/fresh-debian12.sh WORKDIR [main|tests]   (WORKDIR: an empty folder, ~10 GB free)
+# Writes WORKDIR/main.log and WORKDIR/tests.log (or the one named), each ending with `time`'s
+# figures. The trees
 # stay in WORKDIR (unmount WORKDIR/*/{proc,sys,dev} before removing them).
 set -euo pipefail
-[ $# -eq 1 ] || { echo "usage: $0 WORKDIR" >&2; exit 2; }
+[ $# -ge 1 ] && [ $# -le 2 ] || { echo "usage: $0 WORKDIR [main|tests]" >&2; exit 2; }
+jobs=${2:-main tests}
+case "$jobs" in main | tests | "main tests") ;; *) echo "$0: no job '$jobs'" >&2; exit 2 ;; esac
 [ "$(id -u)" -eq 0 ] || { echo "$0: needs root (debootstrap, chroot)" >&2; exit 2; }
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 work="$(mkdir -p "$1" && cd "$1" && pwd)"
@@ -31,10 +34,10 @@ in_tree() {
     LANG=C.UTF-8 bash -c "$*"
 }
 
-for job in main tests; do
+declare -A command=([main]="bash scripts/run-main-job.sh" [tests]="bash .ci/run")
+for job in $jobs; do
   cp -a "$work/base" "$work/$job"
   git clone -q "$repo" "$work/$job/root/shelfcross"
+  in_tree "$work/$job" "cd /root/shelfcross && time ${command[$job]}" > "$work/$job.log" 2>&1
+  tail -n 4 "$work/$job.log"
 done
-in_tree "$work/main" "cd /root/shelfcross && time bash scripts/run-main-job.sh" > "$work/main.log" 2>&1
-in_tree "$work/tests" "cd /root/shelfcross && time bash .ci/run" > "$work/tests.log" 2>&1
-tail -n 4 "$work/main.log" "$work/tests.log"
