@@ -20,39 +20,38 @@ set(_shelfcross_test_costs
   TelloEndToEnd.PilotFliesTheEmulatorTakesInventoryCrossesAndLands 1021
   TelloEndToEnd.CalibrationFlightFacingTheShelfStopsAndLands 1007
   # the rest, longest first
-  docs_runnable_blocks 102
-  SdkLink.ABackOffUnderWayIsNeverTurnedIntoACrossing 42
   Identify.NoiseFreeRecordsOfDronesAcrossTheRangesAreRecoveredWithoutTheRoundingsBias 39
   Warehouse.EveryStrategyInventoriesTheRowAndThroughTheCellsIsShortestOverTheSdkLink 36
+  docs_runnable_blocks 30
+  CmdSearch.ResumesToTheUninterruptedSearchAndRepeatsTheCampaignInRoundZero 29
   SdkLink.LostLandWithoutTheStopSticksRuleFliesIntoTheWall 28
   Warehouse.ThroughTheCellsCrossesAndInventoriesAllFiveShelves 26
-  CmdSearch.ResumesToTheUninterruptedSearchAndRepeatsTheCampaignInRoundZero 25
+  SdkLink.ABackOffUnderWayIsNeverTurnedIntoACrossing 25
   Senses.SensesOutsideAScenariosRangesAreNamedAndTheCalibratedScenarioHoldsThem 23
   CampaignWorkers.AStoppedCampaignDoesNotCountTheStopAgainstItsRun 20
   SdkLink.AThreeSecondOutageIsRiddenThroughAndOnePastTheBoundLands 20
-  SdkLink.LostFirstLandIsSentAgainBeforeTheFlightSoftwaresTimeout 19
   Campaign.SmallDefaultCampaignNeverTouchesTheShelfAndMostlyCrosses 19
+  SdkLink.LostFirstLandIsSentAgainBeforeTheFlightSoftwaresTimeout 19
   SdkLink.AStrongAutopilotIsMeasuredAndItsSticksScaled 18
-  MpiSearch.ThreeRanksEqualOneProcess 15
-  MpiCampaign.KilledWorkerRankThenResumeCompletesEveryRunOnce 15
-  MpiCampaign.KilledWorkerRankUnderRecoveryCompletesInOneGo 14
+  MpiSearch.ThreeRanksEqualOneProcess 14
   SdkLink.ALineHoldNotMeasuredAtTheLastAttemptReReadsRatherThanDeclines 14
   ReplayOverlay.TagsAreDrawnOnThePictureTheyCameFrom 13
-  MpiCampaign.ThreeRanksEqualOneProcess 12
+  CmdCampaign.ShardsMergedEqualOneProcess 12
   Warehouse.EveryStrategyInventoriesTheRowAndThroughTheCellsIsShortestOverTheIdealLink 12
-  CmdCampaign.KilledMidwayAndRestartedEqualsUninterrupted 12
-  CmdCampaign.ShardsMergedEqualOneProcess 11
+  CmdCampaign.KilledMidwayAndRestartedEqualsUninterrupted 11
   Campaign.OneOrTwoWorkersGiveTheSameRunsAndCampaignHash 10
-  ResponseFit.CorrelatedNoiseWidensTheQuantisedRecordsIntervals 10
-  Identify.RecoversAKnownDroneFromItsCalibrationLog 10
   CoSimulation.ARunLandingAtItsLimitIsGivenTimeToLand 10
+  Identify.RecoversAKnownDroneFromItsCalibrationLog 10
+  MpiCampaign.ThreeRanksEqualOneProcess 10
+  ResponseFit.CorrelatedNoiseWidensTheQuantisedRecordsIntervals 10
   SdkLink.FivePercentLossOnEveryChannelNeverTouchesAndListsNothingWrong 10
-  ReplayVideoTest.RunWritesBrowserPlayableH264 9
   CoSimulation.SameSeedGivesTheSameRunHash 9
-  CompareCommand.WritesTableAndPlotsForThreeStrategiesWithTheSameDraws 8
-  PictureDamage.RowsOutsideTheDamageAreTheLossFreePicture 8
+  MpiCampaign.KilledWorkerRankThenResumeCompletesEveryRunOnce 9
+  ReplayVideoTest.RunWritesBrowserPlayableH264 9
   CmdFrames.NominalSequenceRendersAndBothPipelinesDecideTheSame 8
-  CampaignWorkers.RunsThatHangAreKilledAtTheirLimitAndRecorded 7
+  CompareCommand.WritesTableAndPlotsForThreeStrategiesWithTheSameDraws 8
+  MpiCampaign.KilledWorkerRankUnderRecoveryCompletesInOneGo 8
+  PictureDamage.RowsOutsideTheDamageAreTheLossFreePicture 8
 )
 list(LENGTH _shelfcross_test_costs _shelfcross_n)
 math(EXPR _shelfcross_last "${_shelfcross_n} - 1")
