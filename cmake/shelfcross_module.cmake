@@ -53,4 +53,11 @@ function(shelfcross_module_tests)
   # Designated initialisers that leave members at their defaults are idiomatic C++20.
   target_compile_options(${M_NAME}_test PRIVATE -Wall -Wextra -Wno-missing-field-initializers)
   gtest_discover_tests(${M_NAME}_test DISCOVERY_TIMEOUT 60 PROPERTIES LABELS ${M_NAME})
+  shelfcross_test_costs()
+endfunction()
+
+# shelfcross_test_costs(): CTest reads the long tests' start order (cmake/test_costs.cmake)
+# after the tests registered so far in this folder.
+function(shelfcross_test_costs)
+  set_property(DIRECTORY APPEND PROPERTY TEST_INCLUDE_FILES "${SHELFCROSS_SOURCE_DIR}/cmake/test_costs.cmake")
 endfunction()

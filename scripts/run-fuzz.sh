@@ -2,7 +2,8 @@
 # Builds the libFuzzer targets (the `fuzz` preset: clang, ASan + UBSan) and runs each on its
 # committed seed corpus. New inputs go to a scratch folder, never into fuzz/corpus/; a crash, a
 # sanitizer report or a failed property stops the script with libFuzzer's report and the input
-# saved as build/fuzz/artifacts/<target>-crash-<sha1>.
+# saved as build/fuzz/artifacts/<target>-crash-<sha1>. The targets run side by side, one per
+# core (FUZZ_JOBS=N for N at a time).
 #   scripts/run-fuzz.sh ci [TARGET...]       what CI runs: each target a fixed number of inputs
 #                                            from libFuzzer seed 1 (repeatable: see below and
 #                                            fuzz/README.md; about 25 s each on CI's 2 cores)
@@ -30,29 +31,64 @@ if [ "$mode" = ci ]; then
 fi
 targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=(state_record sdk_command scenario flight_config video_receiver)
+if [ "$mode" = ci ]; then
+  for t in "${targets[@]}"; do
+    [ -n "${ci_runs[$t]:-}" ] || { echo "run-fuzz.sh: no CI input count for target $t" >&2; exit 2; }
+  done
+fi
 cmake --preset fuzz >/dev/null
 cmake --build --preset fuzz
 mkdir -p build/fuzz/artifacts
 scratch="$(mktemp -d)"
 trap 'rm -rf "$scratch"' EXIT
-for t in "${targets[@]}"; do
+# One target: its inputs (CI mode) or its time, its own scratch folder and log; exit status of
+# libFuzzer. Each target is one single-threaded process (no -jobs/-workers; the video target's
+# decoder runs on the calling thread), so `parallel` of them share the cores without changing
+# what any of them runs.
+fuzz_one() {
+  local t="$1" budget
   if [ "$mode" = ci ]; then
-    [ -n "${ci_runs[$t]:-}" ] || { echo "run-fuzz.sh: no CI input count for target $t" >&2; exit 2; }
     budget=(-seed=1 -runs="${ci_runs[$t]}" -reload=0)
-    echo "== fuzz: $t, ${ci_runs[$t]} inputs from seed 1, on fuzz/corpus/$t"
   else
     budget=(-max_total_time="$mode")
-    echo "== fuzz: $t for $mode s on fuzz/corpus/$t"
   fi
   mkdir -p "$scratch/$t"
   # -rss_limit_mb: every target stays well below it; a leak or a blow-up does not.
-  status=0
   "${no_aslr[@]}" build/fuzz/fuzz/"${t}"_fuzz "${budget[@]}" -print_final_stats=1 -rss_limit_mb=2048 \
-    -artifact_prefix=build/fuzz/artifacts/"$t"- "$scratch/$t" fuzz/corpus/"$t" >"$scratch/$t.log" 2>&1 || status=$?
+    -artifact_prefix=build/fuzz/artifacts/"$t"- "$scratch/$t" fuzz/corpus/"$t" >"$scratch/$t.log" 2>&1
+}
+# What a finished target prints (its summary, or libFuzzer's report); 1 when it found a problem.
+report_one() {
+  local t="$1" status="$2"
+  if [ "$mode" = ci ]; then
+    echo "== fuzz: $t, ${ci_runs[$t]} inputs from seed 1, on fuzz/corpus/$t"
+  else
+    echo "== fuzz: $t for $mode s on fuzz/corpus/$t"
+  fi
   grep -aE "INFO: Seed:|INFO: seed corpus|#[0-9]+[[:space:]]+(INITED|DONE)|stat::(number_of_executed_units|peak_rss)" "$scratch/$t.log" || true
   if [ "$status" -ne 0 ]; then
     tail -n 80 "$scratch/$t.log"
     echo "fuzz: $t found a problem (above; the input is in build/fuzz/artifacts/)"
-    exit 1
+    return 1
   fi
+}
+# Targets side by side, one per core (FUZZ_JOBS to change it), each reported as it ends; the
+# first finding starts no further target and stops the script once those under way have ended.
+parallel="${FUZZ_JOBS:-$(nproc)}"
+[[ "$parallel" =~ ^[1-9][0-9]*$ ]] || { echo "run-fuzz.sh: FUZZ_JOBS must be a positive count" >&2; exit 2; }
+declare -A target_of=()
+next=0
+failed=0
+while [ "$next" -lt "${#targets[@]}" ] || [ "${#target_of[@]}" -gt 0 ]; do
+  while [ "$failed" -eq 0 ] && [ "$next" -lt "${#targets[@]}" ] && [ "${#target_of[@]}" -lt "$parallel" ]; do
+    fuzz_one "${targets[$next]}" &
+    target_of[$!]="${targets[$next]}"
+    next=$((next + 1))
+  done
+  [ "${#target_of[@]}" -gt 0 ] || break
+  status=0
+  wait -n -p ended "${!target_of[@]}" || status=$?
+  report_one "${target_of[$ended]}" "$status" || failed=1
+  unset "target_of[$ended]"
 done
+exit "$failed"

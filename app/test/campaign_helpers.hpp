@@ -79,8 +79,14 @@ inline std::vector<std::string> stored_rounds(const fs::path& db) {
   return out;
 }
 
-/// The default scenario with runs cut at 4 s: start-up and take-off, enough to differ per seed.
-/// Its link is the shipped one (sdk: the Tello's datagrams through tello_pilot's loop).
+/// How long a run of short_scenario lasts (cosim.timeout_s): the SDK start-up, the video stream's
+/// first pictures and the takeoff command (sent at about 1.3 s), enough to differ per seed. What
+/// these tests check of a campaign (resuming, shards, ranks, worker processes) needs no flight;
+/// whole flights are the co-simulation's tests (verification/).
+inline constexpr int kShortTimeout_s = 2;
+
+/// The default scenario with runs cut at kShortTimeout_s. Its link is the shipped one (sdk: the
+/// Tello's datagrams through tello_pilot's loop).
 inline fs::path short_scenario(const fs::path& dir) {
   std::ifstream in(std::string(SHELFCROSS_SOURCE_DIR) + "/scenarios/paper_test_shelf.yaml");
   std::stringstream text;
@@ -89,7 +95,7 @@ inline fs::path short_scenario(const fs::path& dir) {
   const auto at = yaml.find("cosim:\n");
   yaml.insert(at + 7, "  trajectory_rate_hz: 25\n");
   const auto timeout = yaml.find("  timeout_s: 120");
-  yaml.replace(timeout, 16, "  timeout_s: 4");
+  yaml.replace(timeout, 16, "  timeout_s: " + std::to_string(kShortTimeout_s));
   const fs::path path = dir / "short.yaml";
   std::ofstream(path) << yaml;
   return path;
@@ -110,9 +116,10 @@ inline std::string campaign_hash(const fs::path& dir) {
 }
 
 /// `shelfcross search`'s arguments (after the program) for the tests' small search of the short
-/// scenario: 6 runs, rounds of 2, 2 for the estimate, the mission class.
+/// scenario: 4 runs, rounds of 2, 2 for the estimate, the mission class (round 0 and the
+/// estimation round: the fewest runs that draw from a refitted proposal).
 inline std::vector<std::string> search_args(const std::string& scenario, const fs::path& out) {
-  return {"search", "--scenario", scenario, "--budget", "6", "--seed", "77", "--jobs", "1",
+  return {"search", "--scenario", scenario, "--budget", "4", "--seed", "77", "--jobs", "1",
           "--class", "mission", "--round-runs", "2", "--estimation-runs", "2", "--out", out.string()};
 }
 

@@ -24,8 +24,9 @@ fs::path faulty_scenario(const fs::path& dir, const std::string& extra, int time
   std::stringstream text;
   text << in.rdbuf();
   std::string yaml = text.str();
-  const auto at = yaml.find("  timeout_s: 4\n");
-  yaml.replace(at, 15, "  timeout_s: " + std::to_string(timeout_s) + "\n" + extra);
+  const std::string timeout = "  timeout_s: " + std::to_string(kShortTimeout_s) + "\n";
+  const auto at = yaml.find(timeout);
+  yaml.replace(at, timeout.size(), "  timeout_s: " + std::to_string(timeout_s) + "\n" + extra);
   const fs::path path = dir / "faulty.yaml";
   std::ofstream(path) << yaml;
   return path;
@@ -59,7 +60,7 @@ int count_of(const std::string& text, const std::string& what) {
 
 TEST(CampaignWorkers, RunsThatCrashAreRecordedAndTheCampaignCompletes) {
   const fs::path root = fresh_dir("workers_crash");
-  const std::string scenario = faulty_scenario(root, "  inject_crash_s: 5\n", 6).string();
+  const std::string scenario = faulty_scenario(root, "  inject_crash_s: 1.5\n", 2).string();
   const fs::path out = root / "out";
   EXPECT_EQ(wait_exit(spawn({SHELFCROSS_PROGRAM, "campaign", "--scenario", scenario, "--runs", "3", "--seed", "12",
                              "--jobs", "2", "--out", out.string()},
@@ -87,7 +88,7 @@ TEST(CampaignWorkers, ASearchWhoseRunsCrashRecordsThemAndCompletes) {
   // A search's runs are drawn from its rounds' proposals and sent to the worker processes with
   // their draws; a crash takes its worker only, and counts as a mission failure.
   const fs::path root = fresh_dir("workers_search_crash");
-  const std::string scenario = faulty_scenario(root, "  inject_crash_s: 5\n", 6).string();
+  const std::string scenario = faulty_scenario(root, "  inject_crash_s: 1.5\n", 2).string();
   const fs::path out = root / "out";
   EXPECT_EQ(wait_exit(spawn({SHELFCROSS_PROGRAM, "search", "--scenario", scenario, "--budget", "4", "--seed", "5",
                              "--jobs", "2", "--class", "mission", "--round-runs", "2", "--estimation-runs", "2",
@@ -135,7 +136,7 @@ TEST(CampaignWorkers, AStoppedCampaignDoesNotCountTheStopAgainstItsRun) {
   const fs::path root = fresh_dir("workers_stopped");
   const std::string scenario = short_scenario(root).string();
   const fs::path out = root / "out";
-  // The limit: 12 s of wall-clock time per run (a 4 s run takes a few); the stop lasts 16 s.
+  // The limit: 12 s of wall-clock time per run (a short run takes a few); the stop lasts 16 s.
   const pid_t campaign = spawn({SHELFCROSS_PROGRAM, "campaign", "--scenario", scenario, "--runs", "1", "--seed", "3",
                                 "--jobs", "1", "--run-wall-factor", "0", "--run-wall-floor", "12", "--out",
                                 out.string()},

@@ -1,7 +1,7 @@
 // `shelfcross compare` as a user runs it: three campaigns (one per strategy) with the same
 // seed, the Table 2 markdown and JSON, and the path plots; bad input exits 2. The runs are
-// cut short (the default scenario, 6 s each): the command's plumbing is under test here; the
-// strategies' flights are tested in verification/cosim/test/warehouse_test.cpp.
+// cut short (campaign_helpers.hpp's short scenario): the command's plumbing is under test here;
+// the strategies' flights are tested in verification/report/test/warehouse_test.cpp.
 #include <unistd.h>
 
 #include <filesystem>
@@ -12,27 +12,22 @@
 #include <nlohmann/json.hpp>
 #include <SQLiteCpp/SQLiteCpp.h>
 
+#include "campaign_helpers.hpp"
 #include "run_shelfcross.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 using shelfcross::app::test::run_shelfcross;
+using shelfcross::app::test::short_scenario;
 
 TEST(CompareCommand, WritesTableAndPlotsForThreeStrategiesWithTheSameDraws) {
   const fs::path dir = fs::temp_directory_path() / ("shelfcross_compare_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
-  std::ifstream in(std::string(SHELFCROSS_SOURCE_DIR) + "/scenarios/paper_test_shelf.yaml");
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string yaml = text.str();
-  const std::string key = "  timeout_s: 120";
-  ASSERT_NE(yaml.find(key), std::string::npos);
-  yaml.replace(yaml.find(key), key.size(), "  timeout_s: 6");
-  std::ofstream(dir / "short.yaml") << yaml;
+  const fs::path scenario = short_scenario(dir);
 
-  const auto r = run_shelfcross("compare", "--scenario " + (dir / "short.yaml").string() + " --runs 2 --seed 5 --jobs 2 --out " +
+  const auto r = run_shelfcross("compare", "--scenario " + scenario.string() + " --runs 2 --seed 5 --jobs 2 --out " +
                                                (dir / "out").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json j = nlohmann::json::parse(std::ifstream(dir / "out" / "compare.json"));
@@ -44,7 +39,7 @@ TEST(CompareCommand, WritesTableAndPlotsForThreeStrategiesWithTheSameDraws) {
   EXPECT_TRUE(j["complete"].get<bool>());
   for (const auto& row : j["rows"]) {
     EXPECT_EQ(row["runs"], 2);
-    EXPECT_EQ(row["successes"], 0);  // cut at 6 s: every run a timeout
+    EXPECT_EQ(row["successes"], 0);  // cut short: every run a timeout
     EXPECT_EQ(row["success_lower_95"], 0.0);
   }
   // Same campaign seed: the same dispersion draws run by run in every strategy's store.
@@ -74,7 +69,7 @@ TEST(CompareCommand, WritesTableAndPlotsForThreeStrategiesWithTheSameDraws) {
   EXPECT_TRUE(fs::exists(dir / "out" / "compare_top_view.png"));
   EXPECT_TRUE(fs::exists(dir / "out" / "compare_side_view.png"));
   // Run again: nothing missing, nothing re-run, same table.
-  const auto again = run_shelfcross("compare", "--scenario " + (dir / "short.yaml").string() +
+  const auto again = run_shelfcross("compare", "--scenario " + scenario.string() +
                                                    " --runs 2 --seed 5 --jobs 1 --out " + (dir / "out").string());
   EXPECT_EQ(again.exit_code, 0) << again.output;
   fs::remove_all(dir);

@@ -114,7 +114,7 @@ TEST(MpiSearch, ThreeRanksEqualOneProcess) {
   const fs::path log = root / "mpi.log";
   EXPECT_EQ(wait_exit(spawn(concat(mpirun(3, {}), search(root / "mpi")), log.string())), 0) << read_text(log);
   EXPECT_NE(read_text(log).find("search on 2 worker ranks x 1 workers"), std::string::npos) << read_text(log);
-  EXPECT_EQ(stored_hashes(root / "mpi" / "results.sqlite").size(), 6u);
+  EXPECT_EQ(stored_hashes(root / "mpi" / "results.sqlite").size(), 4u);
   EXPECT_EQ(stored_hashes(root / "mpi" / "results.sqlite"), stored_hashes(root / "one" / "results.sqlite"));
   EXPECT_EQ(stored_rounds(root / "mpi" / "results.sqlite"), stored_rounds(root / "one" / "results.sqlite"));
   // Bad input on rank 0 (other settings into the same folder): every rank leaves, exit code 2.
@@ -136,17 +136,17 @@ void kill_rank_one_after_first_run(pid_t launcher, const fs::path& db) {
 TEST(MpiCampaign, KilledWorkerRankThenResumeCompletesEveryRunOnce) {
   const fs::path root = fresh_dir("mpi_campaign_killed");
   const fs::path scenario = short_scenario(root);
-  const auto command = concat(mpirun(3, {}), campaign_args(scenario, 6, root / "mpi"));
+  const auto command = concat(mpirun(3, {}), campaign_args(scenario, 4, root / "mpi"));
   const pid_t launcher = spawn(command);
   kill_rank_one_after_first_run(launcher, root / "mpi" / "results.sqlite");
   EXPECT_NE(wait_exit(launcher), 0);  // Open MPI aborts the job
   const int before = stored_runs(root / "mpi" / "results.sqlite");
   EXPECT_GE(before, 1);
-  EXPECT_LT(before, 6);
+  EXPECT_LT(before, 4);
   const fs::path log = root / "resume.log";
   EXPECT_EQ(wait_exit(spawn(command, log.string())), 0) << read_text(log);
-  EXPECT_EQ(indices(root / "mpi" / "results.sqlite"), (std::vector<int>{0, 1, 2, 3, 4, 5}));
-  EXPECT_EQ(wait_exit(spawn(concat({SHELFCROSS_PROGRAM}, campaign_args(scenario, 6, root / "one")))), 0);
+  EXPECT_EQ(indices(root / "mpi" / "results.sqlite"), (std::vector<int>{0, 1, 2, 3}));
+  EXPECT_EQ(wait_exit(spawn(concat({SHELFCROSS_PROGRAM}, campaign_args(scenario, 4, root / "one")))), 0);
   EXPECT_EQ(stored_hashes(root / "mpi" / "results.sqlite"), stored_hashes(root / "one" / "results.sqlite"));
   EXPECT_EQ(campaign_hash(root / "mpi"), campaign_hash(root / "one"));
 }
@@ -155,14 +155,14 @@ TEST(MpiCampaign, KilledWorkerRankUnderRecoveryCompletesInOneGo) {
   const fs::path root = fresh_dir("mpi_campaign_recovery");
   const fs::path scenario = short_scenario(root);
   const fs::path log = root / "mpi.log";
-  const pid_t launcher = spawn(concat(concat(mpirun(3, {"--enable-recovery"}), campaign_args(scenario, 6, root / "mpi")),
+  const pid_t launcher = spawn(concat(concat(mpirun(3, {"--enable-recovery"}), campaign_args(scenario, 4, root / "mpi")),
                                       {"--rank-timeout", "3"}),
                                log.string());
   kill_rank_one_after_first_run(launcher, root / "mpi" / "results.sqlite");
   EXPECT_EQ(wait_exit(launcher), 0) << read_text(log);
   EXPECT_NE(read_text(log).find("1 worker rank(s) lost"), std::string::npos) << read_text(log);
-  EXPECT_EQ(indices(root / "mpi" / "results.sqlite"), (std::vector<int>{0, 1, 2, 3, 4, 5}));
-  EXPECT_EQ(wait_exit(spawn(concat({SHELFCROSS_PROGRAM}, campaign_args(scenario, 6, root / "one")))), 0);
+  EXPECT_EQ(indices(root / "mpi" / "results.sqlite"), (std::vector<int>{0, 1, 2, 3}));
+  EXPECT_EQ(wait_exit(spawn(concat({SHELFCROSS_PROGRAM}, campaign_args(scenario, 4, root / "one")))), 0);
   EXPECT_EQ(campaign_hash(root / "mpi"), campaign_hash(root / "one"));
 }
 
