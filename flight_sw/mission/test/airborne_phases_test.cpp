@@ -241,6 +241,115 @@ TEST_F(TransferTest, AWaypointNotReachedInTimeLands) {
   EXPECT_TRUE(d.supervised);
 }
 
+// ---- The crossing ----
+
+// A vehicle flown by the sticks' velocity (level, the body's axes the heading frame's), seeing
+// the scene at 30 frames/s and reporting state records at 10 Hz; the fixture takes each
+// decision as the mission does, and a push (world frame) may act on it in the crossing.
+class FlownTest : public AirbornePhasesTest {
+ protected:
+  /// Flies from p_W_ until `stop` says so on a decision (then returned) or max_s pass.
+  template <typename Stop>
+  std::optional<Decision> fly_until(Stop stop, double max_s) {
+    const TimeNs end_ns = facts_.now_ns + seconds_to_ns(max_s);
+    TimeNs next_frame_ns = facts_.now_ns, next_state_ns = facts_.now_ns;
+    while (facts_.now_ns < end_ns) {
+      const bool frame = next_frame_ns <= next_state_ns;
+      advance(frame ? next_frame_ns : next_state_ns);
+      Decision d;
+      if (frame) {
+        next_frame_ns += seconds_to_ns(1.0 / 30.0);
+        bgr_ = camera_.draw(p_W_, yaw_);
+        d = unit_.on_picture(last_picture(), tools());
+      } else {
+        next_state_ns += testing::kStateRecordNs;
+        d = unit_.on_state(record(), tools());
+      }
+      if (stop(d)) return d;
+      take(d, frame);
+      if (frame) sticks_.controlled(facts_.now_ns);
+      const Decision timers = unit_.supervise(tools());
+      if (stop(timers)) return timers;
+      take(timers, false);
+    }
+    return std::nullopt;
+  }
+  /// Takes `d` as the mission does: the phase entered (Land for a landing), the step resumed.
+  void take(Decision d, bool on_picture) {
+    for (;;) {
+      if (d.landing()) enter(Phase::Land);
+      if (const Transition* t = d.transition()) enter(t->phase);
+      if (!d.resume) return;
+      const Picture pic = last_picture();
+      d = unit_.resume(tools(), on_picture ? &pic : nullptr);
+    }
+  }
+  Eigen::Vector2d v_ground_H() const {
+    const Eigen::Vector2d push_W = facts_.phase.current() == Phase::Cross ? push_in_cross_W_mps_ : Eigen::Vector2d::Zero();
+    const double c = std::cos(yaw_), s = std::sin(yaw_);
+    const VelocityCommand& v = sticks_.velocity();
+    return {v.vx_B_mps + c * push_W.x() + s * push_W.y(), v.vy_B_mps - s * push_W.x() + c * push_W.y()};
+  }
+  void advance(TimeNs t_ns) {
+    const double dt = ns_to_seconds(t_ns - facts_.now_ns);
+    const Eigen::Vector2d v = v_ground_H();
+    p_W_ += dt * Eigen::Vector3d(std::cos(yaw_) * v.x() - std::sin(yaw_) * v.y(),
+                                 std::sin(yaw_) * v.x() + std::cos(yaw_) * v.y(), sticks_.velocity().vz_mps);
+    yaw_ += dt * sticks_.velocity().yaw_rate_radps;
+    facts_.now_ns = t_ns;
+  }
+  StateRecord record() {
+    StateRecord s;
+    s.t_ns = facts_.now_ns;
+    s.yaw_rad = yaw_;
+    s.height_m = p_W_.z();
+    const Eigen::Vector2d v = v_ground_H();
+    s.vx_H_mps = std::round(v.x() * 10.0) / 10.0;
+    s.vy_H_mps = std::round(v.y() * 10.0) / 10.0;
+    s.vz_H_mps = std::round(sticks_.velocity().vz_mps * 10.0) / 10.0;
+    s.battery_pct = 80;
+    facts_.on_state(s);
+    sticks_.on_state(s);
+    return s;
+  }
+
+  Eigen::Vector3d p_W_ = Eigen::Vector3d(0.3, 0.0, 1.0);
+  double yaw_ = 0.0;
+  Eigen::Vector2d push_in_cross_W_mps_ = Eigen::Vector2d::Zero();
+};
+
+TEST_F(FlownTest, TheGateOpenEntersTheCrossingAndFliesItsLineOnceInIt) {
+  airborne_in(Phase::FindShelf);
+  const std::optional<Decision> crossing = fly_until(
+      [](const Decision& d) { return d.transition() && d.transition()->phase == Phase::Cross; }, 90.0);
+  ASSERT_TRUE(crossing) << "no crossing; phase " << phase_name(facts_.phase.current());
+  EXPECT_EQ(facts_.phase.current(), Phase::Approach) << "decided in the approach";
+  EXPECT_NE(crossing->transition()->event.find(": crossing L2 C3"), std::string::npos) << crossing->transition()->event;
+  EXPECT_TRUE(crossing->resume) << "the line is flown once in Cross (entering it restarts the PI loops)";
+  enter(Phase::Cross);
+  const Decision flying = unit_.resume(tools());
+  EXPECT_EQ(flying.transition(), nullptr);
+  EXPECT_NEAR(sticks_.velocity().vx_B_mps, config_.control.crossing_speed_mps, 0.05) << "into the cell, along its line";
+}
+
+TEST_F(FlownTest, ACrossingTheWatchStopsGoesBackToTheApproachBacksOutAndSendsTheRcAtOnce) {
+  airborne_in(Phase::FindShelf);
+  push_in_cross_W_mps_ = Eigen::Vector2d(0.0, 0.2);  // sideways, from the crossing's start
+  const std::optional<Decision> stopped = fly_until(
+      [&](const Decision& d) { return d.transition() && facts_.phase.current() == Phase::Cross; }, 90.0);
+  ASSERT_TRUE(stopped) << "no crossing stopped; phase " << phase_name(facts_.phase.current());
+  EXPECT_EQ(stopped->transition()->phase, Phase::Approach);
+  EXPECT_EQ(stopped->transition()->event.rfind("crossing stopped: ", 0), 0u) << stopped->transition()->event;
+  EXPECT_TRUE(stopped->resume) << "the back-off is flown once back in the approach";
+  EXPECT_EQ(stopped->rc, RcSend::Now);
+  enter(Phase::Approach);
+  const Decision backing = unit_.resume(tools());
+  EXPECT_EQ(backing.transition(), nullptr);
+  EXPECT_EQ(backing.landing(), nullptr);
+  EXPECT_LT(sticks_.velocity().vx_B_mps, 0.0) << "backing out";
+  EXPECT_EQ(unit_.tracker().target(), std::optional<CellIndex>(CellIndex{2, 3})) << "the same target, approached again";
+}
+
 // ---- Through FlightSoftware: the kinematic vehicle (flight_harness.hpp) ----
 
 TEST(FlightSoftware, ShelfNotFoundSearchesByYawThenTimesOut) {
