@@ -52,7 +52,6 @@ class SceneCamera {
   cv::Mat wall() const {
     return cv::Mat(config_.camera.height_px, config_.camera.width_px, CV_8UC3, cv::Scalar(185, 185, 180));
   }
-  const Scene& scene() const { return scene_; }
 
  private:
   const FlightConfig& config_;

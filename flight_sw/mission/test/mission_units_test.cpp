@@ -20,7 +20,6 @@
 namespace shelfcross::flight_sw {
 namespace {
 
-using testing::FrameStep;
 using testing::Harness;
 using testing::Options;
 
