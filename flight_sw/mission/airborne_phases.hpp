@@ -3,12 +3,17 @@
 // FindShelf, GoToViewpoint, TakeInventory (shelf_survey.hpp) and Approach (target_approach.hpp);
 // each state record's in Approach (the gate's measures), Cross (the height hold and the watch,
 // cell_crossing.hpp) and Transfer (transfer_flight.hpp); their timers; the shelf index and the
-// hand-over to the next shelf. What the units' steps say is flown here and the transitions they
-// call for are taken through the mission (mission.hpp), which keeps the phase; the mission's
-// own failsafes (battery, video, keep-alive) are not here.
+// hand-over to the next shelf. What the units' steps say is flown here; each step returns what
+// it decided (Decision, mission.hpp: a transition, a landing, the rc), which the mission takes
+// and which keeps the phase. A step that goes on in the phase it decided on (the viewpoint
+// reached on the picture that found the shelf, the crossing's line flown once in Cross, the
+// approach's back-off once back in it) says so (Decision::resume) and the mission, having
+// taken the decision, asks for the rest (resume). The mission's own failsafes (battery, video,
+// keep-alive) are not here.
 
 #include <optional>
 #include <string>
+#include <variant>
 
 #include <opencv2/core.hpp>
 
@@ -26,12 +31,10 @@
 namespace shelfcross::flight_sw {
 
 /// What the airborne phases work with besides their own state: the mission's facts (the phase
-/// now among them; it changes as they take transitions), the sticks they fly, the mission whose
-/// transitions they take.
+/// now among them; only the mission changes it, taking their decisions) and the sticks they fly.
 struct AirborneTools {
   MissionFacts& facts;
   Sticks& sticks;
-  Mission& mission;
 };
 
 class AirbornePhases {
@@ -40,18 +43,24 @@ class AirbornePhases {
   explicit AirbornePhases(const FlightConfig& config)
       : config_(config), survey_(config), approach_(config), crossing_(config) {}
 
-  /// A picture that steers, in the phase now: FindShelf (then GoToViewpoint on the same
-  /// picture once the whole shelf is in view), GoToViewpoint, TakeInventory (then the target,
-  /// the transfer, or a landing), Approach. Nothing in the other phases.
-  void on_picture(const Picture& pic, AirborneTools t);
+  /// A picture that steers, in the phase now: FindShelf (once the whole shelf is in view:
+  /// GoToViewpoint, resumed on the same picture), GoToViewpoint, TakeInventory (then the
+  /// target, the transfer, or a landing), Approach. Nothing in the other phases.
+  Decision on_picture(const Picture& pic, AirborneTools t);
   /// A state record (after MissionFacts::on_state): the gate's measures; in Transfer the leg
-  /// flown; in Cross the cell's height held and the watch that may stop the crossing.
-  void on_state(const StateRecord& s, AirborneTools t);
+  /// flown (the rc when due); in Cross the cell's height held and the watch that may stop the
+  /// crossing (Approach, resumed backing out, the rc now).
+  Decision on_state(const StateRecord& s, AirborneTools t);
   /// The airborne phases' timers at each input: the phases' time limits, the approach's
-  /// (TargetApproach::supervise), the crossing's end, the transfer leg's limit. True when the
-  /// input's supervision ends here (a transition taken, or an approach step other than Stay);
-  /// false: the mission's failsafes run next.
-  bool supervise(AirborneTools t);
+  /// (TargetApproach::supervise), the crossing's end, the transfer leg's limit.
+  /// Decision::supervised when the input's supervision ends here (a transition or landing, or
+  /// an approach step other than Stay); otherwise the mission's failsafes run next.
+  Decision supervise(AirborneTools t);
+  /// The rest of the step whose decision said `resume`, once the mission has taken it, in the
+  /// phase entered: the viewpoint on the same picture (`pic`, the one the step had; throws
+  /// std::logic_error without it), the crossing's line, or the back-off of a stopped crossing.
+  /// Nothing when no step waits.
+  Decision resume(AirborneTools t, const Picture* pic = nullptr);
   /// A picture that cannot steer (too damaged to fly on, or the target not found in a damaged
   /// one): the last command held briefly, then a hover (Sticks::hold_or_hover). Not while the
   /// corner tags are leaving the view in the approach: there only nearly whole pictures move
@@ -69,22 +78,25 @@ class AirbornePhases {
   int shelf() const { return shelf_; }  ///< the shelf being read or passed, from 0
 
  private:
-  /// In FindShelf: a re-read that started closer than the viewpoint is still backing straight out.
-  bool rereading_from_close(const MissionFacts& facts) const;
-  void find_shelf(const Picture& pic, AirborneTools t);
-  void go_to_viewpoint(const Picture& pic, bool view_fresh, AirborneTools t);
-  /// The inventory taken: the conventional strategies fly their transfer; through the cells,
-  /// the target is chosen on the full view just read, or, with no crossable empty cell, it lands.
-  void take_inventory(const Picture& pic, AirborneTools t);
-  /// Flies an approach step and takes the transition it asks for (target_approach.hpp).
-  void follow(const ApproachStep& step, AirborneTools t);
+  /// The rest of a step, waiting for the mission to take its decision (resume): the viewpoint
+  /// on the same picture, the back-off of the crossing stopped, the crossing's line.
+  struct ViewpointOnSamePicture {};
+  using Pending = std::variant<std::monostate, ViewpointOnSamePicture, CrossingStop, VelocityCommand>;
+
+  Decision find_shelf(const Picture& pic, AirborneTools t);
+  Decision go_to_viewpoint(const Picture& pic, bool view_fresh, AirborneTools t);
+  /// The inventory taken: the conventional strategies plan their transfer (from the last
+  /// visual pose; none, or no state record: land); through the cells, the target is chosen on
+  /// the full view just read, or, with no crossable empty cell, it lands.
+  Decision take_inventory(const Picture& pic, AirborneTools t);
+  /// Flies an approach step and returns the decision it asks for (target_approach.hpp).
+  Decision follow(const ApproachStep& step, AirborneTools t);
   /// The next shelf: FindShelf for it, `event` the phase change's.
-  void next_shelf(const std::string& event, AirborneTools t);
-  void start_transfer(AirborneTools t);
+  Transition next_shelf(const std::string& event, AirborneTools t);
   /// On each state record in Transfer: the next waypoint once within waypoint_tolerance_m,
   /// then the P law toward it, heading held on the shelf normal (guidance.hpp,
   /// transfer_velocity).
-  void transfer(AirborneTools t);
+  Decision transfer(AirborneTools t);
   bool last_shelf() const { return shelf_ + 1 >= config_.layout.shelf_count; }
 
   const FlightConfig& config_;
@@ -93,6 +105,7 @@ class AirbornePhases {
   TargetApproach approach_;  ///< the target, its approach, the crossing gate
   CellCrossing crossing_;    ///< the crossing's height hold, watch and end
   int shelf_ = 0;
+  Pending pending_;
 };
 
 }  // namespace shelfcross::flight_sw

@@ -1,6 +1,7 @@
 #include "flight_sw/mission/flight_software.hpp"
 
 #include <algorithm>
+#include <utility>
 
 namespace shelfcross::flight_sw {
 
@@ -9,11 +10,6 @@ namespace {
 FlightConfig validated(FlightConfig c) {
   validate_flight_config(c);
   return c;
-}
-
-// A unit's decided transition, if any, entered through the mission's one `enter`.
-void take(Mission& mission, const std::optional<Transition>& t) {
-  if (t) mission.enter(t->phase, t->event);
 }
 
 }  // namespace
@@ -51,7 +47,7 @@ std::vector<SdkCommand> FlightSoftware::step(const Input& input) {
       [this](const auto& m) {
         using T = std::decay_t<decltype(m)>;
         if constexpr (std::is_same_v<T, SdkReply>) {
-          take(*this, commands_.on_reply(m, facts_));
+          take(decided(commands_.on_reply(m, facts_)));
         } else if constexpr (std::is_same_v<T, StateRecord>) {
           facts_.on_state(m);
           sticks_.on_state(m);
@@ -60,14 +56,14 @@ std::vector<SdkCommand> FlightSoftware::step(const Input& input) {
           if (const std::optional<StickAxis> axis = response.engaged()) {
             facts_.telemetry.event = stick_scaling_event(*axis, response);
           }
-          shelves_.on_state(m, {facts_, sticks_, *this});
+          take(shelves_.on_state(m, {facts_, sticks_}));
         } else if constexpr (std::is_same_v<T, CameraFrame>) {
           on_frame(m);
         }
         // ClockTick: only the timers below.
       },
       input);
-  take(*this, commands_.check_timeout(facts_));
+  take(decided(commands_.check_timeout(facts_)));
   if (facts_.phase.current() != Phase::Done) supervise();
   commands_.poll(facts_.now_ns, out_);
   facts_.telemetry.phase = facts_.phase.current();
@@ -86,12 +82,12 @@ void FlightSoftware::on_frame(const CameraFrame& f) {
   if (!pic.decides && pic.damage_events > config_->perception.steer_max_damage_events) {
     ++facts_.telemetry.link.unflown_frames;
     if (vision_phase(facts_.phase.current())) shelves_.hold_or_hover(facts_, sticks_);
-    if (facts_.phase.current() == Phase::WaitVideo) take(*this, commands_.take_off_if_ready(facts_));
+    if (facts_.phase.current() == Phase::WaitVideo) take(decided(commands_.take_off_if_ready(facts_)));
     else emit_rc(false);
     return;
   }
-  if (facts_.phase.current() == Phase::WaitVideo) return take(*this, commands_.take_off_if_ready(facts_));
-  shelves_.on_picture(pic, {facts_, sticks_, *this});
+  if (facts_.phase.current() == Phase::WaitVideo) return take(decided(commands_.take_off_if_ready(facts_)));
+  take(shelves_.on_picture(pic, {facts_, sticks_}), &pic);
   sticks_.controlled(facts_.now_ns);
   emit_rc(false);
 }
@@ -100,17 +96,20 @@ void FlightSoftware::on_frame(const CameraFrame& f) {
 
 void FlightSoftware::supervise() {
   // WaitVideo's and Land's timers; the other ground phases have none but their commands'.
-  if (!airborne(facts_.phase.current())) return take(*this, commands_.supervise(facts_));
+  if (!airborne(facts_.phase.current())) return take(decided(commands_.supervise(facts_)));
   // The airborne phases' own timers, then the mission's failsafes.
-  if (shelves_.supervise({facts_, sticks_, *this})) return;
+  Decision timers = shelves_.supervise({facts_, sticks_});
+  const bool supervised = timers.supervised;
+  take(std::move(timers));
+  if (supervised) return;
   // Low battery: land now, except in the crossing (finish it, then land beyond the shelf).
   if (facts_.phase.current() != Phase::Cross && facts_.state && facts_.state->battery_pct < config_->mission.low_battery_pct) {
-    return land(Outcome::Aborted, "low battery (" + std::to_string(facts_.state->battery_pct) + "%)");
+    return take({.change = Landing{Outcome::Aborted, "low battery (" + std::to_string(facts_.state->battery_pct) + "%)"}});
   }
   // Video stall: the timers run on whatever input arrives (state records at 10 Hz).
   if (vision_phase(facts_.phase.current())) {
     const VideoStall stall = video_.stall(facts_);
-    if (stall == VideoStall::Land) return land(Outcome::Aborted, "video lost");
+    if (stall == VideoStall::Land) return take({.change = Landing{Outcome::Aborted, "video lost"}});
     if (stall == VideoStall::Hover) {
       sticks_.hover();
       emit_rc(true);
@@ -120,7 +119,28 @@ void FlightSoftware::supervise() {
   if (sticks_.keepalive_due(facts_.now_ns)) emit_rc(true);
 }
 
-// ---- Transitions ----
+// ---- Decisions and transitions ----
+
+void FlightSoftware::take(Decision d, const Picture* pic) {
+  RcSend rc = RcSend::None;
+  for (;;) {
+    rc = std::max(rc, d.rc);
+    if (const Landing* landing = d.landing()) {
+      // Sticks to zero before "land": no rc goes out while a command is outstanding, so if
+      // "land" is lost the Tello would keep the last sticks (the crossing speed, say) until the
+      // retry.
+      sticks_.hover();
+      emit_rc(true);
+      commands_.landing(landing->outcome, landing->reason);
+      enter(Phase::Land, "landing: " + landing->reason);
+    } else if (const Transition* transition = d.transition()) {
+      enter(transition->phase, transition->event);
+    }
+    if (!d.resume) break;
+    d = shelves_.resume({facts_, sticks_}, pic);
+  }
+  if (rc != RcSend::None) emit_rc(rc == RcSend::Now);
+}
 
 // Every transition passes here: the table (mission/phases.cpp) says which are allowed; what
 // every phase's start clears, then the phase's own entry (the SDK command it asks for).
@@ -143,15 +163,6 @@ void FlightSoftware::enter(Phase p, const std::string& event) {
     case Phase::Land: return commands_.ask("land", to.land_reply_s);
     default: return;
   }
-}
-
-void FlightSoftware::land(Outcome outcome, const std::string& reason) {
-  // Sticks to zero before "land": no rc goes out while a command is outstanding, so if "land"
-  // is lost the Tello would keep the last sticks (the crossing speed, say) until the retry.
-  sticks_.hover();
-  emit_rc(true);
-  commands_.landing(outcome, reason);
-  enter(Phase::Land, "landing: " + reason);
 }
 
 void FlightSoftware::emit_rc(bool force) {

@@ -130,8 +130,8 @@ struct ClockTick {
 
 using Input = std::variant<CameraFrame, StateRecord, SdkReply, ClockTick>;
 
-/// The mission (mission.hpp): the phases' units take their transitions through it.
-class FlightSoftware final : private Mission {
+/// The mission: the phases' units return their decisions (mission.hpp) and it takes them.
+class FlightSoftware final {
  public:
   /// Throws std::invalid_argument for an invalid configuration (validate_flight_config).
   explicit FlightSoftware(FlightConfig config);
@@ -157,10 +157,17 @@ class FlightSoftware final : private Mission {
   const FlightConfig& config() const { return *config_; }
 
  private:
-  // The transitions (Mission): every phase entered in one place, `enter`
-  void enter(Phase phase, const std::string& event) override;
-  void land(Outcome outcome, const std::string& reason) override;
-  void emit_rc(bool force) override;
+  // The decisions: every one taken in one place, `take`; every phase entered in one, `enter`
+  /// Takes a unit's decision (Decision, mission.hpp), and the rest of the airborne step it
+  /// resumes, `pic` the picture the step had (if it was one's).
+  void take(Decision decision, const Picture* pic = nullptr);
+  /// Enters `phase`, `event` written to the telemetry: every phase's start clears its timers
+  /// and restarts the PI loops, then the phase's own entry (the SDK command it asks for).
+  /// Throws std::logic_error on a transition the table (mission/phases.cpp) lacks.
+  void enter(Phase phase, const std::string& event);
+  /// Sends the sticks flown when an rc datagram is due (`force`: now), airborne and with no
+  /// non-rc command outstanding; otherwise nothing.
+  void emit_rc(bool force);
   // Pictures and timers (replies and state records: `step` hands them to the units)
   void on_frame(const CameraFrame& frame);
   void supervise();

@@ -1,12 +1,14 @@
 #pragma once
-// How the mission ends (Outcome, MissionResult), the transition a unit's step decides
-// (Transition), and what the airborne units still ask of the mission in the middle of a step
-// (Mission: a phase entered, a landing, the rc sent). FlightSoftware is the mission
-// (flight_software.hpp): every phase is entered in one place, FlightSoftware::enter. The command
-// phases (command_phases.hpp) return their transition and the mission takes it; the airborne
-// phases (airborne_phases.hpp) call the mission where their step changes the phase.
+// How the mission ends (Outcome, MissionResult), and what a unit's step decides: a transition
+// (Transition), a landing (Landing), the rc to send (Decision). FlightSoftware is the mission
+// (flight_software.hpp): it takes every decision in one place, and every phase is entered
+// there (FlightSoftware::enter). The command phases (command_phases.hpp) return their
+// transition, the airborne phases (airborne_phases.hpp) their Decision; none calls the
+// mission back.
 
+#include <optional>
 #include <string>
+#include <variant>
 
 #include "flight_sw/mission/phases.hpp"
 
@@ -35,22 +37,39 @@ struct MissionResult {
   bool landed = false;  ///< a land command was acknowledged (false if it never took off)
 };
 
-/// The mission as its units see it: the transitions they take and the rc they send mid-step.
-class Mission {
- public:
-  /// Enters `phase`, `event` written to the telemetry: every phase's start clears its timers
-  /// and restarts the PI loops, then the phase's own entry (the SDK command it asks for).
-  /// Throws std::logic_error on a transition the table (mission/phases.cpp) lacks.
-  virtual void enter(Phase phase, const std::string& event) = 0;
-  /// Zero sticks sent at once (no rc goes out while `land` is outstanding), then Land, the
-  /// mission to end in `outcome` with `reason` once down.
-  virtual void land(Outcome outcome, const std::string& reason) = 0;
-  /// Sends the sticks flown when an rc datagram is due (`force`: now), airborne and with no
-  /// non-rc command outstanding; otherwise nothing.
-  virtual void emit_rc(bool force) = 0;
-
- protected:
-  ~Mission() = default;
+/// A landing decided: zero sticks sent at once (no rc goes out while `land` is outstanding),
+/// then Land, the mission to end in `outcome` with `reason` once down.
+struct Landing {
+  Outcome outcome = Outcome::Aborted;
+  std::string reason;
+  bool operator==(const Landing&) const = default;
 };
+
+/// The rc datagram a step asks for once its decision is taken: none, when due, or now.
+enum class RcSend { None, Due, Now };
+
+/// What an airborne step decided, taken by the mission (FlightSoftware::take) in this order:
+/// the landing or the transition; then, where `resume` says so, the rest of the step in the
+/// phase entered (AirbornePhases::resume, whose decision is taken the same way); then the rc
+/// (the most urgent asked along the way). Sent only airborne with no non-rc command
+/// outstanding.
+struct Decision {
+  std::variant<std::monostate, Transition, Landing> change;
+  bool resume = false;          ///< the step goes on once `change` is taken
+  RcSend rc = RcSend::None;
+  /// The airborne phases' timers (AirbornePhases::supervise) handled this input: the
+  /// mission's own failsafes do not run after them.
+  bool supervised = false;
+
+  const Transition* transition() const { return std::get_if<Transition>(&change); }
+  const Landing* landing() const { return std::get_if<Landing>(&change); }
+};
+
+/// A transition returned by a unit (or none), as a decision.
+inline Decision decided(const std::optional<Transition>& t) {
+  Decision d;
+  if (t) d.change = *t;
+  return d;
+}
 
 }  // namespace shelfcross::flight_sw

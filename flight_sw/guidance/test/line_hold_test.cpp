@@ -12,10 +12,13 @@
 
 #include "flight_sw/guidance/crossing_law.hpp"
 #include "flight_sw/guidance/line_hold.hpp"
+#include "flight_sw/test/state_clock.hpp"
 #include "shelfcross/rotation.hpp"
 
 namespace shelfcross::flight_sw {
 namespace {
+
+using testing::state_record_ns;
 
 constexpr double kFrameHz = 30.0;
 
@@ -70,20 +73,19 @@ TEST(HeadingStretch, HoldsOneDegreeOfFlickerAndEndsOnATurn) {
   constexpr double kDeg = deg_to_rad(1.0);  // one degree
   const ApproachParams a = FlightConfig{}.mission.approach;
   HeadingStretch h(a.settle_heading_band_rad, a.settle_s);
-  const auto at = [](int k) { return static_cast<TimeNs>(k) * 100'000'000; };  // 10 Hz
   EXPECT_EQ(h.since_ns(), 0);
-  for (int k = 1; k <= 30; ++k) h.on_state(at(k), (12 + k % 2) * kDeg);  // 12, 13, 12, ... degrees
-  EXPECT_EQ(h.since_ns(), at(1));
-  h.on_state(at(31), 14 * kDeg);  // two degrees above the 12s: the stretch starts after the last 12
-  EXPECT_EQ(h.since_ns(), at(31));
-  h.on_state(at(32), 13 * kDeg);
-  EXPECT_EQ(h.since_ns(), at(31));
-  for (int k = 33; k <= 45; ++k) h.on_state(at(k), (14 + 0.05 * 0.1 * (k - 32) / kDeg) * kDeg);  // 0.05 rad/s
-  EXPECT_GT(h.since_ns(), at(33));
-  EXPECT_LE(h.since_ns(), at(45));
+  for (int k = 1; k <= 30; ++k) h.on_state(state_record_ns(k), (12 + k % 2) * kDeg);  // 12, 13, 12, ... degrees
+  EXPECT_EQ(h.since_ns(), state_record_ns(1));
+  h.on_state(state_record_ns(31), 14 * kDeg);  // two degrees above the 12s: the stretch starts after the last 12
+  EXPECT_EQ(h.since_ns(), state_record_ns(31));
+  h.on_state(state_record_ns(32), 13 * kDeg);
+  EXPECT_EQ(h.since_ns(), state_record_ns(31));
+  for (int k = 33; k <= 45; ++k) h.on_state(state_record_ns(k), (14 + 0.05 * 0.1 * (k - 32) / kDeg) * kDeg);  // 0.05 rad/s
+  EXPECT_GT(h.since_ns(), state_record_ns(33));
+  EXPECT_LE(h.since_ns(), state_record_ns(45));
   HeadingStretch w(a.settle_heading_band_rad, a.settle_s);
-  for (int k = 1; k <= 10; ++k) w.on_state(at(k), (k % 2 ? 180 : -179.5) * kDeg);
-  EXPECT_EQ(w.since_ns(), at(1));
+  for (int k = 1; k <= 10; ++k) w.on_state(state_record_ns(k), (k % 2 ? 180 : -179.5) * kDeg);
+  EXPECT_EQ(w.since_ns(), state_record_ns(1));
 }
 
 // A gap in the state records longer than settle_s ends the stretch, whatever the yaw after it:
@@ -91,16 +93,15 @@ TEST(HeadingStretch, HoldsOneDegreeOfFlickerAndEndsOnATurn) {
 TEST(HeadingStretch, AGapLongerThanTheSettleTimeEndsTheStretch) {
   const ApproachParams a = FlightConfig{}.mission.approach;
   HeadingStretch h(a.settle_heading_band_rad, a.settle_s);
-  const auto at = [](int k) { return static_cast<TimeNs>(k) * 100'000'000; };  // 10 Hz
-  for (int k = 1; k <= 20; ++k) h.on_state(at(k), 0.2);
-  h.on_state(at(31), 0.2);  // 1.1 s without a record: the stretch goes on
-  EXPECT_EQ(h.since_ns(), at(1));
-  h.on_state(at(44), 0.2);  // 1.3 s: it starts anew at the record after the gap
-  EXPECT_EQ(h.since_ns(), at(44));
-  h.on_state(at(45), 0.2);
-  EXPECT_EQ(h.since_ns(), at(44));
-  h.on_state(at(45 + 70), 0.2);  // longer than the 5 s the stretch keeps: anew as well
-  EXPECT_EQ(h.since_ns(), at(45 + 70));
+  for (int k = 1; k <= 20; ++k) h.on_state(state_record_ns(k), 0.2);
+  h.on_state(state_record_ns(31), 0.2);  // 1.1 s without a record: the stretch goes on
+  EXPECT_EQ(h.since_ns(), state_record_ns(1));
+  h.on_state(state_record_ns(44), 0.2);  // 1.3 s: it starts anew at the record after the gap
+  EXPECT_EQ(h.since_ns(), state_record_ns(44));
+  h.on_state(state_record_ns(45), 0.2);
+  EXPECT_EQ(h.since_ns(), state_record_ns(44));
+  h.on_state(state_record_ns(45 + 70), 0.2);  // longer than the 5 s the stretch keeps: anew as well
+  EXPECT_EQ(h.since_ns(), state_record_ns(45 + 70));
 }
 
 // A calm hover: the pose noise of a few millimetres, the state still. The forecast is a
@@ -188,13 +189,12 @@ TEST(LineHold, AnOffsetThatLeavesNoRoomIsNotBlamedOnTheAir) {
 // reason names the air; the wide column's 16.4 cm still does. The memory forgets what is
 // older than kAirMemory_s, and measures nothing on fewer than kAirMinRecords.
 TEST(LineHold, GustyAirRememberedRefusesTheNarrowColumnOnACalmWindow) {
-  const auto at = [](int k) { return static_cast<TimeNs>(k) * 100'000'000; };  // 10 Hz
   AirMemory few;
-  for (int k = 0; k < kAirMinRecords - 1; ++k) few.on_state(at(k), 0.1);
-  EXPECT_EQ(few.rms_mps(at(kAirMinRecords - 1)), 0.0);
+  for (int k = 0; k < kAirMinRecords - 1; ++k) few.on_state(state_record_ns(k), 0.1);
+  EXPECT_EQ(few.rms_mps(state_record_ns(kAirMinRecords - 1)), 0.0);
   AirMemory air;
-  for (int k = 0; k < 200; ++k) air.on_state(at(k), k % 10 < 4 ? ((k / 10) % 2 ? 0.1 : -0.1) : 0.0);
-  const double sigma = air.rms_mps(at(199));
+  for (int k = 0; k < 200; ++k) air.on_state(state_record_ns(k), k % 10 < 4 ? ((k / 10) % 2 ? 0.1 : -0.1) : 0.0);
+  const double sigma = air.rms_mps(state_record_ns(199));
   EXPECT_NEAR(sigma, 0.1 * std::sqrt(0.3), 1e-3);
 
   LineHoldMonitor m;
@@ -214,8 +214,8 @@ TEST(LineHold, GustyAirRememberedRefusesTheNarrowColumnOnACalmWindow) {
   EXPECT_FALSE(gate_with(f, {2, 2}).has_value()) << *gate_with(f, {2, 2});
 
   // 20 s of calm records later the gusts are forgotten: calm air reads 0.
-  for (int k = 200; k < 400; ++k) air.on_state(at(k), 0.0);
-  EXPECT_EQ(air.rms_mps(at(400)), 0.0);
+  for (int k = 200; k < 400; ++k) air.on_state(state_record_ns(k), 0.0);
+  EXPECT_EQ(air.rms_mps(state_record_ns(400)), 0.0);
 }
 
 // White noise of sd_mps on a reading, from a fixed seed (Box-Muller on the portable engine).
@@ -302,12 +302,11 @@ TEST(LineHold, TheGateKeepsTheSeparationMinimumPlusTheForecastsError) {
   // The air's error: 200 records of a 0.4 s gust in ten, as above, measure sigma_v to a few
   // millimetres a second; its reach's error enters the forecast's.
   AirMemory air;
-  const auto at = [](int k) { return static_cast<TimeNs>(k) * 100'000'000; };
-  for (int k = 0; k < 200; ++k) air.on_state(at(k), k % 10 < 4 ? ((k / 10) % 2 ? 0.1 : -0.1) : 0.0);
+  for (int k = 0; k < 200; ++k) air.on_state(state_record_ns(k), k % 10 < 4 ? ((k / 10) % 2 ? 0.1 : -0.1) : 0.0);
   LineWander w;
   w.poses = 30, w.measured = 30, w.span_s = 2.5;
-  w.air_rms_mps = air.rms_mps(at(199));
-  w.air_error_mps = air.error_mps(at(199));
+  w.air_rms_mps = air.rms_mps(state_record_ns(199));
+  w.air_error_mps = air.error_mps(state_record_ns(199));
   EXPECT_GT(w.air_error_mps, 0.001);
   EXPECT_LT(w.air_error_mps, 0.01);
   const LineHoldForecast g = forecast_line_hold(config.mission, w, blind_s());

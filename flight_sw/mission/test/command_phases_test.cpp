@@ -1,7 +1,10 @@
 // The command phases alone (command_phases.hpp): the SDK's replies, their loss and the state
-// height in, the transition each step decides out, with no FlightSoftware around them.
+// height in, the transition each step decides out, with no FlightSoftware around them; then
+// the same decisions flown through FlightSoftware against the kinematic vehicle
+// (flight_harness.hpp): the takeoff's and the landing's replies refused or lost.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <optional>
 #include <string>
 #include <vector>
@@ -9,10 +12,15 @@
 #include "flight_sw/config.hpp"
 #include "flight_sw/mission/command_phases.hpp"
 #include "flight_sw/mission/facts.hpp"
+#include "flight_sw/mission/test/flight_harness.hpp"
 #include "shelfcross/time.hpp"
 
 namespace shelfcross::flight_sw {
 namespace {
+
+using testing::FrameStep;
+using testing::Harness;
+using testing::Options;
 
 // A CommandPhases in a phase, with the clock of its inputs: `ask` sends the phase's command
 // at once, `reply` answers it, `later` moves the clock without an input.
@@ -169,6 +177,133 @@ TEST_F(CommandPhasesTest, LandRefusedInTheAirIsAskedAgainAfterAWaitAndEndsOnTheS
   EXPECT_EQ(phases_.supervise(facts_), (Transition{Phase::Done, "landed (no `ok` yet: the state height says on the ground)"}));
   EXPECT_EQ(phases_.result().outcome, Outcome::Aborted);
   EXPECT_TRUE(phases_.result().landed);
+}
+
+// ---- Through FlightSoftware: the kinematic vehicle (flight_harness.hpp) ----
+
+TEST(FlightSoftware, TakeoffRefusedIsRetriedThenGivenUpOnTheGround) {
+  Options o;
+  o.takeoff_replies = {"error No valid imu"};
+  o.blank_frames = true;
+  Harness h(o);
+  h.run(60.0);
+  const auto cmds = h.non_rc();
+  EXPECT_EQ(std::count(cmds.begin(), cmds.end(), "takeoff"), 4);  // 1 + 3 retries
+  EXPECT_EQ(std::count(cmds.begin(), cmds.end(), "land"), 0);
+  ASSERT_TRUE(h.fsw().finished());
+  EXPECT_EQ(h.fsw().result().outcome, Outcome::Aborted);
+  EXPECT_FALSE(h.fsw().result().landed);
+  EXPECT_NE(h.fsw().result().reason.find("takeoff failed"), std::string::npos);
+  // ... once the state height has stayed low 3 s after the last refusal (no takeoff under way).
+  EXPECT_GT(h.now(), h.sent("takeoff").back() + 3 * kNsPerSecond);
+}
+
+// Every `takeoff` refused while the drone climbs (a duplicated datagram took off): the flight
+// software watches the state height instead of saying it stayed on the ground, and flies on
+// once the climb has ended, not in it.
+TEST(FlightSoftware, TakeoffRefusedWhileTakingOffIsSeenInTheStateHeight) {
+  Options o;
+  o.takeoff_duplicated = true;
+  o.blank_frames = true;
+  o.start_W_m.z() = 0.0;
+  Harness h(o);
+  h.run(10.0);
+  const auto cmds = h.non_rc();
+  EXPECT_EQ(std::count(cmds.begin(), cmds.end(), "takeoff"), 4);  // 1 + 3 retries, all refused
+  EXPECT_EQ(std::count(cmds.begin(), cmds.end(), "land"), 0);
+  EXPECT_FALSE(h.fsw().finished());
+  EXPECT_EQ(h.fsw().phase(), Phase::FindShelf);
+  // Up at 1 m only 1 s + 1 m / 0.45 m/s after the first `takeoff`: no phase of flight before.
+  const TimeNs up_ns = h.sent("takeoff").front() + 1000 * kMs + seconds_to_ns(1.0 / 0.45);
+  for (const FrameStep& st : h.frame_steps()) {
+    if (st.t_ns < up_ns) {
+      EXPECT_EQ(st.after, Phase::TakeOff) << "at " << ns_to_seconds(st.t_ns) << " s";
+    }
+  }
+}
+
+TEST(FlightSoftware, TakeoffRetriedAfterAnErrorThenFlies) {
+  Options o;
+  o.takeoff_replies = {"error", "ok"};
+  o.blank_frames = true;
+  Harness h(o);
+  h.run(8.0);
+  const auto cmds = h.non_rc();
+  EXPECT_EQ(std::count(cmds.begin(), cmds.end(), "takeoff"), 2);
+  EXPECT_EQ(h.fsw().phase(), Phase::FindShelf);
+}
+
+TEST(FlightSoftware, LostTakeoffReplyCountsWhenTheHeightSaysAirborne) {
+  Options o;
+  o.takeoff_replies = {""};  // the drone took off but the reply never came
+  o.blank_frames = true;
+  Harness h(o);
+  h.run(1.0);
+  // Airborne in the harness only with an "ok": set the height by hand through a state record.
+  FlightSoftware& fsw = h.fsw();
+  EXPECT_EQ(fsw.phase(), Phase::TakeOff);
+  StateRecord s;
+  s.t_ns = h.now() + 19 * kNsPerSecond;
+  s.height_m = 0.9;
+  fsw.step(s);
+  s.t_ns += 2 * kNsPerSecond;  // past the 20 s reply timeout
+  fsw.step(s);
+  EXPECT_EQ(fsw.phase(), Phase::FindShelf);
+}
+
+// The `ok` of `land` is lost; the repeated `land` finds the drone on the ground and gets
+// `error` (one run in 100 of the default sdk campaign ended "land not
+// acknowledged" this way, counted an abort though the drone had crossed and landed). The state
+// height says it is down: landed, the mission's outcome kept.
+/// A whole mission whose `land` reply goes wrong as `o` says: it crossed, and it ends landed
+/// (on the ground, the outcome kept, nothing "not acknowledged").
+void expect_crossed_and_landed(Harness& h) {
+  h.run(90.0);
+  FlightSoftware& fsw = h.fsw();
+  ASSERT_TRUE(fsw.finished()) << phase_name(fsw.phase()) << ": " << fsw.telemetry().event;
+  EXPECT_EQ(fsw.result().outcome, Outcome::Crossed) << fsw.result().reason;
+  EXPECT_TRUE(fsw.result().landed);
+  EXPECT_EQ(fsw.result().reason.find("not acknowledged"), std::string::npos) << fsw.result().reason;
+  EXPECT_DOUBLE_EQ(h.position().z(), 0.0);
+}
+
+// The `ok` of `land` lost: the first fresh state record on the ground ends the landing, not
+// the reply's timeout (land_reply_s, 10 s). The drone here comes down at 1 m/s from about 1 m.
+TEST(FlightSoftware, LostLandReplyCountsWhenTheHeightSaysLanded) {
+  Options o;
+  o.land_reply = "";
+  Harness h(o);
+  expect_crossed_and_landed(h);
+  const std::vector<TimeNs> lands = h.sent("land");
+  ASSERT_EQ(lands.size(), 1u);
+  EXPECT_LT(ns_to_seconds(h.now() - lands[0]), 2.0);
+  EXPECT_EQ(h.fsw().telemetry().event, "landed (no `ok` yet: the state height says on the ground)");
+}
+
+// A duplicated `land`: the drone lands,
+// but the reply heard is the duplicate's `error`. Retrying at once spent the three retries in
+// 0.4 s, each refused by the landing drone, and the flight software ended "land not
+// acknowledged" in the air (tello_pilot's failsafe took over; the run counted an abort). The
+// refusal is waited out by the state height: landed, the crossing's outcome kept, and `land`
+// asked again no faster than every 0.5 s meanwhile.
+TEST(FlightSoftware, LandRefusedWhileLandingWaitsForTheStateHeight) {
+  Options o;
+  o.land_duplicated = true;
+  Harness h(o);
+  expect_crossed_and_landed(h);
+  const std::vector<TimeNs> lands = h.sent("land");
+  ASSERT_GE(lands.size(), 1u);
+  for (size_t i = 1; i < lands.size(); ++i) EXPECT_GE(lands[i] - lands[i - 1], 500 * kMs);
+}
+
+TEST(FlightSoftware, LowBatteryBeforeTakeoffStaysOnTheGround) {
+  Options o;
+  o.battery = [](TimeNs) { return 20; };
+  Harness h(o);
+  h.run(5.0);
+  ASSERT_TRUE(h.fsw().finished());
+  EXPECT_EQ(h.non_rc(), (std::vector<std::string>{"command", "streamon"}));
+  EXPECT_EQ(h.fsw().result().outcome, Outcome::Aborted);
 }
 
 }  // namespace

@@ -1,7 +1,9 @@
-// The mission room's units alone (video_intake.hpp, transfer_flight.hpp): inputs in, what the
-// unit decides out, with no FlightSoftware around them.
+// The mission room's units alone (video_intake.hpp, transfer_flight.hpp, cell_crossing.hpp):
+// inputs in, what the unit decides out, with no FlightSoftware around them; then the video's
+// stall flown through FlightSoftware against the kinematic vehicle (flight_harness.hpp).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <optional>
 
 #include <opencv2/core.hpp>
@@ -9,12 +11,19 @@
 #include "flight_sw/config.hpp"
 #include "flight_sw/mission/cell_crossing.hpp"
 #include "flight_sw/mission/facts.hpp"
+#include "flight_sw/mission/test/flight_harness.hpp"
 #include "flight_sw/mission/transfer_flight.hpp"
 #include "flight_sw/mission/video_intake.hpp"
+#include "flight_sw/test/state_clock.hpp"
 #include "shelfcross/time.hpp"
 
 namespace shelfcross::flight_sw {
 namespace {
+
+using testing::Harness;
+using testing::Options;
+
+using testing::state_record_ns;
 
 CameraFrame frame(const FlightConfig& c, int damage_events = 0, std::vector<RowSpan> rows = {}) {
   CameraFrame f;
@@ -191,7 +200,7 @@ TEST(CellCrossing, StopsADriftSeenBeforeTheCellAndFliesOnPastThatPoint) {
   facts.on_state(state_at(0, 0.4, 0.0, 1.0));
   EXPECT_FALSE(crossing.watch(state_at(0, 0.4, 0.0, 1.0), facts));
   // Drifting sideways at 0.2 m/s: carried 10 cm across within the lag, past the 5 cm slack.
-  const StateRecord drifting = state_at(100 * kMs, 0.0, 0.2, 1.0);
+  const StateRecord drifting = state_at(state_record_ns(1), 0.0, 0.2, 1.0);
   facts.on_state(drifting);
   const std::optional<CrossingStop> stop = crossing.watch(drifting, facts);
   ASSERT_TRUE(stop);
@@ -210,12 +219,12 @@ TEST(CellCrossing, EndsWhenTheOdometryHasFlownTheLine) {
   CellCrossing crossing(c);
   crossing.begin(straight_crossing(), 0);
   MissionFacts facts;
-  for (int k = 0; k <= 19; ++k) facts.on_state(state_at(k * 100 * kMs, 1.0, 0.0, 1.0));
+  for (int k = 0; k <= 19; ++k) facts.on_state(state_at(state_record_ns(k), 1.0, 0.0, 1.0));
   facts.now_ns = 1900 * kMs;
   EXPECT_FALSE(crossing.flown(facts.now_ns, facts));  // 1.9 m of 2
   facts.on_state(state_at(2000 * kMs, 1.0, 0.0, 1.0));
-  facts.on_state(state_at(2100 * kMs, 1.0, 0.0, 1.0));
-  facts.now_ns = 2100 * kMs;
+  facts.on_state(state_at(state_record_ns(21), 1.0, 0.0, 1.0));
+  facts.now_ns = state_record_ns(21);
   EXPECT_TRUE(crossing.flown(facts.now_ns, facts));  // 2.1 m
 }
 
@@ -230,7 +239,7 @@ TEST(CellCrossing, HoldsTheHeightAHoldFollowingTheRangeHidesFromH) {
   MissionFacts facts;
   double climb = 0.0;
   for (int k = 0; k <= 9; ++k) {
-    StateRecord s = state_at(k * 100 * kMs, 0.4, 0.0, 1.0);
+    StateRecord s = state_at(state_record_ns(k), 0.4, 0.0, 1.0);
     if (k > 5) climb += 0.05;
     s.vz_H_mps = k > 5 ? 0.5 : 0.0;
     s.tof_m = (k >= 5 ? 0.4 : 1.0) + climb;
@@ -243,7 +252,7 @@ TEST(CellCrossing, HoldsTheHeightAHoldFollowingTheRangeHidesFromH) {
   CellCrossing fused(c);
   fused.begin(straight_crossing(), 0);
   for (int k = 0; k <= 9; ++k) {
-    StateRecord s = state_at(k * 100 * kMs, 0.4, 0.0, 1.0);
+    StateRecord s = state_at(state_record_ns(k), 0.4, 0.0, 1.0);
     s.tof_m = k >= 5 ? 0.4 : 1.0;
     fused.on_state(s, facts);
   }
@@ -261,7 +270,7 @@ TEST(CellCrossing, WithTheVpsLostFliesTheRestAtTheSpeedItReadAndIsNeverStopped) 
   crossing.begin(straight_crossing(), 0);
   MissionFacts facts;
   const auto record = [&](int k) {
-    const StateRecord s = state_at(k * 100 * kMs, k <= 10 ? 0.4 : 0.0, 0.0, 1.0);
+    const StateRecord s = state_at(state_record_ns(k), k <= 10 ? 0.4 : 0.0, 0.0, 1.0);
     facts.on_state(s);
     crossing.on_state(s, facts);
     facts.now_ns = s.t_ns;
@@ -278,13 +287,13 @@ TEST(CellCrossing, WithTheVpsLostFliesTheRestAtTheSpeedItReadAndIsNeverStopped) 
   late.begin(straight_crossing(), 0);
   MissionFacts f;
   for (int k = 0; k <= 30; ++k) {
-    const StateRecord s = state_at(k * 100 * kMs, k <= 10 ? 0.4 : 0.0, 0.0, 1.0);
+    const StateRecord s = state_at(state_record_ns(k), k <= 10 ? 0.4 : 0.0, 0.0, 1.0);
     f.on_state(s);
     late.on_state(s, f);
   }
   f.now_ns = 4900 * kMs;
   EXPECT_FALSE(late.flown(f.now_ns, f));
-  f.now_ns = 5100 * kMs;
+  f.now_ns = state_record_ns(51);
   EXPECT_TRUE(late.flown(f.now_ns, f));
 }
 
@@ -296,7 +305,7 @@ TEST(CellCrossing, WithTheVpsNeverReadEndsByItsTiming) {
   crossing.begin(straight_crossing(), 0);
   MissionFacts facts;
   for (int k = 0; k <= 99; ++k) {
-    const StateRecord s = state_at(k * 100 * kMs, 0.0, 0.0, 1.0);
+    const StateRecord s = state_at(state_record_ns(k), 0.0, 0.0, 1.0);
     facts.on_state(s);
     crossing.on_state(s, facts);
   }
@@ -305,6 +314,35 @@ TEST(CellCrossing, WithTheVpsNeverReadEndsByItsTiming) {
   facts.on_state(state_at(10 * kNsPerSecond, 0.0, 0.0, 1.0));
   facts.now_ns = 10 * kNsPerSecond;
   EXPECT_TRUE(crossing.flown(facts.now_ns, facts));
+}
+
+// ---- Through FlightSoftware: the kinematic vehicle (flight_harness.hpp) ----
+
+TEST(FlightSoftware, VideoStallHoversThenLands) {
+  Options o;
+  o.blank_frames = true;
+  o.frames_on = [](TimeNs t) { return t < 4 * kNsPerSecond; };
+  Harness h(o);
+  h.run(20.0);
+  ASSERT_TRUE(h.fsw().finished());
+  EXPECT_EQ(h.fsw().result().reason, "video lost");
+  EXPECT_TRUE(h.fsw().result().landed);
+  // The last frame came at < 4 s: hover (rc 0 0 0 0) sent from a state record 0.5 s later,
+  // land 3 s later, nothing but hover in between.
+  TimeNs hover_t = -1, land_t = -1;
+  for (const auto& c : h.commands()) {
+    if (c.t_ns > 4 * kNsPerSecond && hover_t < 0 && c.text.rfind("rc", 0) == 0) {
+      EXPECT_EQ(c.text, "rc 0 0 0 0");
+      hover_t = c.t_ns;
+    }
+    if (c.text == "land") land_t = c.t_ns;
+    if (c.t_ns > 4 * kNsPerSecond && c.text.rfind("rc", 0) == 0) {
+      EXPECT_EQ(c.text, "rc 0 0 0 0");
+    }
+  }
+  const double last_frame_s = std::floor(4.0 * 15 - 1e-9) / 15.0;
+  EXPECT_NEAR(ns_to_seconds(hover_t) - last_frame_s, 0.5, 0.1 + 1e-9);
+  EXPECT_NEAR(ns_to_seconds(land_t) - last_frame_s, 3.0, 0.1 + 1e-9);
 }
 
 }  // namespace

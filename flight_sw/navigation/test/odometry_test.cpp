@@ -5,10 +5,13 @@
 #include <numbers>
 
 #include "flight_sw/navigation/odometry.hpp"
+#include "flight_sw/test/state_clock.hpp"
 #include "shelfcross/time.hpp"
 
 namespace shelfcross::flight_sw {
 namespace {
+
+using testing::state_record_ns;
 
 StateRecord record(TimeNs t_ns, double vx_H_mps, double vy_H_mps, double yaw_rad, double height_m = 1.0,
                    double vz_H_mps = 0.0) {
@@ -25,7 +28,7 @@ StateRecord record(TimeNs t_ns, double vx_H_mps, double vy_H_mps, double yaw_rad
 TEST(StateOdometry, IntegratesTheHeadingFrameVelocityTurnedByTheYaw) {
   StateOdometry o;
   // Heading 90 deg left: forward in H is +y in O. Ten records 0.1 s apart at 0.5 m/s.
-  for (int k = 0; k <= 10; ++k) o.on_state(record(k * 100 * kMs, 0.5, 0.0, std::numbers::pi / 2, 1.2));
+  for (int k = 0; k <= 10; ++k) o.on_state(record(state_record_ns(k), 0.5, 0.0, std::numbers::pi / 2, 1.2));
   EXPECT_NEAR(o.p_O_m().x(), 0.0, 1e-12);
   EXPECT_NEAR(o.p_O_m().y(), 0.5, 1e-12);
   EXPECT_EQ(o.p_O_m().z(), 1.2);  // the state height

@@ -8,12 +8,13 @@
 
 #include "flight_sw/tello/pilot_loop.hpp"
 #include "flight_sw/tello/sdk_driver_types.hpp"
+#include "flight_sw/test/state_clock.hpp"
 
 namespace shelfcross::tello {
 namespace {
 
 constexpr TimeNs kPassNs = 20 * kMs;
-constexpr TimeNs kRecordNs = 100 * kMs;
+using flight_sw::testing::kStateRecordNs;
 
 // State records every 0.1 s from 0 to `until_s` except in [gap_from_s, gap_to_s); the
 // verdicts of passes every 20 ms, counted, and the time of the first of each.
@@ -27,7 +28,7 @@ Flight fly(LinkWatch& w, double gap_from_s, double gap_to_s, double until_s) {
   TimeNs last_state_ns = 0;
   for (TimeNs t = 0; t <= seconds_to_ns(until_s); t += kPassNs) {
     const bool in_gap = t >= seconds_to_ns(gap_from_s) && t < seconds_to_ns(gap_to_s);
-    if (t % kRecordNs == 0 && !in_gap) last_state_ns = t;
+    if (t % kStateRecordNs == 0 && !in_gap) last_state_ns = t;
     const LinkVerdict v = w.check(t, last_state_ns);
     if (f.count[v]++ == 0) f.first_ns[v] = t;
     if (v == LinkVerdict::GiveUp) break;  // the pilot loop lands
