@@ -26,7 +26,7 @@ std::optional<std::string> SdkInterpreter::on_command(TimeNs t_ns, std::string_v
   const auto parsed = sdk::parse(text);
   if (const auto* err = std::get_if<sdk::ParseError>(&parsed)) {
     // rc is never answered, even when malformed; nothing is answered outside SDK mode.
-    const bool is_rc = text.substr(0, 3) == "rc " || text == "rc";
+    const bool is_rc = sdk::is_rc_text(text);
     if (!sdk_mode_) {
       last_refusal_ = "ignored: not in SDK mode ('command' not received yet), no reply";
       return std::nullopt;

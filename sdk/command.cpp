@@ -208,6 +208,8 @@ std::string rc_text(int a, int b, int c, int d) {
   return "rc " + std::to_string(a) + " " + std::to_string(b) + " " + std::to_string(c) + " " + std::to_string(d);
 }
 
+bool is_rc_text(std::string_view text) { return text == "rc" || text.substr(0, 3) == "rc "; }
+
 TimeNs ReplyTimeouts::timeout_for(std::string_view text) const {
   if (text == "takeoff") return seconds_to_ns(takeoff_s);
   if (text == "land") return seconds_to_ns(land_s);

@@ -87,6 +87,9 @@ std::optional<CommandKind> classify_command(std::string_view text, std::string* 
 
 /// "rc a b c d" for sticks already in range (asserted).
 std::string rc_text(int a, int b, int c, int d);
+/// True when the datagram's verb is `rc` (exactly "rc", or "rc " and its arguments), whether or
+/// not its arguments parse: the Tello never answers an rc datagram, even a malformed one.
+bool is_rc_text(std::string_view text);
 
 /// A flying Tello that hears no command at all for this long lands by itself, s
 /// (docs/tello_sdk.md): the simulated Tello's watchdog and the bound on tello_pilot's riding

@@ -11,6 +11,7 @@
 #include "flight_sw/tello/link_watch.hpp"
 #include "flight_sw/tello/pilot_log.hpp"
 #include "flight_sw/tello/stick_program.hpp"
+#include "sdk/command.hpp"
 
 namespace shelfcross::tello {
 namespace {
@@ -220,7 +221,7 @@ class PilotLoop::Impl {
 
   void submit_fsw(const std::vector<SdkCommand>& commands) {
     for (const SdkCommand& c : commands) {
-      const bool rc = c.text.rfind("rc ", 0) == 0;
+      const bool rc = sdk::is_rc_text(c.text);
       const TimeNs now = clock_.now_ns();
       // No takeoff without a live state stream: the program's failsafes need it in the air
       // (and the flight software's battery check needs it before). Its own timeout retries.

@@ -118,6 +118,15 @@ TEST(SdkCommandClassify, AcceptsEveryCommandOfTheTableInRange) {
   EXPECT_EQ(rc_text(-5, 0, 100, -100), "rc -5 0 100 -100");
 }
 
+TEST(SdkCommandClassify, AnRcDatagramIsKnownByItsVerbEvenWhenItsArgumentsDoNotParse) {
+  for (const char* c : {"rc", "rc 0 0 0 0", "rc -100 100 -100 100", "rc 101 0 0 0", "rc 0 0 0", "rc x"}) {
+    EXPECT_TRUE(is_rc_text(c)) << c;
+  }
+  for (const char* c : {"", "r", "rcx 0 0 0 0", "rc0 0 0 0", " rc 0 0 0 0", "command", "speed 10"}) {
+    EXPECT_FALSE(is_rc_text(c)) << c;
+  }
+}
+
 TEST(SdkCommandClassify, RefusesOutOfRangeAndMalformedCommands) {
   for (const char* c : {"", "rc 101 0 0 0", "rc 0 0 0 -101", "rc 1.5 0 0 0", "rc 0 0 0", "rc 0 0 0 0 0",
                         "rc +1 0 0 0", "rc 01 0 0 0", "rc -0 0 0 0", "rc  0 0 0 0", "rc 0 0 0 0 ",

@@ -58,6 +58,7 @@
 #include <opencv2/core/mat.hpp>
 
 #include "flight_sw/mission/flight_software.hpp"
+#include "sdk/command.hpp"
 #include "shelfcross/cell_index.hpp"
 #include "verification/scenario/scenario.hpp"
 
@@ -199,7 +200,7 @@ class SequenceDriver {
   }
   void handle(const std::vector<SdkCommand>& commands) {
     for (const SdkCommand& c : commands) {
-      if (c.text.rfind("rc ", 0) != 0) replies_.push_back({c.t_ns + 20'000'000, "ok"});
+      if (!sdk::is_rc_text(c.text)) replies_.push_back({c.t_ns + 20'000'000, "ok"});
     }
   }
   flight_sw::FlightSoftware fsw_;
