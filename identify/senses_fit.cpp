@@ -28,15 +28,53 @@ constexpr double kRangeEdgeFraction = 0.6, kEdgeFraction = 0.2;
 // vgy in dm/s.
 constexpr double kCm = 0.01, kDm = 0.1;
 
-double lag1_correlation(const std::vector<std::vector<double>>& residuals) {
-  double num = 0.0, den = 0.0;
+// The residuals' autocorrelation at lags 1..max_lag, pooled over the series.
+std::vector<double> autocorrelations(const std::vector<std::vector<double>>& residuals, int max_lag) {
+  std::vector<double> num(static_cast<size_t>(max_lag) + 1, 0.0);
   for (const auto& r : residuals) {
     for (size_t k = 0; k < r.size(); ++k) {
-      den += r[k] * r[k];
-      if (k + 1 < r.size()) num += r[k] * r[k + 1];
+      for (size_t l = 0; l <= static_cast<size_t>(max_lag) && k + l < r.size(); ++l) num[l] += r[k] * r[k + l];
     }
   }
-  return den > 0.0 ? std::clamp(num / den, 0.0, 0.95) : 0.0;
+  std::vector<double> rho(num.size(), 0.0);
+  for (size_t l = 1; l < num.size() && num[0] > 0.0; ++l) rho[l] = num[l] / num[0];
+  return rho;
+}
+
+// The leave-one-out residuals of white readings are correlated by construction: r = W y with
+// W_kk = 1 and W_kj = -1/n_k over the record's neighbours, so Cov(r) = sigma^2 W W^T; its
+// correlations rho_ij = (W W^T)_ij / sqrt(v_i v_j), v_k = 1 + 1/n_k (lag 1 at half_window 3:
+// -0.19, all lags up to 2 half_window non-zero). Returns sum_ij rho_ij^2 over one series.
+double structural_correlation_sum(size_t size, int half_window) {
+  const int n = static_cast<int>(size), reach = 2 * half_window;
+  std::vector<int> lo(size), hi(size);
+  for (int k = 0; k < n; ++k) {
+    lo[static_cast<size_t>(k)] = std::max(0, k - half_window);
+    hi[static_cast<size_t>(k)] = std::min(n - 1, k + half_window);
+  }
+  auto weight = [&](int k, int j) {  // W_kj
+    if (j == k) return 1.0;
+    const size_t i = static_cast<size_t>(k);
+    if (j < lo[i] || j > hi[i]) return 0.0;
+    return -1.0 / (hi[i] - lo[i]);
+  };
+  auto cov = [&](int a, int b) {  // (W W^T)_ab
+    double c = 0.0;
+    for (int j = std::max(lo[static_cast<size_t>(a)], lo[static_cast<size_t>(b)]);
+         j <= std::min(hi[static_cast<size_t>(a)], hi[static_cast<size_t>(b)]); ++j) {
+      c += weight(a, j) * weight(b, j);
+    }
+    return c;
+  };
+  double sum = 0.0;
+  for (int a = 0; a < n; ++a) {
+    const double va = cov(a, a);
+    for (int b = std::max(0, a - reach); b <= std::min(n - 1, a + reach); ++b) {
+      const double c = cov(a, b);
+      sum += c * c / (va * cov(b, b));
+    }
+  }
+  return sum;
 }
 
 // The longest stretch of centred sticks while flying (seconds since the takeoff's ok).
@@ -461,8 +499,25 @@ RoundedNoise fit_rounded_noise(const std::vector<std::vector<double>>& series, d
   }
   out.sigma = 0.5 * (a + c);
   const double lmax = std::max(loglik(out.sigma), ll[best]);
-  out.rho = lag1_correlation(res);
-  const double scale = (1.0 - out.rho) / (1.0 + out.rho);
+  // The log-likelihood treats the n residuals as independent; its curvature then claims
+  // Var(sigma^2 estimate) = 2 sigma^4 / n. For Gaussian residuals of correlations rho_ij,
+  //     Var(sum_k r_k^2 / v_k) = 2 sigma^4 sum_ij rho_ij^2,
+  // so the likelihood is scaled by n_eff / n, n_eff = n^2 / sum_ij rho_ij^2 (the variance of a
+  // scatter, which squares the correlations; the mean's n (1 - rho) / (1 + rho) is not it: it
+  // ignores the negative correlation the moving mean itself makes, 1.30 times the claimed
+  // variance for white readings at half_window 3, and overstates a positive one). sum_ij
+  // rho_ij^2 is the larger of the moving mean's own (white readings, exact) and the residuals'
+  // sample autocorrelations at lags up to 2 half_window + 1 (each rho_l^2 less its 1 / n bias):
+  // a wander the mean leaves behind counts through the latter.
+  const int max_lag = 2 * half_window + 1;
+  const std::vector<double> rho = autocorrelations(res, max_lag);
+  out.rho = std::max(0.0, rho[1]);
+  double structural = 0.0, sample = static_cast<double>(out.n);
+  for (const auto& r : res) structural += structural_correlation_sum(r.size(), half_window);
+  for (int l = 1; l <= max_lag; ++l) {
+    sample += 2.0 * out.n * (rho[static_cast<size_t>(l)] * rho[static_cast<size_t>(l)] - 1.0 / out.n);
+  }
+  const double scale = out.n / std::max({structural, sample, static_cast<double>(out.n)});
   out.n_eff = out.n * scale;
   // The likelihood-ratio interval at n_eff: where 2 scale (lmax - l) = 3.84, by bisection
   // between grid points.

@@ -15,8 +15,11 @@
 // coarse 0.1 m/s mostly reads 0 when the noise is a few cm/s: the likelihood knows that too
 // (how often a reading leaves 0), where a standard deviation of the readings would not.
 // 95 % interval: the likelihood-ratio interval (chi-square, 1 degree: 3.84) of the log-likelihood
-// scaled by n_eff / n, n_eff = n (1 - rho) / (1 + rho), rho the residuals' lag-1 correlation
-// (at least 0): a wander the mean leaves behind counts once, not each record.
+// scaled by n_eff / n. A scatter's estimate varies as 2 sigma^4 sum_ij rho_ij^2 (rho_ij the
+// residuals' correlations), not 2 sigma^4 n, so n_eff = n^2 / sum_ij rho_ij^2: the moving mean
+// itself correlates neighbouring residuals (exactly known for white readings: 1.30 n at
+// half_window 3), and a wander the mean leaves behind adds its own (from the residuals'
+// autocorrelations); the larger of the two counts.
 // Below half a rounding step the interval is [0, at least q / 2]: the readings cannot tell such
 // a noise from the rounding of the wander.
 //   height_noise_m   h's noise. h is the hold's estimate, which the hold keeps at its target.
