@@ -48,9 +48,10 @@
 // its edge off it), fitted by least squares in (beta H, c_w, s_w) for each tau, tau in
 // [kTauMin_s, kTauMax_s] by a grid and golden section. Intervals: 2.5 and 97.5 % percentiles of
 // refits on the fit plus the residuals in moving blocks of block_s (within each window), the
-// edges' times drawn anew within their two records, and a drift drawn anew: a random walk of the
-// intensity y shows over the floor (the barometer's drift, (1 - beta) d, is no straight line over
-// a pass; the residuals' blocks cannot carry a wander that slow).
+// edges' times drawn anew within their two records, and a drift drawn anew (the barometer's
+// drift is no straight line over a pass; the residuals' blocks cannot carry a wander that slow):
+// a walk d* as y holds it, d* - beta F_tau[d*], of d's intensity: the floor's over (1 - beta)
+// and, where beta > 0.5, at least baro - tof's (drift_track.hpp).
 //   height_hold_range_blend      beta: 0 the hold ignores the range reading, 1 it follows it.
 //   height_hold_time_constant_s  tau, only when beta's interval lies above kFollowsFrom (a
 //                                hold that barely follows cannot be timed) and tau's below
