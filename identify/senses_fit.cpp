@@ -292,8 +292,8 @@ void bootstrap_pass(const PassData& d, const PassFit& fit, double H, const Sense
   const int block = std::max(1, static_cast<int>(std::lround(o.block_s / 0.1)));
   // y - H u holds the barometer's drift as d - beta F_tau[d]: the hold follows it too. Over the
   // floor's 5 s lags (drift_intensity) that is about (1 - beta) d, but within a time constant the
-  // hold has not yet followed and y moves with d's whole intensity: a plain walk of the floor's
-  // (1 - beta) q, as drawn before, was a tenth of it at beta = 0.9. d's own intensity q: the
+  // hold has not yet followed and y moves with d's whole intensity (a plain walk of the floor's
+  // (1 - beta) q would be a tenth of it at beta = 0.9). d's own intensity q: the
   // floor's over (1 - beta); where the hold follows more than half, the floor shows less than
   // half of d (nothing at beta = 1) and the barometer's own track (baro - tof, noisier: its
   // noise is the barometer's) counts too, the larger of the two (beta at most 0.8 in the ratio).

@@ -102,7 +102,7 @@ TEST(SensesFit, CorrelatedScatterWidensTheInterval) {
 // scatter varies 1.30 times as much as n independent residuals' would. n_eff says so (n / 1.30),
 // and over 400 records of 130 readings (a 15 s hover at 10 Hz) the 95 % interval holds the
 // truth in at least 93 % (binomial(400, 0.95) falls below 372 with probability 0.02; taken as
-// n independent residuals the interval held it in about 91 %).
+// n independent residuals the interval holds it in about 91 %).
 TEST(SensesFit, TheMovingMeansOwnCorrelationWidensTheNoiseInterval) {
   int held = 0;
   double n_eff_share = 0.0;
@@ -165,7 +165,7 @@ TEST(Senses, RecoversKnownSensesFromASyntheticCalibrationLog) {
 // (1 - beta) of it the floor shows over seconds. With beta 0.9 and a drift of 15 mm/sqrt(s)
 // (three times the documented senses'), the time constant's interval spans at least 1.6 times
 // its lower end in four synthetic flights and holds the truth in each (a walk of the floor's
-// intensity gave spans of 1.4 to 1.6 and missed the first: 1.23 [1.03, 1.44] against 1.5 s);
+// intensity alone gives spans of 1.4 to 1.6 and misses the first: 1.23 [1.03, 1.44] against 1.5 s);
 // without a drift the same flights' intervals stay narrow (under 1.4 times), the drift drawn
 // from what baro - tof shows.
 TEST(Senses, TheHoldsIntervalCarriesTheBarometersDriftItFollows) {
