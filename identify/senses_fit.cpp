@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 
 #include <Eigen/Dense>
 
+#include "identify/drift_track.hpp"
 #include "shelfcross/random.hpp"
 
 namespace shelfcross::identify {
@@ -14,7 +16,6 @@ namespace {
 constexpr double kSettleAfterTakeoff_s = 3.0;  // the takeoff's climb ends before the hover counts
 constexpr double kSettleAfterStick_s = 2.0;    // after a stick returns to centre
 constexpr double kBeforeStick_s = 0.5;
-constexpr double kChiSquare95 = 3.841458820694124;  // 1 degree of freedom
 constexpr double kBeforePass_s = 3.0, kAfterPass_s = 6.0;
 // An edge: between two records the range reading steps by at least kRangeEdgeFraction of the
 // board's height (tof's noise is centimetres; the drone's own height moves only through the
@@ -27,17 +28,6 @@ constexpr double kRangeEdgeFraction = 0.6, kEdgeFraction = 0.2;
 // The SDK's resolutions (docs/tello_sdk.md): h and tof in cm, baro with two decimals, vgx and
 // vgy in dm/s.
 constexpr double kCm = 0.01, kDm = 0.1;
-
-double lag1_correlation(const std::vector<std::vector<double>>& residuals) {
-  double num = 0.0, den = 0.0;
-  for (const auto& r : residuals) {
-    for (size_t k = 0; k < r.size(); ++k) {
-      den += r[k] * r[k];
-      if (k + 1 < r.size()) num += r[k] * r[k + 1];
-    }
-  }
-  return den > 0.0 ? std::clamp(num / den, 0.0, 0.95) : 0.0;
-}
 
 // The longest stretch of centred sticks while flying (seconds since the takeoff's ok).
 std::optional<std::pair<double, double>> still_stretch(const FlightRecord& r) {
@@ -65,24 +55,6 @@ std::optional<std::pair<double, double>> still_stretch(const FlightRecord& r) {
   return best;
 }
 
-// Leave-one-out moving means and the residuals about them, with each residual's n.
-void residuals_about_mean(const std::vector<double>& y, int half_window, std::vector<double>& r, std::vector<int>& n) {
-  r.assign(y.size(), 0.0);
-  n.assign(y.size(), 0);
-  const int size = static_cast<int>(y.size());
-  for (int k = 0; k < size; ++k) {
-    double sum = 0.0;
-    int count = 0;
-    for (int j = std::max(0, k - half_window); j <= std::min(size - 1, k + half_window); ++j) {
-      if (j == k) continue;
-      sum += y[static_cast<size_t>(j)];
-      ++count;
-    }
-    n[static_cast<size_t>(k)] = count;
-    r[static_cast<size_t>(k)] = count > 0 ? y[static_cast<size_t>(k)] - sum / count : 0.0;
-  }
-}
-
 // --- the board pass ---------------------------------------------------------------------------
 
 struct PassData {
@@ -93,6 +65,7 @@ struct PassData {
   std::vector<double> edge_sign;             // +1 onto the board, -1 off it
   std::vector<double> window_start_s;
   double drift_m_per_sqrt_s = 0.0;  // h - tof's own slow drift over the floor (drift_intensity)
+  double baro_walk_m_per_sqrt_s = 0.0;  // the barometer's drift itself, from baro - tof (barometer_walk)
 };
 
 // The drift of y = h - tof over the floor, where the hold has settled: (1 - beta) times the
@@ -129,6 +102,27 @@ double drift_intensity(const std::vector<double>& t, const std::vector<double>& 
   }
   if (n < 5) return 0.0;
   return std::sqrt(std::max(0.0, (d2 - white) / n) / kLag_s);
+}
+
+// The barometer's drift's own intensity q from w = baro - tof - H u (drift_track.hpp), from
+// kWalkLead_s before the first window (the still hover) to the last one's end, the records
+// within kWalkEdgeGap_s of an edge left out (the board's rim reads a few cm above its top). 0
+// without a barometer.
+constexpr double kWalkLead_s = 15.0, kWalkEdgeGap_s = 0.25;
+double barometer_walk(const std::vector<double>& t, const std::vector<double>& baro, const std::vector<double>& tof,
+                      const std::vector<int>& over, double from_s, double to_s, double H, const PassData& d) {
+  std::vector<double> tw, w;
+  for (size_t k = 0; k < t.size(); ++k) {
+    if (t[k] < from_s - kWalkLead_s || t[k] > to_s || !std::isfinite(baro[k])) continue;
+    bool near_edge = false;
+    for (size_t j = 0; j < d.edge_lo_s.size(); ++j) {
+      near_edge = near_edge || (t[k] >= d.edge_lo_s[j] - kWalkEdgeGap_s && t[k] <= d.edge_hi_s[j] + kWalkEdgeGap_s);
+    }
+    if (near_edge) continue;
+    tw.push_back(t[k]);
+    w.push_back(baro[k] - tof[k] - H * over[k]);
+  }
+  return walk_intensity(tw, w).intensity_m_per_sqrt_s;
 }
 
 // F_tau[u] at the records for edges at `edges_s`.
@@ -215,13 +209,14 @@ std::optional<std::string> pass_data(const FlightRecord& r, double H, PassData& 
   const std::vector<TimeNs> sent = state_send_times(r);
   const TimeNs t0 = *r.takeoff_ok_ns;
   const double end_s = ns_to_seconds(r.land_sent_ns.value_or(r.end_ns) - t0);
-  std::vector<double> t, y, tof;
+  std::vector<double> t, y, tof, baro;
   for (size_t k = 0; k < r.states.size(); ++k) {
     const double tk = ns_to_seconds(sent[k] - t0);
     if (tk < kSettleAfterTakeoff_s || tk > end_s || !r.states[k].tof_m) continue;
     t.push_back(tk);
     tof.push_back(*r.states[k].tof_m);
     y.push_back(r.states[k].height_m - tof.back());
+    baro.push_back(r.states[k].baro_m.value_or(std::numeric_limits<double>::quiet_NaN()));
   }
   std::vector<int> over(t.size(), 0);
   bool on = false;
@@ -276,6 +271,7 @@ std::optional<std::string> pass_data(const FlightRecord& r, double H, PassData& 
     }
   }
   d.drift_m_per_sqrt_s = drift_intensity(t, y, settled);
+  d.baro_walk_m_per_sqrt_s = barometer_walk(t, baro, tof, over, spans.front().first, spans.back().second, H, d);
   d.windows = static_cast<int>(spans.size());
   for (const auto& s : spans) d.window_start_s.push_back(s.first);
   return std::nullopt;
@@ -294,6 +290,16 @@ void bootstrap_pass(const PassData& d, const PassFit& fit, double H, const Sense
   std::vector<double> residual(d.y_m.size());
   for (size_t k = 0; k < residual.size(); ++k) residual[k] = d.y_m[k] - fit.fitted[k];
   const int block = std::max(1, static_cast<int>(std::lround(o.block_s / 0.1)));
+  // y - H u holds the barometer's drift as d - beta F_tau[d]: the hold follows it too. Over the
+  // floor's 5 s lags (drift_intensity) that is about (1 - beta) d, but within a time constant the
+  // hold has not yet followed and y moves with d's whole intensity (a plain walk of the floor's
+  // (1 - beta) q would be a tenth of it at beta = 0.9). d's own intensity q: the
+  // floor's over (1 - beta); where the hold follows more than half, the floor shows less than
+  // half of d (nothing at beta = 1) and the barometer's own track (baro - tof, noisier: its
+  // noise is the barometer's) counts too, the larger of the two (beta at most 0.8 in the ratio).
+  const double beta = std::clamp(-fit.b / H, 0.0, 1.0);
+  double q = d.drift_m_per_sqrt_s / std::max(0.2, 1.0 - beta);
+  if (beta > 0.5) q = std::max(q, d.baro_walk_m_per_sqrt_s);
   std::vector<std::vector<size_t>> members(static_cast<size_t>(d.windows));
   for (size_t k = 0; k < d.window.size(); ++k) members[static_cast<size_t>(d.window[k])].push_back(k);
   for (int b = 0; b < o.bootstrap_replicates; ++b) {
@@ -304,11 +310,14 @@ void bootstrap_pass(const PassData& d, const PassFit& fit, double H, const Sense
         const size_t start = static_cast<size_t>(rng.below(n - len + 1));
         for (size_t i = 0; i < len && filled < n; ++i, ++filled) y[m[filled]] = fit.fitted[m[filled]] + residual[m[start + i]];
       }
-      // A drift drawn anew: a random walk of the intensity the floor showed.
-      double walk = 0.0;
+      // A drift drawn anew: the barometer's walk d* and the hold's answer to it,
+      // d* - beta F_tau[d*] (from rest at the window's start; the drift held between records).
+      double walk = 0.0, followed = 0.0;
       for (size_t i = 1; i < n; ++i) {
-        walk += d.drift_m_per_sqrt_s * std::sqrt(std::max(0.0, d.t_s[m[i]] - d.t_s[m[i - 1]])) * rng.normal();
-        y[m[i]] += walk;
+        const double dt = std::max(0.0, d.t_s[m[i]] - d.t_s[m[i - 1]]);
+        followed += (walk - followed) * -std::expm1(-dt / fit.tau_s);
+        walk += q * std::sqrt(dt) * rng.normal();
+        y[m[i]] += walk - beta * followed;
       }
     }
     std::vector<double> edges;
@@ -421,83 +430,6 @@ void identify_noises(const FlightRecord& r, const SensesOptions& o, SensesIdenti
 }
 
 }  // namespace
-
-RoundedNoise fit_rounded_noise(const std::vector<std::vector<double>>& series, double q, int half_window) {
-  std::vector<std::vector<double>> res(series.size());
-  std::vector<std::vector<int>> counts(series.size());
-  RoundedNoise out;
-  double spread = 0.0;
-  for (size_t i = 0; i < series.size(); ++i) {
-    residuals_about_mean(series[i], half_window, res[i], counts[i]);
-    for (double r : res[i]) spread += r * r;
-    out.n += static_cast<int>(series[i].size());
-  }
-  spread = std::sqrt(spread / std::max(1, out.n));
-  auto loglik = [&](double sigma) {
-    double l = 0.0;
-    for (size_t i = 0; i < res.size(); ++i) {
-      for (size_t k = 0; k < res[i].size(); ++k) {
-        const double n = std::max(1, counts[i][k]);
-        const double se = std::sqrt(sigma * sigma * (1.0 + 1.0 / n) + q * q / (12.0 * n));
-        l += log_normal_mass((res[i][k] - q / 2) / se, (res[i][k] + q / 2) / se);
-      }
-    }
-    return l;
-  };
-  // sigma on a grid from 0 (then q / 500) to well beyond the residuals' spread.
-  std::vector<double> grid = {0.0};
-  const double top = std::max(3.0 * q, 5.0 * spread);
-  constexpr int kGrid = 160;
-  for (int i = 0; i < kGrid; ++i) grid.push_back(q / 500.0 * std::pow(top / (q / 500.0), i / (kGrid - 1.0)));
-  std::vector<double> ll(grid.size());
-  for (size_t i = 0; i < grid.size(); ++i) ll[i] = loglik(grid[i]);
-  const size_t best = static_cast<size_t>(std::max_element(ll.begin(), ll.end()) - ll.begin());
-  // Golden-section refinement between the best point's neighbours.
-  double a = grid[best == 0 ? 0 : best - 1], c = grid[std::min(best + 1, grid.size() - 1)];
-  for (int it = 0; it < 50; ++it) {
-    const double m1 = a + (c - a) / 3.0, m2 = c - (c - a) / 3.0;
-    if (loglik(m1) < loglik(m2)) a = m1;
-    else c = m2;
-  }
-  out.sigma = 0.5 * (a + c);
-  const double lmax = std::max(loglik(out.sigma), ll[best]);
-  out.rho = lag1_correlation(res);
-  const double scale = (1.0 - out.rho) / (1.0 + out.rho);
-  out.n_eff = out.n * scale;
-  // The likelihood-ratio interval at n_eff: where 2 scale (lmax - l) = 3.84, by bisection
-  // between grid points.
-  auto inside = [&](double sigma) { return 2.0 * scale * (lmax - loglik(sigma)) <= kChiSquare95; };
-  auto edge = [&](double in, double out_) {
-    for (int it = 0; it < 50; ++it) {
-      const double m = 0.5 * (in + out_);
-      (inside(m) ? in : out_) = m;
-    }
-    return in;
-  };
-  out.lo = 0.0;
-  for (size_t i = best; i-- > 0;) {
-    if (!inside(grid[i])) {
-      out.lo = edge(grid[i + 1] <= out.sigma ? grid[i + 1] : out.sigma, grid[i]);
-      break;
-    }
-  }
-  out.hi = grid.back();
-  for (size_t i = best + 1; i < grid.size(); ++i) {
-    if (!inside(grid[i])) {
-      out.hi = edge(std::max(grid[i - 1], out.sigma), grid[i]);
-      break;
-    }
-  }
-  // Under half a rounding step the readings cannot tell a noise from the rounding of the slow
-  // wander: a few flips of the last digit are either (records of known noise and a wander of
-  // 0.15 steps: the likelihood's interval missed noises of 0.1 to 0.2 steps in 20 to 40 % of
-  // records). The interval then runs from 0 to at least half a step.
-  if (out.sigma < 0.5 * q) {
-    out.lo = 0.0;
-    out.hi = std::max(out.hi, 0.5 * q);
-  }
-  return out;
-}
 
 const std::vector<std::string>& senses_parameter_names() {
   static const std::vector<std::string> names = {"vps_noise_mps", "height_noise_m", "baro_noise_m", "tof_noise_m",

@@ -15,8 +15,11 @@
 // coarse 0.1 m/s mostly reads 0 when the noise is a few cm/s: the likelihood knows that too
 // (how often a reading leaves 0), where a standard deviation of the readings would not.
 // 95 % interval: the likelihood-ratio interval (chi-square, 1 degree: 3.84) of the log-likelihood
-// scaled by n_eff / n, n_eff = n (1 - rho) / (1 + rho), rho the residuals' lag-1 correlation
-// (at least 0): a wander the mean leaves behind counts once, not each record.
+// scaled by n_eff / n. A scatter's estimate varies as 2 sigma^4 sum_ij rho_ij^2 (rho_ij the
+// residuals' correlations), not 2 sigma^4 n, so n_eff = n^2 / sum_ij rho_ij^2: the moving mean
+// itself correlates neighbouring residuals (exactly known for white readings: 1.30 n at
+// half_window 3), and a wander the mean leaves behind adds its own (from the residuals'
+// autocorrelations); the larger of the two counts.
 // Below half a rounding step the interval is [0, at least q / 2]: the readings cannot tell such
 // a noise from the rounding of the wander.
 //   height_noise_m   h's noise. h is the hold's estimate, which the hold keeps at its target.
@@ -45,9 +48,10 @@
 // its edge off it), fitted by least squares in (beta H, c_w, s_w) for each tau, tau in
 // [kTauMin_s, kTauMax_s] by a grid and golden section. Intervals: 2.5 and 97.5 % percentiles of
 // refits on the fit plus the residuals in moving blocks of block_s (within each window), the
-// edges' times drawn anew within their two records, and a drift drawn anew: a random walk of the
-// intensity y shows over the floor (the barometer's drift, (1 - beta) d, is no straight line over
-// a pass; the residuals' blocks cannot carry a wander that slow).
+// edges' times drawn anew within their two records, and a drift drawn anew (the barometer's
+// drift is no straight line over a pass; the residuals' blocks cannot carry a wander that slow):
+// a walk d* as y holds it, d* - beta F_tau[d*], of d's intensity: the floor's over (1 - beta)
+// and, where beta > 0.5, at least baro - tof's (drift_track.hpp).
 //   height_hold_range_blend      beta: 0 the hold ignores the range reading, 1 it follows it.
 //   height_hold_time_constant_s  tau, only when beta's interval lies above kFollowsFrom (a
 //                                hold that barely follows cannot be timed) and tau's below
