@@ -15,6 +15,7 @@
 #include "verification/campaign/campaign.hpp"
 #include "verification/campaign/run_process.hpp"
 #include "verification/report/report.hpp"
+#include "stop_signal.hpp"
 #include "worker_options.hpp"
 #ifdef SHELFCROSS_WITH_MPI
 #include "distributed/mpi_campaign.hpp"
@@ -22,9 +23,6 @@
 
 namespace shelfcross::app {
 namespace {
-
-std::atomic<bool> g_stop{false};
-extern "C" void request_stop(int) { g_stop = true; }
 
 struct CampaignOptions {
   std::string scenario = verification::kDefaultScenarioFile;
@@ -132,7 +130,7 @@ int run_in_this_process(const CampaignOptions& o, const verification::Shard& sha
   const auto t0 = std::chrono::steady_clock::now();  // informative: runs per hour
   const std::int64_t added = verification::run_pending(
       c.store, o.seed, o.runs, worker_factory(c.nominal, o),
-      {.jobs = o.jobs, .on_progress = progress_printer(), .stop = &g_stop, .shard = shard});
+      {.jobs = o.jobs, .on_progress = progress_printer(), .stop = &stop_requested(), .shard = shard});
   const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return finish(o, shard, c.store, c.nominal->name, added, elapsed_s);
 }
@@ -147,8 +145,7 @@ int run_under_mpi(const CampaignOptions& o, const verification::Shard& shard) {
   if (mpi.size() == 1) return run_in_this_process(o, shard);
   // The launcher ends the job with SIGTERM (Ctrl-C on mpirun, a rank that died): every rank
   // goes at once; committed runs are safe and the same command resumes.
-  std::signal(SIGINT, SIG_DFL);
-  std::signal(SIGTERM, SIG_DFL);
+  die_on_signals();
   distributed::CampaignSetup setup;
   if (mpi.rank() != 0) {
     distributed::share_setup(mpi, setup);
@@ -172,7 +169,7 @@ int run_under_mpi(const CampaignOptions& o, const verification::Shard& shard) {
   const auto t0 = std::chrono::steady_clock::now();  // informative: runs per hour
   const distributed::CoordinatorResult r = distributed::coordinate_campaign(
       mpi, c->store, o.runs,
-      {.on_progress = progress_printer(), .stop = &g_stop, .shard = shard,
+      {.on_progress = progress_printer(), .stop = &stop_requested(), .shard = shard,
        .rank_timeout = rank_timeout(o)});
   const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (r.ranks_lost > 0) std::cerr << r.ranks_lost << " worker rank(s) lost; their runs were handed out again\n";
@@ -210,8 +207,7 @@ const CommandRegistration kCampaign{
             throw UsageError(e.what());
           }
         }
-        std::signal(SIGINT, request_stop);
-        std::signal(SIGTERM, request_stop);
+        stop_on_signals();
 #ifdef SHELFCROSS_WITH_MPI
         if (distributed::launched_by_mpi()) return run_under_mpi(*o, shard);
 #endif

@@ -4,7 +4,6 @@
 // paths in top and side views (Fig. 21). Resumable: the same command again runs what is missing.
 #include <unistd.h>
 
-#include <csignal>
 #include <cstdio>
 #include <iostream>
 #include <thread>
@@ -12,13 +11,11 @@
 #include "command_registry.hpp"
 #include "verification/campaign/run_process.hpp"
 #include "verification/report/compare.hpp"
+#include "stop_signal.hpp"
 #include "worker_options.hpp"
 
 namespace shelfcross::app {
 namespace {
-
-std::atomic<bool> g_stop{false};
-extern "C" void request_compare_stop(int) { g_stop = true; }
 
 struct CompareCliOptions {
   std::string scenario = "scenarios/warehouse_5_shelves.yaml";
@@ -42,12 +39,11 @@ const CommandRegistration kCompare{
       add_worker_limit_options(sub, o->limits);
       return [o]() -> int {
         const verification::Scenario nominal = verification::load_scenario(o->scenario);
-        std::signal(SIGINT, request_compare_stop);
-        std::signal(SIGTERM, request_compare_stop);
+        stop_on_signals();
         const bool tty = isatty(STDERR_FILENO);
         verification::CompareOptions options;
         options.jobs = o->jobs;
-        options.stop = &g_stop;
+        options.stop = &stop_requested();
         options.make_workers = [o](std::shared_ptr<const verification::Scenario> scenario) {
           return verification::process_worker_factory(std::move(scenario), o->limits);
         };

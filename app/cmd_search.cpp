@@ -16,6 +16,7 @@
 #include "verification/campaign/run_process.hpp"
 #include "verification/search/search.hpp"
 #include "verification/search/search_report.hpp"
+#include "stop_signal.hpp"
 #include "worker_options.hpp"
 #ifdef SHELFCROSS_WITH_MPI
 #include "distributed/mpi_campaign.hpp"
@@ -23,9 +24,6 @@
 
 namespace shelfcross::app {
 namespace {
-
-std::atomic<bool> g_stop{false};
-extern "C" void request_search_stop(int) { g_stop = true; }
 
 struct SearchOptions {
   std::string scenario = verification::kDefaultScenarioFile;
@@ -66,7 +64,7 @@ void print_progress(const verification::CampaignProgress& p) {
 verification::SearchRunOptions run_options(const SearchOptions& o) {
   verification::SearchRunOptions r;
   r.jobs = o.jobs;
-  r.stop = &g_stop;
+  r.stop = &stop_requested();
   r.on_round = print_round;
   r.on_progress = print_progress;
   return r;
@@ -100,8 +98,7 @@ std::optional<verification::SearchRunResult> run_under_mpi(std::shared_ptr<const
   distributed::MpiSession mpi;
   if (mpi.size() == 1) return run_in_this_process(std::move(nominal), settings, o);
   // As for a campaign: the launcher ends the job with SIGTERM; every rank goes at once.
-  std::signal(SIGINT, SIG_DFL);
-  std::signal(SIGTERM, SIG_DFL);
+  die_on_signals();
   const auto rank_timeout = std::chrono::milliseconds(static_cast<std::int64_t>(o.rank_timeout_s * 1000.0));
   distributed::CampaignSetup setup{verification::write_scenario(*nominal), settings.seed, ""};
   distributed::share_setup(mpi, setup);  // every rank loaded the same file; rank 0's text rules
@@ -127,11 +124,11 @@ std::optional<verification::SearchRunResult> run_under_mpi(std::shared_ptr<const
     distributed::broadcast_text(mpi, text);
     serving = true;
     const distributed::CoordinatorResult c = distributed::coordinate_campaign(
-        mpi, store, runs, {.on_progress = print_progress, .stop = &g_stop, .shard = {}, .rank_timeout = rank_timeout});
+        mpi, store, runs, {.on_progress = print_progress, .stop = &stop_requested(), .shard = {}, .rank_timeout = rank_timeout});
     serving = false;
     if (!mpi.intact()) {
       std::cerr << c.ranks_lost << " worker rank(s) lost: the search stops here; run the same command to resume\n";
-      g_stop = true;
+      stop_requested() = true;
     }
     return c.committed;
   };
@@ -250,8 +247,7 @@ int run_search_command(const SearchOptions& o) {
     }
     settings.ce.adapted.insert(name);
   }
-  std::signal(SIGINT, request_search_stop);
-  std::signal(SIGTERM, request_search_stop);
+  stop_on_signals();
   std::optional<verification::SearchRunResult> ran;
 #ifdef SHELFCROSS_WITH_MPI
   if (distributed::launched_by_mpi()) {

@@ -9,14 +9,12 @@
 #include <opencv2/core.hpp>
 
 #include "command_registry.hpp"
+#include "stop_signal.hpp"
 #include "verification/scenario/scenario.hpp"
 #include "verification/world/tello_emulator.hpp"
 
 namespace shelfcross::app {
 namespace {
-
-std::atomic<bool> g_stop{false};
-extern "C" void on_stop_signal(int) { g_stop.store(true); }
 
 struct TelloSimOptions {
   std::string scenario = verification::kDefaultScenarioFile;
@@ -154,8 +152,7 @@ const CommandRegistration kTelloSim{
         const verification::RunSetup& setup = emulator.setup();
         const verification::Scenario& scenario = *setup.scenario;
         if (!o->write_calibration.empty()) write_calibration(o->write_calibration, setup.believed_camera);
-        std::signal(SIGINT, on_stop_signal);
-        std::signal(SIGTERM, on_stop_signal);
+        stop_on_signals();
         std::cout << "tello-sim " << scenario.name << " seed " << o->config.seed << ": commands on "
                   << o->config.bind_ip << ":" << emulator.ports().command << ", state from port "
                   << emulator.ports().state_source << " to port " << o->config.client_state_port
@@ -171,7 +168,7 @@ const CommandRegistration kTelloSim{
                        "error is the pilot's belief, see --write-calibration)\n";
         }
         std::cout << "renderer: " << emulator.renderer_description() << std::endl;
-        verification::run_tello_emulator(emulator, g_stop, o->max_seconds);
+        verification::run_tello_emulator(emulator, stop_requested(), o->max_seconds);
         const verification::EmulatorReport report = emulator.report();
         std::cout << verification::emulator_report_text(report) << std::flush;
         if (!o->report.empty()) {

@@ -18,12 +18,8 @@ namespace shelfcross::identify {
 namespace {
 
 using testing::KnownDrone;
+using testing::record_of;
 using testing::synthetic_log;
-
-FlightRecord record_of(const std::string& text) {
-  std::istringstream in(text);
-  return parse_flight_record(in, "flight.jsonl");
-}
 
 // Few bootstrap refits: these tests check the plumbing, not the intervals' coverage.
 IdentifyOptions quick_options(int replicates = 20) {

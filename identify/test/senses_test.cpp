@@ -20,12 +20,8 @@ namespace {
 
 using testing::KnownDrone;
 using testing::KnownSenses;
+using testing::record_of;
 using testing::synthetic_log;
-
-FlightRecord record_of(const std::string& text) {
-  std::istringstream in(text);
-  return parse_flight_record(in, "flight.jsonl");
-}
 
 SensesOptions senses_options(std::optional<double> board_height_m, int replicates = 60) {
   SensesOptions o;

@@ -201,4 +201,10 @@ inline std::string synthetic_log(const KnownDrone& drone) {
   return log.str();
 }
 
+/// The flight record a log's text parses to (as if read from "flight.jsonl").
+inline FlightRecord record_of(const std::string& text) {
+  std::istringstream in(text);
+  return parse_flight_record(in, "flight.jsonl");
+}
+
 }  // namespace shelfcross::identify::testing

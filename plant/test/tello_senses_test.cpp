@@ -15,8 +15,8 @@ namespace shelfcross::plant {
 namespace {
 
 // A Tello in SDK mode taken off at (x, y), flying on the given senses.
-struct Flight {
-  Flight(const SensesSetup& senses, WindParams wind = {}, double x_m = 0.0, double y_m = 0.0)
+struct SensedFlight {
+  SensedFlight(const SensesSetup& senses, WindParams wind = {}, double x_m = 0.0, double y_m = 0.0)
       : tello(VehicleParams{}, AutopilotParams{}, wind, 11, {}, x_m, y_m, 0.0, senses) {
     EXPECT_EQ(tello.submit(0, "command"), std::optional<std::string>("ok"));
     EXPECT_EQ(tello.submit(seconds_to_ns(0.5), "takeoff"), std::nullopt);
@@ -41,7 +41,7 @@ struct Flight {
 };
 
 TEST(TelloSenses, DefaultSensesTheTruthExactly) {
-  Flight f(SensesSetup{});
+  SensedFlight f(SensesSetup{});
   f.hover(3.0);
   const RigidBodyState& s = f.tello.state();
   const TelloSenses& senses = f.tello.autopilot().senses();
@@ -63,12 +63,12 @@ TEST(TelloSenses, DefaultSensesTheTruthExactly) {
 void check_drift_with_the_air(const SensesParams& invalid) {
   WindParams wind;
   wind.steady_W_mps = Eigen::Vector3d(0.3, 0.0, 0.0);
-  Flight held(SensesSetup{}, wind);
+  SensedFlight held(SensesSetup{}, wind);
   const Eigen::Vector3d p_held = held.tello.state().p_WB_m;
   held.hover(30.0);
   EXPECT_LT((held.tello.state().p_WB_m - p_held).head<2>().norm(), 0.05);
 
-  Flight f(SensesSetup{invalid, nullptr, 1.0, 3}, wind);
+  SensedFlight f(SensesSetup{invalid, nullptr, 1.0, 3}, wind);
   EXPECT_FALSE(f.tello.autopilot().senses().vps_valid());
   f.hover(30.0);
   const Eigen::Vector3d v = f.tello.state().v_WB_W_mps;
@@ -97,9 +97,9 @@ TEST(TelloSenses, OverAPlainSurfaceAHoverDriftsWithTheAir) {
 TEST(TelloSenses, TooLittleLightIsAPlainSurface) {
   SensesParams p;
   p.vps.min_contrast = 0.3;
-  Flight dim(SensesSetup{p, nullptr, 0.2, 3});
+  SensedFlight dim(SensesSetup{p, nullptr, 0.2, 3});
   EXPECT_FALSE(dim.tello.autopilot().senses().vps_valid());
-  Flight lit(SensesSetup{p, nullptr, 0.8, 3});
+  SensedFlight lit(SensesSetup{p, nullptr, 0.8, 3});
   EXPECT_TRUE(lit.tello.autopilot().senses().vps_valid());
 }
 
@@ -110,7 +110,7 @@ TEST(TelloSenses, AVpsBiasMakesAHoverDriftAtMinusTheBias) {
   SensesParams p;
   p.vps.bias_stddev_mps = 0.05;
   p.vps.bias_time_constant_s = 3600.0;
-  Flight f(SensesSetup{p, nullptr, 1.0, 5});
+  SensedFlight f(SensesSetup{p, nullptr, 1.0, 5});
   f.hover(5.0);  // the hold settles on the biased estimate
   ASSERT_GT(f.tello.autopilot().senses().vps_bias_H_mps().norm(), 0.005);
   // The bias still wanders a little (about 10 % of its deviation in 20 s): compare the drift
@@ -151,7 +151,7 @@ double climb_over_the_box(const HeightHoldParams& hold, const CollisionWorld& wo
                           std::optional<double>& tof_m) {
   SensesParams p;
   p.height_hold = hold;
-  Flight f(SensesSetup{p, &world, 1.0, 7}, {}, 1.0, y_m);
+  SensedFlight f(SensesSetup{p, &world, 1.0, 7}, {}, 1.0, y_m);
   const double z0 = f.tello.state().p_WB_m.z();
   EXPECT_EQ(f.tello.submit(f.tello.time_ns(), "forward 217"), std::nullopt);
   f.hover(8.0);

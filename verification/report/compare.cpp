@@ -40,13 +40,6 @@ const PaperRow& paper_row(const std::string& strategy) {
 }
 
 const cv::Scalar kColours[] = {cv::Scalar(60, 160, 60), cv::Scalar(200, 120, 30), cv::Scalar(40, 40, 220)};
-const cv::Scalar kShelf(120, 80, 40);
-
-std::string fixed(double v, int decimals) {
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(decimals) << v;
-  return s.str();
-}
 
 }  // namespace
 
@@ -92,12 +85,12 @@ std::string comparison_table_markdown(const std::vector<StrategyRow>& rows) {
   md << "| path strategy | runs | mean distance (m) | paper | mean time (s) | paper | success rate | "
         "95 % lower bound | contacts | contact 95 % upper bound | safe aborts | inventory errors | inventory recall |\n"
      << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
-  const auto opt = [](const std::optional<double>& v, int decimals) { return v ? fixed(*v, decimals) : std::string("-"); };
+  const auto opt = [](const std::optional<double>& v, int decimals) { return v ? fixed_text(*v, decimals) : std::string("-"); };
   for (const StrategyRow& r : rows) {
     md << "| " << paper_row(r.strategy).label << " | " << r.runs << " | " << opt(r.mean_distance_m, 2) << " | "
-       << fixed(r.paper_distance_m, 0) << " | " << opt(r.mean_time_s, 1) << " | " << fixed(r.paper_time_s, 0) << " | "
-       << r.successes << "/" << r.runs << " = " << fixed(r.success_rate, 3) << " | " << fixed(r.success_lower_95, 3)
-       << " | " << r.contacts << " | " << fixed(r.contact_upper_95, 4) << " | " << r.safe_aborts << " | "
+       << fixed_text(r.paper_distance_m, 0) << " | " << opt(r.mean_time_s, 1) << " | " << fixed_text(r.paper_time_s, 0) << " | "
+       << r.successes << "/" << r.runs << " = " << fixed_text(r.success_rate, 3) << " | " << fixed_text(r.success_lower_95, 3)
+       << " | " << r.contacts << " | " << fixed_text(r.contact_upper_95, 4) << " | " << r.safe_aborts << " | "
        << r.inventory_errors << " | " << opt(r.mean_recall, 4) << " |\n";
   }
   md << "\nMean distance and time over the successful runs (a failed run ends early); recall over every run. "
@@ -169,8 +162,8 @@ std::string run_by_run_markdown(const RunByRun& r) {
   if (r.runs == 0) return "";
   const auto share = [&r](std::int64_t n, double lower) {
     return std::to_string(n) + " of " + std::to_string(r.runs) + " (" +
-           fixed(100.0 * static_cast<double>(n) / static_cast<double>(r.runs), 1) + " %; at least " +
-           fixed(100.0 * lower, 1) + " %, one-sided 95 %)";
+           fixed_text(100.0 * static_cast<double>(n) / static_cast<double>(r.runs), 1) + " %; at least " +
+           fixed_text(100.0 * lower, 1) + " %, one-sided 95 %)";
   };
   std::ostringstream md;
   md << "## Run by run\n\nOver the " << r.runs << " runs every strategy flew successfully (the same seed and draws): "
@@ -187,9 +180,9 @@ std::string run_by_run_markdown(const RunByRun& r) {
     }
     std::ostringstream p;
     p << std::setprecision(3) << a.time_s.p_two_sided;
-    md << fixed(a.time_s.hodges_lehmann, 1) << " s | " << fixed(a.time_s.interval.lower, 1) << " to "
-       << fixed(a.time_s.interval.upper, 1) << " s | " << p.str() << " | " << fixed(a.distance_m.hodges_lehmann, 2)
-       << " m | " << fixed(a.distance_m.interval.lower, 2) << " to " << fixed(a.distance_m.interval.upper, 2) << " m |\n";
+    md << fixed_text(a.time_s.hodges_lehmann, 1) << " s | " << fixed_text(a.time_s.interval.lower, 1) << " to "
+       << fixed_text(a.time_s.interval.upper, 1) << " s | " << p.str() << " | " << fixed_text(a.distance_m.hodges_lehmann, 2)
+       << " m | " << fixed_text(a.distance_m.interval.lower, 2) << " to " << fixed_text(a.distance_m.interval.upper, 2) << " m |\n";
   }
   md << "\nShift: the Hodges-Lehmann estimate of the paired difference with its distribution-free interval. ";
   if (r.not_fastest.empty()) {
@@ -237,9 +230,9 @@ std::int64_t write_comparison_plots(const Scenario& nominal, const std::vector<s
       xs.push_back(p.x());
       ys.push_back(p.y());
     }
-    top.add_line(xs, ys, kShelf, 2, i == 0 ? "shelves" : "");
+    top.add_line(xs, ys, kShelfBgr, 2, i == 0 ? "shelves" : "");
     const double fx = X_WS.translation().x();
-    side.add_rect(fx, 0.0, fx + s.depth_m, beam_z_S_m(s, levels), kShelf, false, i == 0 ? "shelves" : "");
+    side.add_rect(fx, 0.0, fx + s.depth_m, beam_z_S_m(s, levels), kShelfBgr, false, i == 0 ? "shelves" : "");
   }
   for (size_t k = 0; k < runs_per_strategy.size() && k < compared_strategies().size(); ++k) {
     for (const RunRecord& r : runs_per_strategy[k]) {

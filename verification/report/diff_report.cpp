@@ -10,6 +10,7 @@
 
 #include "config/strict_json.hpp"
 #include "verification/statistics/plot.hpp"
+#include "verification/statistics/statistics.hpp"
 
 namespace shelfcross::verification {
 
@@ -27,12 +28,6 @@ const char* const kHistogramMetrics[] = {"min_clearance_m",      "crossing_push_
 
 constexpr const char* kIntervalMethod = "Newcombe's hybrid score interval for paired proportions (method 10)";
 
-std::string fixed(double v, int decimals) {
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(decimals) << v;
-  return s.str();
-}
-
 /// A p-value as read: 4 significant digits, "< 1e-12" in the far tail.
 std::string p_text(double p) {
   if (p < 1e-12) return "< 1e-12";
@@ -41,7 +36,7 @@ std::string p_text(double p) {
   return s.str();
 }
 
-std::string percent(double v, int decimals) { return fixed(100.0 * v, decimals) + " %"; }
+std::string percent(double v, int decimals) { return fixed_text(100.0 * v, decimals) + " %"; }
 
 std::string signed_percent(double v, int decimals) {
   std::string text(v > 0.0 ? "+" : "");
@@ -234,7 +229,7 @@ std::string verdict_section(const PairedDiff& d, const DiffReportOptions& o) {
   md << "- **Mission success**: BASE " << d.pairs - f.table.both - f.table.base_only << " of " << d.pairs << ", NEW "
      << d.pairs - f.table.both - f.table.new_only << " of " << d.pairs << "; " << f.table.new_only
      << " runs lost in NEW, " << f.table.base_only << " gained; difference NEW - BASE "
-     << signed_percent(f.base_rate - f.new_rate, 2) << " (" << fixed(100.0 * d.confidence, 0) << " % interval "
+     << signed_percent(f.base_rate - f.new_rate, 2) << " (" << fixed_text(100.0 * d.confidence, 0) << " % interval "
      << signed_percent(-f.difference.upper, 2) << " to " << signed_percent(-f.difference.lower, 2)
      << "); exact McNemar: one-sided p (NEW worse) = " << p_text(f.mcnemar.p_new_worse)
      << ", two-sided p = " << p_text(f.mcnemar.p_two_sided) << ".\n";
@@ -245,8 +240,8 @@ std::string verdict_section(const PairedDiff& d, const DiffReportOptions& o) {
      << "); one-sided p (NEW worse) = " << p_text(c.mcnemar.p_new_worse) << ", two-sided p = "
      << p_text(c.mcnemar.p_two_sided) << ".\n";
   const EventComparison& n = d.near_misses;
-  md << "- **Near misses** (no contact, least clearance below " << fixed(100.0 * d.base.scenario.cosim.near_miss_m, 1)
-     << " cm in BASE, " << fixed(100.0 * d.next.scenario.cosim.near_miss_m, 1) << " cm in NEW): BASE "
+  md << "- **Near misses** (no contact, least clearance below " << fixed_text(100.0 * d.base.scenario.cosim.near_miss_m, 1)
+     << " cm in BASE, " << fixed_text(100.0 * d.next.scenario.cosim.near_miss_m, 1) << " cm in NEW): BASE "
      << n.table.both + n.table.base_only << ", NEW " << n.table.both + n.table.new_only << "; " << n.table.new_only
      << " new in NEW, " << n.table.base_only << " gone; one-sided p (NEW worse) = " << p_text(n.mcnemar.p_new_worse)
      << ", two-sided p = " << p_text(n.mcnemar.p_two_sided) << " (reported, not gated).\n";
@@ -280,7 +275,7 @@ std::string table_section(const PairedDiff& d) {
      << " (contacts) fair coin tosses under \"no difference\": the one-sided p-value is the chance of at least "
         "as many going NEW's way as did, the two-sided one twice the smaller tail. The interval for the "
         "difference in rates is "
-     << kIntervalMethod << ", at " << fixed(100.0 * d.confidence, 0) << " %.\n\n";
+     << kIntervalMethod << ", at " << fixed_text(100.0 * d.confidence, 0) << " %.\n\n";
   return md.str();
 }
 
@@ -299,7 +294,7 @@ std::string closest_calls_section(const PairedDiff& d) {
   const auto side = [&md](const std::vector<std::pair<std::int64_t, double>>& each, bool least) {
     const auto e = extreme(each, least);
     if (e) {
-      md << " | " << fixed(100.0 * e->second, 1) << " cm | " << e->first;
+      md << " | " << fixed_text(100.0 * e->second, 1) << " cm | " << e->first;
     } else {
       md << " | none | ";
     }
@@ -322,7 +317,7 @@ std::string metrics_section(const PairedDiff& d) {
   std::ostringstream md;
   md << "## Metrics, paired (NEW - BASE)\n\n"
      << "| metric | pairs | differences not 0 | median difference | Hodges-Lehmann shift | "
-     << fixed(100.0 * d.confidence, 0)
+     << fixed_text(100.0 * d.confidence, 0)
      << " % interval | Wilcoxon p (two-sided) | tolerance | NEW higher | NEW lower |\n"
         "|---|---|---|---|---|---|---|---|---|---|\n";
   for (const MetricComparison& m : d.metrics) {

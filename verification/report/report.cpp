@@ -25,13 +25,7 @@ namespace {
 
 using nlohmann::json;
 
-const cv::Scalar kGood(60, 160, 60), kBad(40, 40, 220), kShelf(120, 80, 40), kCell(230, 200, 150);
-
-std::string fixed(double v, int decimals) {
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(decimals) << v;
-  return s.str();
-}
+const cv::Scalar kGood(60, 160, 60), kBad(40, 40, 220), kCell(230, 200, 150);
 
 /// Latency in the loop: when the campaign disperses the video latency, the success rate
 /// against each run's total latency from capture to command (its link's mean video latency
@@ -68,9 +62,9 @@ std::string latency_sweep_section(const Scenario& scenario, const std::vector<Ru
     if (p < 0.5 && !first_below_50_ms) first_below_50_ms = lo;
   }
   md << "\n";
-  if (last_90_ms) md << "Success rate at least 90 % in every bin up to " << fixed(*last_90_ms, 0) << " ms. ";
+  if (last_90_ms) md << "Success rate at least 90 % in every bin up to " << fixed_text(*last_90_ms, 0) << " ms. ";
   if (first_below_50_ms) {
-    md << "It falls below 50 % from " << fixed(*first_below_50_ms, 0) << " ms on.\n\n";
+    md << "It falls below 50 % from " << fixed_text(*first_below_50_ms, 0) << " ms on.\n\n";
   } else {
     md << "It never falls below 50 % in the swept range.\n\n";
   }
@@ -88,7 +82,7 @@ std::string latency_sweep_section(const Scenario& scenario, const std::vector<Ru
 }  // namespace
 
 std::string safety_section(const SafetySummary& s, const NearMissSummary& n) {
-  const auto percent = [](double v, int decimals) { return fixed(100.0 * v, decimals) + " %"; };
+  const auto percent = [](double v, int decimals) { return fixed_text(100.0 * v, decimals) + " %"; };
   std::ostringstream md;
   md << "## Safety apart from mission success\n\n"
      << "| | runs | rate | one-sided 95 % bound (Clopper-Pearson) |\n|---|---|---|---|\n"
@@ -99,7 +93,7 @@ std::string safety_section(const SafetySummary& s, const NearMissSummary& n) {
      << percent(s.runs ? static_cast<double>(s.safe_aborts) / static_cast<double>(s.runs) : 0.0, 2) << " | |\n"
      << "| inventory errors (flown safely, wrong inventory) | " << s.inventory_errors << " | | |\n"
      << "| other failures (timeout, software fault) | " << s.other_failures << " | | |\n"
-     << "| near misses (no contact, least clearance below " << fixed(100.0 * n.near_miss_m, 1) << " cm) | " << n.runs
+     << "| near misses (no contact, least clearance below " << fixed_text(100.0 * n.near_miss_m, 1) << " cm) | " << n.runs
      << " (" << n.successes << " succeeded) | " << percent(n.rate, 2) << " | |\n\n"
      << "A contact is the safety failure; an abort is only a lost mission. The contact bound is the "
         "largest contact probability consistent with these runs at 95 % confidence. A near miss is "
@@ -117,13 +111,13 @@ std::string cost_section(const CostSummary& c, std::int64_t runs) {
     return md.str();
   }
   const Summary& s = c.cpu_s_per_run;
-  const auto or_none = [](const std::optional<double>& v, int decimals) { return v ? fixed(*v, decimals) : "-"; };
+  const auto or_none = [](const std::optional<double>& v, int decimals) { return v ? fixed_text(*v, decimals) : "-"; };
   md << "| | |\n|---|---|\n"
      << "| runs with a CPU figure | " << s.count << " of " << runs << " |\n"
-     << "| CPU seconds per run: mean, p50, p95, max | " << fixed(s.mean, 2) << ", " << fixed(s.p50, 2) << ", "
-     << fixed(s.p95, 2) << ", " << fixed(s.max, 2) << " |\n"
+     << "| CPU seconds per run: mean, p50, p95, max | " << fixed_text(s.mean, 2) << ", " << fixed_text(s.p50, 2) << ", "
+     << fixed_text(s.p95, 2) << ", " << fixed_text(s.max, 2) << " |\n"
      << "| CPU seconds per simulated second | " << or_none(c.cpu_s_per_simulated_s, 3) << " |\n"
-     << "| runs per core-hour | " << (s.mean > 0.0 ? fixed(3600.0 / s.mean, 0) : std::string("-")) << " |\n\n"
+     << "| runs per core-hour | " << (s.mean > 0.0 ? fixed_text(3600.0 / s.mean, 0) : std::string("-")) << " |\n\n"
      << "CPU time (user + system) each run took in its worker process (with in-process worker threads: its "
         "thread's); it depends on the machine and its load. Runs lost with their worker (crashed, hung) or "
         "failed in it have no figure.\n\n";
@@ -163,14 +157,14 @@ RunsDrawn draw_runs(const std::filesystem::path& dir, const Scenario& scenario, 
     const int levels = static_cast<int>(sh.row_pitch_m.size());
     for (int i = 0; i <= columns; ++i) {
       const Eigen::Vector3d a = X * Eigen::Vector3d(0, post_y_S_m(sh, i), 0);
-      top.add_rect(a.x() - 0.01, a.y() - 0.01, a.x() + sh.depth_m + 0.01, a.y() + 0.01, kShelf, true);
+      top.add_rect(a.x() - 0.01, a.y() - 0.01, a.x() + sh.depth_m + 0.01, a.y() + 0.01, kShelfBgr, true);
     }
     for (int j = 0; j <= levels; ++j) {
       const double z = beam_z_S_m(sh, j);
-      side.add_rect(x_face - 0.01, z - 0.01, x_face + sh.depth_m + 0.01, z + 0.01, kShelf, true);
+      side.add_rect(x_face - 0.01, z - 0.01, x_face + sh.depth_m + 0.01, z + 0.01, kShelfBgr, true);
     }
-    side.add_rect(x_face - 0.01, 0.0, x_face + 0.01, beam_z_S_m(sh, levels), kShelf, true);
-    side.add_rect(x_face + sh.depth_m - 0.01, 0.0, x_face + sh.depth_m + 0.01, beam_z_S_m(sh, levels), kShelf, true);
+    side.add_rect(x_face - 0.01, 0.0, x_face + 0.01, beam_z_S_m(sh, levels), kShelfBgr, true);
+    side.add_rect(x_face + sh.depth_m - 0.01, 0.0, x_face + sh.depth_m + 0.01, beam_z_S_m(sh, levels), kShelfBgr, true);
   }
 
   std::vector<double> settle_z, settle_yaw, offset_y, offset_z;
@@ -214,7 +208,7 @@ RunsDrawn draw_runs(const std::filesystem::path& dir, const Scenario& scenario, 
     if (is_near_miss(r.outcome, stored.run, scenario.cosim.near_miss_m)) {
       ++drawn.near_misses;
       drawn.near_miss_rows << "| " << r.index << " | " << r.outcome << " | "
-                           << fixed(100.0 * *stored.run->truth.min_clearance_m, 1) << " | `shelfcross replay "
+                           << fixed_text(100.0 * *stored.run->truth.min_clearance_m, 1) << " | `shelfcross replay "
                            << dir.string() << " --run " << r.index << "` |\n";
     }
     if (!ok) {
@@ -274,10 +268,10 @@ std::string crossing_push_section(const Scenario& scenario, const std::vector<Ru
         "|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& [width_mm, c] : by_width) {
     const Summary p = summarize(c.push_m);
-    md << "| " << width_mm / 10.0 << " cm | " << fixed(100.0 * c.room_m, 1) << " cm | " << p.count << " | "
-       << fixed(100.0 * p.mean, 1) << " cm | " << fixed(100.0 * p.p95, 1) << " cm | " << fixed(100.0 * p.p99, 1)
-       << " cm | " << fixed(100.0 * c.largest_m, 1) << " cm | " << c.largest_run << " | "
-       << fixed(100.0 * (c.room_m - c.largest_m), 1) << " cm |\n";
+    md << "| " << width_mm / 10.0 << " cm | " << fixed_text(100.0 * c.room_m, 1) << " cm | " << p.count << " | "
+       << fixed_text(100.0 * p.mean, 1) << " cm | " << fixed_text(100.0 * p.p95, 1) << " cm | " << fixed_text(100.0 * p.p99, 1)
+       << " cm | " << fixed_text(100.0 * c.largest_m, 1) << " cm | " << c.largest_run << " | "
+       << fixed_text(100.0 * (c.room_m - c.largest_m), 1) << " cm |\n";
   }
   histogram_chart(all_m, 20, "Crossing push from the cell's centre line", "m").save_png((dir / "crossing_push.png").string());
   md << "\n![crossing push](crossing_push.png)\n\n";
@@ -304,19 +298,19 @@ CampaignSummary write_campaign_report(const std::filesystem::path& dir) {
      << "\n\n";
   md << "| | |\n|---|---|\n";
   md << "| successes | " << summary.successes << " |\n";
-  md << "| success rate | " << fixed(summary.success_rate, 4) << " |\n";
-  md << "| one-sided 95 % lower bound (Clopper-Pearson) | " << fixed(summary.success_lower_95, 4) << " |\n\n";
+  md << "| success rate | " << fixed_text(summary.success_rate, 4) << " |\n";
+  md << "| one-sided 95 % lower bound (Clopper-Pearson) | " << fixed_text(summary.success_lower_95, 4) << " |\n\n";
   md << safety_section(summary.safety, summary.near_misses);
   md << "## Outcomes\n\n| outcome | runs |\n|---|---|\n";
   for (const auto& [name, n] : summary.outcomes) md << "| " << name << " | " << n << " |\n";
   md << "\n## Metrics\n\n| metric | runs | mean | p50 | p95 | p99 | max |\n|---|---|---|---|---|---|---|\n";
   for (const auto& [name, s] : summary.metrics) {
-    md << "| " << name << " | " << s.count << " | " << fixed(s.mean, 3) << " | " << fixed(s.p50, 3) << " | "
-       << fixed(s.p95, 3) << " | " << fixed(s.p99, 3) << " | " << fixed(s.max, 3) << " |\n";
+    md << "| " << name << " | " << s.count << " | " << fixed_text(s.mean, 3) << " | " << fixed_text(s.p50, 3) << " | "
+       << fixed_text(s.p95, 3) << " | " << fixed_text(s.p99, 3) << " | " << fixed_text(s.max, 3) << " |\n";
   }
   md << "\nSettling: from the start of the approach until the error stays inside max(" << scenario.cosim.settling_fraction * 100
      << " % of its initial value, " << scenario.cosim.settling_floor_z_m * 100 << " cm / "
-     << fixed(rad_to_deg(scenario.cosim.settling_floor_yaw_rad), 2) << " deg) for good.\n\n";
+     << fixed_text(rad_to_deg(scenario.cosim.settling_floor_yaw_rad), 2) << " deg) for good.\n\n";
   md << cost_section(summary.cost, summary.runs);
   md << "## Trajectories\n\n![top view](top_view.png)\n\n![side view](side_view.png)\n\n";
   md << "## Approach responses" << (scenario.warehouse.shelves.size() > 1 ? " (first shelf)" : "")
@@ -337,7 +331,7 @@ CampaignSummary write_campaign_report(const std::filesystem::path& dir) {
   if (drawn.near_misses) {
     md << "| run | outcome | least clearance (cm) | replay |\n|---|---|---|---|\n" << drawn.near_miss_rows.str();
   } else {
-    md << "None closer than " << fixed(100.0 * scenario.cosim.near_miss_m, 1) << " cm.\n";
+    md << "None closer than " << fixed_text(100.0 * scenario.cosim.near_miss_m, 1) << " cm.\n";
   }
   return summary;
 }

@@ -47,7 +47,7 @@ std::string format_double(double x) {
   return buf;
 }
 
-std::string quoted(const std::string& s) {
+std::string yaml_quoted(const std::string& s) {
   YAML::Emitter e;
   e << YAML::DoubleQuoted << s;
   return e.c_str();

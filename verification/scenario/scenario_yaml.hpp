@@ -53,7 +53,7 @@ const Bounds<double> kAnyFinite{};
 /// the usual range, else scientific ("1e-300"); at most 17 significant digits either way.
 std::string format_double(double x);
 /// `s` as a double-quoted YAML scalar.
-std::string quoted(const std::string& s);
+std::string yaml_quoted(const std::string& s);
 
 /// Well-formed UTF-8 (RFC 3629): no stray continuation or truncated sequence, no overlong
 /// form, no surrogate, nothing above U+10FFFF.
@@ -149,7 +149,7 @@ class Writer {
   template <class T>
   void field(const char* key, T& v, const Bounds<T>& = {}, Need = Need::optional) {
     if constexpr (std::is_same_v<T, bool>) put(key, v ? "true" : "false");
-    else if constexpr (std::is_same_v<T, std::string>) put(key, quoted(v));
+    else if constexpr (std::is_same_v<T, std::string>) put(key, yaml_quoted(v));
     else if constexpr (std::is_floating_point_v<T>) put(key, format_double(v));
     else put(key, std::to_string(v));
   }

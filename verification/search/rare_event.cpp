@@ -13,7 +13,6 @@
 namespace shelfcross::verification {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kMinusInfinity = -std::numeric_limits<double>::infinity();
 
 /// Mixed into a run's seed for its selector stream (RoundProposal::sample): a stream apart
@@ -243,7 +242,7 @@ std::optional<CeRound> next_ce_round(const ParameterDistributions& nominal, cons
   next.first_run = used;
   if (rounds.empty()) {
     next.proposal = RoundProposal::of_nominal(nominal);
-    next.level = kNaN;
+    next.level = std::numeric_limits<double>::quiet_NaN();  // no level before the first round
     next.estimation = adaptation_budget == 0;  // no adaptation asked for: plain Monte Carlo
     next.runs = next.estimation ? budget : std::min(settings.round_runs, adaptation_budget);
     return next;

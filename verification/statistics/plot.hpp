@@ -10,6 +10,9 @@
 
 namespace shelfcross::verification {
 
+/// The shelves' colour in every plot that draws them (BGR).
+inline const cv::Scalar kShelfBgr(120, 80, 40);
+
 class Chart {
  public:
   Chart(std::string title, std::string x_label, std::string y_label, int width_px = 960,

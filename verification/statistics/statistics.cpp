@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <numeric>
+#include <sstream>
 #include <stdexcept>
 
 #include <boost/math/distributions/beta.hpp>
@@ -10,6 +12,12 @@
 #include <boost/math/distributions/normal.hpp>
 
 namespace shelfcross::verification {
+
+std::string fixed_text(double v, int decimals) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(decimals) << v;
+  return s.str();
+}
 
 double clopper_pearson_lower(std::int64_t successes, std::int64_t trials, double confidence) {
   if (trials <= 0 || successes < 0 || successes > trials || !(confidence > 0.0 && confidence < 1.0)) {

@@ -7,6 +7,9 @@
 
 namespace shelfcross::verification {
 
+/// v with `decimals` digits after the point (std::fixed): how the reports print a figure.
+std::string fixed_text(double v, int decimals);
+
 /// One-sided lower confidence bound of a binomial success probability (Clopper-Pearson):
 /// the largest p_L with P(X >= successes | p_L) <= 1 - confidence, i.e. the (1 - confidence)
 /// quantile of Beta(successes, trials - successes + 1). 0 when successes == 0.

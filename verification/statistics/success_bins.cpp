@@ -9,12 +9,6 @@
 namespace shelfcross::verification {
 namespace {
 
-std::string fixed(double v, int decimals) {
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(decimals) << v;
-  return s.str();
-}
-
 }  // namespace
 
 void SuccessBins::add(double value, bool success) {
@@ -36,8 +30,8 @@ std::vector<SuccessBins::Bin> SuccessBins::bins() const {
 std::string SuccessBins::table_rows(double scale, int decimals, const std::string& suffix) const {
   std::ostringstream md;
   for (const Bin& b : bins()) {
-    md << "| " << fixed(b.lo * scale, decimals) << "-" << fixed(b.hi * scale, decimals) << suffix << " | " << b.runs
-       << " | " << b.successes << " | " << fixed(b.rate(), 3) << " | " << fixed(b.lower_95(), 3) << " |\n";
+    md << "| " << fixed_text(b.lo * scale, decimals) << "-" << fixed_text(b.hi * scale, decimals) << suffix << " | " << b.runs
+       << " | " << b.successes << " | " << fixed_text(b.rate(), 3) << " | " << fixed_text(b.lower_95(), 3) << " |\n";
   }
   return md.str();
 }

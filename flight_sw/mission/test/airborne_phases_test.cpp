@@ -33,10 +33,8 @@ using testing::Options;
 using testing::expect_through_cell_2_3;
 using testing::first_entry_s;
 
+using testing::kInFront_W_m;
 using testing::state_record_ns;
-
-// Hovering in front of the shelf, its whole grid in view, heading into it.
-const Eigen::Vector3d kInFront_W_m(1.1, 0.0, 0.98);
 
 FlightConfig with_strategy(Strategy mode) {
   FlightConfig c;

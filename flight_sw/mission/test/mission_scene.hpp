@@ -29,6 +29,9 @@ inline std::vector<DrawnBox> every_cell_boxed() {
   return boxes;
 }
 
+/// Hovering in front of the mission scene's shelf, its whole grid in view, heading into it.
+inline const Eigen::Vector3d kInFront_W_m(1.1, 0.0, 0.98);
+
 /// The front shelf at x = 3 m with `boxes`, and the shelf behind it at x = 5.6 m with one box.
 inline Scene mission_scene(std::vector<DrawnBox> boxes = front_boxes()) {
   DrawnShelf front = paper_shelf({3.0, 0.0, 0.0});

@@ -35,10 +35,8 @@ using testing::expect_backed_out_and_landed_clear;
 using testing::expect_through_cell_2_3;
 using testing::position_at_land;
 
+using testing::kInFront_W_m;
 using testing::state_record_ns;
-
-// Hovering in front of the shelf, its whole grid in view, heading into it.
-const Eigen::Vector3d kInFront_W_m(1.1, 0.0, 0.98);
 
 class TargetApproachTest : public ::testing::Test {
  protected:

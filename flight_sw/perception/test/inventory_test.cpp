@@ -14,7 +14,6 @@
 namespace shelfcross::flight_sw {
 namespace {
 
-constexpr double kDeg = deg_to_rad(1.0);  // one degree
 
 TEST(Inventory, DrawnShelfWithBoxesInKnownCellsIsExact) {
   testing::Scene scene;
@@ -33,7 +32,7 @@ TEST(Inventory, DrawnShelfWithBoxesInKnownCellsIsExact) {
   const std::vector<Eigen::Vector4d> poses = {{0.85, 0.0, 0.98, 0.0}, {0.88, 0.04, 0.96, 2.0},
                                               {0.83, -0.03, 1.0, -1.5}};
   for (const auto& p : poses) {
-    const cv::Mat img = drawer.draw(scene, testing::camera_pose_W(p.head<3>(), p[3] * kDeg));
+    const cv::Mat img = drawer.draw(scene, testing::camera_pose_W(p.head<3>(), deg_to_rad(p[3])));
     ShelfView view;
     analyse_shelf(img, tags, config, view);
     ASSERT_TRUE(view.full) << view.grid.refusal;
