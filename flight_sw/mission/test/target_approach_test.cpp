@@ -1,6 +1,7 @@
 // The approach of the target cell alone (target_approach.hpp): the target chosen on the
-// inventory read from a drawn shelf, then pictures, the clock and the crossing's stops in, the
-// step each call returns out (what to fly, and Stay, GiveUp, Reread, Land or Cross), with no
+// inventory read from a drawn shelf, then pictures (from where the test puts the vehicle, not
+// where the steps would fly it), state records, the clock and the crossing's stops in, the step
+// each call returns out (what to fly, and Stay, GiveUp, Reread, Land or Cross), with no
 // FlightSoftware around it. Then the approach's decisions flown through FlightSoftware against
 // the kinematic vehicle (flight_harness.hpp): the target lost, the time limits, the gate's
 // refusals and give-ups, the re-reads, the target's identity, the still heading, gusty air.
@@ -72,6 +73,35 @@ class TargetApproachTest : public ::testing::Test {
     facts_.now_ns += seconds_to_ns(s);
     return approach_.supervise(facts_, survey_, in_phase_s, false);
   }
+  /// A state record now of a level vehicle at p_W_m heading along x_W (the heading frame's
+  /// axes the world's), having flown v_W_mps since the last: to the facts and the approach.
+  void state(const Eigen::Vector3d& p_W_m, const Eigen::Vector3d& v_W_mps) {
+    StateRecord s;
+    s.t_ns = facts_.now_ns;
+    s.height_m = p_W_m.z();
+    s.vx_H_mps = v_W_mps.x();
+    s.vy_H_mps = v_W_mps.y();
+    s.vz_H_mps = v_W_mps.z();
+    s.battery_pct = 80;
+    facts_.on_state(s);
+    approach_.on_state(s, true);
+  }
+  /// The vehicle moved from p_W_ straight to `to_W_m` at speed_mps, whatever the approach asks:
+  /// a picture every 1/30 s, a state record with every third. The first step that does not go
+  /// on, or the last.
+  ApproachStep fly_to(const Eigen::Vector3d& to_W_m, double speed_mps) {
+    const Eigen::Vector3d from_W_m = p_W_;
+    const double move_s = (to_W_m - from_W_m).norm() / speed_mps;
+    const Eigen::Vector3d v_W_mps = (to_W_m - from_W_m) / move_s;
+    ApproachStep s;
+    for (int k = 1; k <= static_cast<int>(std::ceil(move_s * 30.0)); ++k) {
+      p_W_ = k / 30.0 < move_s ? Eigen::Vector3d(from_W_m + k / 30.0 * v_W_mps) : to_W_m;
+      if (k % 3 == 0) state(p_W_, v_W_mps);
+      s = step(camera_.draw(p_W_));
+      if (s.next != ApproachStep::Next::Stay) return s;
+    }
+    return s;
+  }
   bool flies_back_off(const ApproachStep& s) const {
     return s.velocity && s.velocity->vx_B_mps == back_off_velocity(config_.control).vx_B_mps && s.velocity->vx_B_mps < 0.0;
   }
@@ -83,6 +113,7 @@ class TargetApproachTest : public ::testing::Test {
   TargetApproach approach_;
   testing::SceneCamera camera_;
   cv::Mat bgr_;
+  Eigen::Vector3d p_W_ = kInFront_W_m;  ///< where the vehicle is (fly_to moves it)
 };
 
 TEST_F(TargetApproachTest, ACrossingStoppedCrossingAttemptsTimesGivesUpBacksOutThenLands) {
@@ -156,6 +187,58 @@ TEST_F(TargetApproachTest, ACrossingStoppedBacksOffAndBackingOffTooLongRereadsTh
   EXPECT_EQ(doubt->event, std::string(kCouldNotCentre) + ": re-reading the shelf from the viewpoint");
   EXPECT_TRUE(doubt->hover);
   EXPECT_FALSE(approach_.tracker().target());
+}
+
+// Continuity broken (no picture for identity_continuity_s and a frame), the target's identity
+// is judged on the next whole picture. Seen from where it was chosen, a known marker confirms it
+// and the approach goes on. Seen after the same gap 0.41 m to the left, the box where the target
+// was in the picture sits on L2 C2 (box 4's cell), and the check (cell_identity.hpp)
+// contradicts the target there: the shelf is re-read, the target forgotten.
+TEST_F(TargetApproachTest, AnIdentityContradictedAfterAGapRereadsTheShelf) {
+  ASSERT_TRUE(target_chosen());
+  approach_.on_phase_change();
+  const double gap_s = config_.mission.target.identity_continuity_s;
+  facts_.now_ns += seconds_to_ns(gap_s);
+  const ApproachStep confirmed = step(camera_.draw(kInFront_W_m));
+  EXPECT_EQ(confirmed.next, ApproachStep::Next::Stay);
+  EXPECT_TRUE(approach_.tracker().identification().continuity_lost());
+  EXPECT_EQ(approach_.tracker().identification().identity(), CellIdentity::Confirmed);
+  EXPECT_EQ(facts_.telemetry.event.rfind("target identity confirmed: ", 0), 0u) << facts_.telemetry.event;
+
+  facts_.now_ns += seconds_to_ns(gap_s);
+  const ApproachStep doubt = step(camera_.draw(kInFront_W_m + Eigen::Vector3d(0.0, 0.41, 0.0)));
+  EXPECT_EQ(doubt.next, ApproachStep::Next::Reread);
+  EXPECT_EQ(doubt.event.rfind("target identity contradicted (", 0), 0u) << doubt.event;
+  EXPECT_NE(doubt.event.find(": re-reading the shelf from the viewpoint"), std::string::npos) << doubt.event;
+  EXPECT_TRUE(doubt.hover);
+  EXPECT_FALSE(doubt.crossing);
+  EXPECT_EQ(facts_.telemetry.tracking.identity_contradictions, 1);
+  EXPECT_EQ(facts_.telemetry.tracking.shelf_rereads, 1);
+  EXPECT_FALSE(approach_.tracker().target()) << "forgotten, to be chosen anew";
+}
+
+// The vehicle lined up on L2 C3 (centre y -0.17 m, z 0.81 m) far out, then flown straight in at
+// 0.2 m/s, level, heading along the cell's normal: no sideways command, a still heading, the line
+// hold measured quiet, the cell height sampled against the state height. The approach goes on
+// until a corner tag reaches the picture's border inside cross_range_max_m; the gate is open on
+// that picture and the step is the crossing of L2 C3, holding the cell centre's height.
+TEST_F(TargetApproachTest, TheGateOpenOnACentredStillApproachCrossesTheTarget) {
+  ASSERT_TRUE(target_chosen());
+  approach_.on_phase_change();
+  const Eigen::Vector3d lined_up_W_m(kInFront_W_m.x(), -0.17, 0.81);
+  EXPECT_EQ(fly_to(lined_up_W_m, 0.1).next, ApproachStep::Next::Stay) << "lining up, far out";
+  const ApproachStep s = fly_to(lined_up_W_m + Eigen::Vector3d(1.7, 0.0, 0.0), 0.2);
+  ASSERT_EQ(s.next, ApproachStep::Next::Cross) << "at x " << p_W_.x() << ": " << facts_.telemetry.event;
+  ASSERT_TRUE(s.crossing);
+  EXPECT_EQ(s.crossing->event.rfind("corner tags leaving the view: crossing L2 C3 ", 0), 0u) << s.crossing->event;
+  EXPECT_TRUE(approach_.tracker().corners().near_edge());
+  ASSERT_TRUE(approach_.tracker().poses().pose_K());
+  EXPECT_LE(-approach_.tracker().poses().pose_K()->p_FB_m().x(), config_.mission.approach.cross_range_max_m);
+  EXPECT_EQ(approach_.tracker().identification().identity(), CellIdentity::Confirmed);
+  EXPECT_TRUE(facts_.telemetry.control.line_hold.measured);
+  EXPECT_NEAR(s.crossing->height_m, lined_up_W_m.z(), 0.03) << "the cell centre's height by the state height";
+  EXPECT_GT(s.crossing->velocity.vx_B_mps, 0.0) << "into the cell";
+  EXPECT_FALSE(s.hover);
 }
 
 // ---- Through FlightSoftware: the kinematic vehicle (flight_harness.hpp) ----
