@@ -32,6 +32,12 @@ double* senses_dispersed_field(plant::SensesParams& senses, const std::string& n
   return nullptr;
 }
 
+bool is_senses_dispersion(const std::string& name) {
+  plant::SensesParams senses;
+  if (senses_dispersed_field(senses, name) != nullptr) return true;
+  return name == "camera_readout_s" || name == "ground_effect_coeff" || name == "ceiling_effect_coeff";
+}
+
 namespace {
 
 /// The senses' dispersed keys (dispersion_table.hpp), each replacing its key.

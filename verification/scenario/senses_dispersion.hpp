@@ -13,4 +13,9 @@ namespace shelfcross::verification {
 /// not one of them.
 double* senses_dispersed_field(plant::SensesParams& senses, const std::string& name);
 
+/// Whether `name` draws one of the Tello's own senses, the camera's rolling shutter
+/// (`camera_readout_s`) or the air near surfaces (`ground_effect_coeff`, `ceiling_effect_coeff`):
+/// the dispersions a scenario with the documented senses adds to the world of the truth.
+bool is_senses_dispersion(const std::string& name);
+
 }  // namespace shelfcross::verification
