@@ -18,7 +18,6 @@
 #include <benchmark/benchmark.h>
 
 #include <cstdlib>
-#include <map>
 #include <memory>
 
 #include <opencv2/core/utility.hpp>
@@ -57,16 +56,6 @@ void whole_run(benchmark::State& state, const Scenario& shipped) {
   state.counters["runs_per_h"] = benchmark::Counter(3600.0 * runs, benchmark::Counter::kIsRate);
   state.counters["frames"] = benchmark::Counter(frames / runs);
   state.counters["sim_s"] = benchmark::Counter(simulated_s / runs);
-}
-
-// The default scenario with every effect of the senses dropped, as scripts/senses_variants.py's
-// `none` variant: the truth sensed, a global shutter, no air near surfaces.
-Scenario without_senses(Scenario s) {
-  s.senses = {};
-  s.readout_s = 0.0;
-  s.vehicle.surface_effects = {};
-  std::erase_if(s.dispersions, [](const auto& d) { return is_senses_dispersion(d.first); });
-  return s;
 }
 
 void BM_WholeRun(benchmark::State& state) {

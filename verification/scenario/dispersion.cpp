@@ -38,6 +38,14 @@ bool is_senses_dispersion(const std::string& name) {
   return name == "camera_readout_s" || name == "ground_effect_coeff" || name == "ceiling_effect_coeff";
 }
 
+Scenario without_senses(Scenario scenario) {
+  scenario.senses = {};
+  scenario.readout_s = 0.0;
+  scenario.vehicle.surface_effects = {};
+  std::erase_if(scenario.dispersions, [](const auto& d) { return is_senses_dispersion(d.first); });
+  return scenario;
+}
+
 namespace {
 
 /// The senses' dispersed keys (dispersion_table.hpp), each replacing its key.

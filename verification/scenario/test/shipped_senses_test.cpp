@@ -95,6 +95,21 @@ TEST(ShippedSenses, TheDefaultScenarioCarriesEverySense) {
   EXPECT_EQ(senses_parameters, 16);
 }
 
+// The world of the truth (tests of a mechanism the senses do not bear on fly their runs there):
+// every sense at the identity and its draws gone, every other key and draw kept.
+TEST(ShippedSenses, WithoutTheSensesIsTheWorldOfTheTruth) {
+  const Scenario def = load_scenario(kScenarios + "paper_test_shelf.yaml");
+  Scenario truth = without_senses(def);
+  EXPECT_EQ(senses_of(truth), Senses{});
+  EXPECT_EQ(truth.dispersions.size(), def.dispersions.size() - 16);
+  for (const auto& [name, d] : truth.dispersions) EXPECT_EQ(def.dispersions.at(name), d) << name;
+  truth.senses = def.senses;
+  truth.readout_s = def.readout_s;
+  truth.vehicle.surface_effects = def.vehicle.surface_effects;
+  truth.dispersions = def.dispersions;
+  EXPECT_EQ(truth, def);
+}
+
 TEST(ShippedSenses, EveryShippedScenarioSensesAsTheDefaultOneButForItsPurpose) {
   const Senses documented = senses_of(load_scenario(kScenarios + "paper_test_shelf.yaml"));
   const std::vector<std::string> files = shipped_scenarios();
