@@ -4,9 +4,10 @@
     senses_variants.py EFFECTS.yaml OUT_DIR [--onto SCENARIO.yaml ...]
 
 EFFECTS.yaml is a scenario carrying every effect at its documented values and dispersions
-(scenarios/senses/paper_test_shelf_senses.yaml). For it, OUT_DIR/<effect>.yaml keeps that one
-effect and drops the others, and OUT_DIR/none.yaml drops them all; so none.yaml flies the world
-without the senses and each <effect>.yaml the world with one. For each --onto SCENARIO,
+(scenarios/paper_test_shelf.yaml, the default; every shipped scenario carries them). For it,
+OUT_DIR/<effect>.yaml keeps that one effect and drops the others, and OUT_DIR/none.yaml drops
+them all; so none.yaml flies the world without the senses and each <effect>.yaml the world with
+one. For each --onto SCENARIO,
 OUT_DIR/<stem>_none.yaml is that scenario without any effect and OUT_DIR/<stem>_all.yaml the
 same with every effect of EFFECTS.yaml added. Every variant keeps its source's `name`, so
 `shelfcross diff` pairs campaigns of two variants run by run. Each campaign draws every

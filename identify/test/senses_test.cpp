@@ -241,12 +241,12 @@ TEST(Senses, ALogWithoutTheSensesBlockIdentifiesNoneOfThem) {
   EXPECT_NE(id.not_identified.at("height_noise_m").find("no still hover"), std::string::npos);
 }
 
-// A drone with a noisier h and a hold that follows the range, against the documented senses'
-// scenario (h noise 0 to 3 cm): height_noise_m named outside; the calibrated scenario holds the
+// A drone with a noisier h and a hold that follows the range, against the default scenario's
+// documented senses (h noise 0 to 3 cm): height_noise_m named outside; the calibrated scenario holds the
 // drone's senses and reads back.
 TEST(Senses, SensesOutsideAScenariosRangesAreNamedAndTheCalibratedScenarioHoldsThem) {
   const verification::Scenario documented =
-      verification::load_scenario(std::string(SHELFCROSS_SOURCE_DIR) + "/scenarios/senses/paper_test_shelf_senses.yaml");
+      verification::load_scenario(std::string(SHELFCROSS_SOURCE_DIR) + "/scenarios/paper_test_shelf.yaml");
   KnownDrone drone;
   drone.seed = 24;
   KnownSenses k;

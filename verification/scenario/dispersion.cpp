@@ -32,6 +32,20 @@ double* senses_dispersed_field(plant::SensesParams& senses, const std::string& n
   return nullptr;
 }
 
+bool is_senses_dispersion(const std::string& name) {
+  plant::SensesParams senses;
+  if (senses_dispersed_field(senses, name) != nullptr) return true;
+  return name == "camera_readout_s" || name == "ground_effect_coeff" || name == "ceiling_effect_coeff";
+}
+
+Scenario without_senses(Scenario scenario) {
+  scenario.senses = {};
+  scenario.readout_s = 0.0;
+  scenario.vehicle.surface_effects = {};
+  std::erase_if(scenario.dispersions, [](const auto& d) { return is_senses_dispersion(d.first); });
+  return scenario;
+}
+
 namespace {
 
 /// The senses' dispersed keys (dispersion_table.hpp), each replacing its key.

@@ -90,8 +90,8 @@ TEST(Scenario, BaseIsValid) {
   EXPECT_TRUE(s.start.landed);
 }
 
-// The shipped decked warehouse is the default scenario but for its decks, its name and the air
-// near them.
+// The shipped decked warehouse is the default scenario but for its decks and its name (the air
+// near them, the ground and ceiling effect, is on in both: shipped_senses_test.cpp).
 TEST(Scenario, DeckedWarehouseIsTheDefaultWithDecks) {
   Scenario decked = load_scenario(std::string(SHELFCROSS_SOURCE_DIR) + "/scenarios/warehouse_decked.yaml");
   const Scenario plain = load_scenario(kDefaultPath);
@@ -99,12 +99,6 @@ TEST(Scenario, DeckedWarehouseIsTheDefaultWithDecks) {
   EXPECT_EQ(decked.warehouse.shelves[0].deck_thickness_m, 0.018);
   EXPECT_NEAR(cell_clear_height_m(decked.warehouse.shelves[0], 2), 0.302, 1e-12);
   EXPECT_NEAR(cell_floor_z_S_m(decked.warehouse.shelves[0], 2), 0.668, 1e-12);
-  // And the air near the decks: ground and ceiling effect on, dispersed.
-  EXPECT_EQ(decked.vehicle.surface_effects.ground_coeff, 1.0);
-  EXPECT_EQ(decked.vehicle.surface_effects.ceiling_coeff, 1.0);
-  EXPECT_EQ(plain.vehicle.surface_effects, plant::SurfaceEffectParams{});
-  EXPECT_EQ(decked.dispersions.erase("ground_effect_coeff") + decked.dispersions.erase("ceiling_effect_coeff"), 2u);
-  decked.vehicle.surface_effects = plain.vehicle.surface_effects;
   decked.warehouse.shelves[0].deck_thickness_m = 0.0;
   decked.name = plain.name;
   EXPECT_EQ(decked, plain);

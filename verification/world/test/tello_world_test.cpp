@@ -122,9 +122,11 @@ TEST(TelloWorld, AWallEndsTheWorldAsLeavingTheArena) {
 // With ticks that do not divide the clocks' periods, a capture (a state record) is due at the
 // first tick at or after each scheduled instant, carries that instant, and draws one noise seed
 // from the run's render-noise stream; a tick past several instants takes one capture and skips
-// the others.
+// the others. A global shutter (the default scenario's rolling shutter off), so that each
+// capture's readout starts at its own pose.
 TEST(TelloWorld, CapturesAndStateRecordsAreDueAtTheFirstTickAtOrAfterTheirInstants) {
   auto s = default_scenario();
+  s->readout_s = 0.0;
   TelloWorld world(setup_of(s), 1);
   const std::int64_t frame_mhz = millihertz(s->frame_rate_hz), state_mhz = millihertz(s->cosim.state_rate_hz);
   RandomStream noise(7, StreamId::render_noise);
