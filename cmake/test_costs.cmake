@@ -8,14 +8,14 @@
 # test's CTest time in seconds on a 2-core machine, rounded; only the order it gives matters.
 # Once CTest has timed a test, its own record takes over.
 #
-# The RUN_SERIAL tests (the end-to-end flights against the emulator, paced by the wall clock)
-# come first: a serial test waits until no other test runs, which costs nothing at the start
-# and a drained core anywhere else.
+# The end-to-end flights against the emulator (paced by the wall clock, one at a time: a
+# resource lock, app/CMakeLists.txt) come first: one after another, beside the rest, they end
+# long before the other tests do.
 #
 # A name that no test has (yet) is skipped: each directory includes this file, and the names
 # defined so far are set.
 set(_shelfcross_test_costs
-  # serial (app/CMakeLists.txt): 1000 and their seconds, above every other
+  # the flights (app/CMakeLists.txt): 1000 and their seconds, above every other
   TelloEndToEnd.SameWithFivePercentLossOnEveryChannel 1035
   TelloEndToEnd.PilotFliesTheEmulatorTakesInventoryCrossesAndLands 1021
   TelloEndToEnd.CalibrationFlightFacingTheShelfStopsAndLands 1007

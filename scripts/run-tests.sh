@@ -8,27 +8,34 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 bash scripts/install-deps.sh
 slowest() {
   echo
-  for junit in build/release/ctest-junit.xml build/debug/ctest-junit.xml; do
+  for junit in build/release/ctest-junit.xml build/fuzz/ctest-junit.xml build/debug/ctest-junit.xml; do
     if [ -f "$junit" ]; then python3 scripts/slowest_tests.py "$junit"; fi
   done
 }
-rm -f build/release/ctest-junit.xml build/debug/ctest-junit.xml
+rm -f build/release/ctest-junit.xml build/fuzz/ctest-junit.xml build/debug/ctest-junit.xml
 trap slowest EXIT
 cmake --preset release
 cmake --build --preset release
 ctest --preset release -j "$(nproc)"
 # The parsers' (config, sdk, tello), plant's and flight software's tests under AddressSanitizer
-# and UndefinedBehaviorSanitizer (the debug preset; the whole suite under it: docs/getting-started.md). Only
-# these: the debug build of the rest (render, verification, app) would not fit CI's time.
-cmake --preset debug
-cmake --build build/debug --target config_test sdk_test plant_test flight_base_test perception_test navigation_test \
-  control_test guidance_test mission_test tello_test
-ctest --preset debug -j "$(nproc)" -L '^(config|sdk|plant|flight_sw|tello)$'
-# The parsers under libFuzzer (fuzz/README.md): each target a fixed number of inputs from a
-# fixed seed on its corpus (about 25 s each), when clang and libFuzzer's runtime are there
-# (scripts/debian-packages.txt installs both).
+# and UndefinedBehaviorSanitizer, then the parsers under libFuzzer (fuzz/README.md): each target
+# a fixed number of inputs from a fixed seed on its corpus (about 25 s each). One clang build
+# (the fuzz preset: the sanitizers and libFuzzer's coverage on everything it compiles) compiles
+# these libraries once for both. Only these tests: the sanitized build of the rest (render,
+# verification, app) would not fit CI's time (the whole suite under the sanitizers:
+# docs/getting-started.md). Without clang or libFuzzer's runtime (scripts/debian-packages.txt
+# installs both) GCC builds the same tests (the debug preset) and the fuzz targets are not run.
+sanitized_tests=(config_test sdk_test plant_test flight_base_test perception_test navigation_test control_test
+                 guidance_test mission_test tello_test)
+sanitized_labels='^(config|sdk|plant|flight_sw|tello)$'
 if command -v clang++ >/dev/null && compgen -G "/usr/lib/llvm-*/lib/clang/*/lib/linux/libclang_rt.fuzzer-x86_64.a" >/dev/null; then
+  cmake --preset fuzz
+  cmake --build build/fuzz --target "${sanitized_tests[@]}" fuzz
+  ctest --preset fuzz -j "$(nproc)" -L "$sanitized_labels"
   bash scripts/run-fuzz.sh ci
 else
-  echo "run-tests: clang++ or libFuzzer's runtime (libclang-rt-14-dev) missing: fuzz targets not run"
+  echo "run-tests: clang++ or libFuzzer's runtime (libclang-rt-14-dev) missing: the sanitized tests built by GCC (the debug preset), fuzz targets not run"
+  cmake --preset debug
+  cmake --build build/debug --target "${sanitized_tests[@]}"
+  ctest --preset debug -j "$(nproc)" -L "$sanitized_labels"
 fi
