@@ -52,6 +52,7 @@ function(shelfcross_module_tests)
   target_compile_definitions(${M_NAME}_test PRIVATE SHELFCROSS_SOURCE_DIR="${SHELFCROSS_SOURCE_DIR}")
   # Designated initialisers that leave members at their defaults are idiomatic C++20.
   target_compile_options(${M_NAME}_test PRIVATE -Wall -Wextra -Wno-missing-field-initializers)
+  shelfcross_test_program(${M_NAME}_test)
   gtest_discover_tests(${M_NAME}_test DISCOVERY_TIMEOUT 60 PROPERTIES LABELS ${M_NAME})
   shelfcross_test_costs()
 endfunction()

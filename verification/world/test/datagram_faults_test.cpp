@@ -7,7 +7,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <optional>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -267,7 +266,8 @@ TEST(DatagramFaults, OutagesTakeEveryChannelForOneToFiveSeconds) {
   DatagramFaults faults(f, 3);
   double down_s = 0.0, longest_s = 0.0, shortest_s = 1e9, sum_s = 0.0;
   int outages = 0;
-  std::optional<TimeNs> began;
+  bool in_outage = false;
+  TimeNs began = 0;
   constexpr int kRate = 100;
   for (int k = 0; k < kRate * 20000; ++k) {
     const TimeNs t = tick_time_ns(k, kRate);
@@ -279,14 +279,17 @@ TEST(DatagramFaults, OutagesTakeEveryChannelForOneToFiveSeconds) {
       EXPECT_TRUE(faults.state(t).lost);
       EXPECT_TRUE(faults.video_datagram_lost(t));
     }
-    if (down && !began) began = t;
-    if (!down && began) {
-      const double length_s = ns_to_seconds(t - *began);
+    if (down && !in_outage) {
+      in_outage = true;
+      began = t;
+    }
+    if (!down && in_outage) {
+      const double length_s = ns_to_seconds(t - began);
       longest_s = std::max(longest_s, length_s);
       shortest_s = std::min(shortest_s, length_s);
       sum_s += length_s;
       ++outages;
-      began.reset();
+      in_outage = false;
     }
   }
   ASSERT_GT(outages, 400);
