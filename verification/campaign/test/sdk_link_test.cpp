@@ -112,9 +112,11 @@ TEST(SdkLink, FivePercentLossOnEveryChannelNeverTouchesAndListsNothingWrong) {
 // landing point. The Tello flies the last sticks it got: without the driver's stop-sticks
 // rule the crossing's forward stick stays on and the vehicle flies into the wall (as a lossy
 // end-to-end flight does); with it, the sticks were centred on the
-// wire before the land, so the vehicle hovers until its watchdog lands it.
+// wire before the land, so the vehicle hovers until its watchdog lands it. Flown in the world
+// of the truth (without_senses): the rule is the driver's and the wall is met on the last sticks,
+// whatever the Tello senses; the senses would only add a tenth to the flights' cost.
 TEST(SdkLink, LostLandWithoutTheStopSticksRuleFliesIntoTheWall) {
-  Scenario s = load_scenario(kDefault);
+  Scenario s = without_senses(load_scenario(kDefault));
   s.dispersions.clear();
   s.warehouse.arena_max_W_m.x() = 4.9;  // the shelf's back face is at 3.34 m
   s.cosim.link.lost_command = "land";
@@ -141,9 +143,11 @@ TEST(SdkLink, LostLandWithoutTheStopSticksRuleFliesIntoTheWall) {
 // The first `land` datagram lost after the crossing. tello_pilot sends the flight software's
 // `land` again as soon as the state records show no descent 1.5 s after it, instead of holding
 // it for an attempt's timeout (5 s) or the whole land_reply_s (10 s): the mission ends about
-// 1.5 s later than the same run with nothing lost, and lands as it does.
+// 1.5 s later than the same run with nothing lost, and lands as it does. Flown in the world of
+// the truth (without_senses): the re-send is tello_pilot's, on the state records' height,
+// whatever the Tello senses.
 TEST(SdkLink, LostFirstLandIsSentAgainBeforeTheFlightSoftwaresTimeout) {
-  Scenario s = load_scenario(kDefault);
+  Scenario s = without_senses(load_scenario(kDefault));
   s.dispersions.clear();
   s.cosim.timeout_s = 90.0;
   s.cosim.link.command_loss_probability = 0.0;  // only the injected loss
@@ -176,8 +180,10 @@ TEST(SdkLink, LostFirstLandIsSentAgainBeforeTheFlightSoftwaresTimeout) {
 // (Failsafes::link_outage_s, 10 s: the Tello's 15 s watchdog less the 5 s keep-alive): the
 // program gives up and lands, the run a named abort. (12 s in the approach would end on the
 // shelf whatever the program does: the Tello flies the approach's last sticks all that time.)
+// Flown in the world of the truth (without_senses): the ride-through and its bound are the
+// link's and the program's, whatever the Tello senses.
 TEST(SdkLink, AThreeSecondOutageIsRiddenThroughAndOnePastTheBoundLands) {
-  Scenario s = load_scenario(kDefault);
+  Scenario s = without_senses(load_scenario(kDefault));
   s.dispersions.clear();
   s.cosim.link.spells.outage_start_s = 12.0;
   s.cosim.link.spells.outage_duration_s = 3.0;
