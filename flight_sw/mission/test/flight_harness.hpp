@@ -172,9 +172,7 @@ class Harness {
           CameraFrame f;
           f.t_ns = t_;
           f.index = frame_k;
-          f.bgr = blank ? cv::Mat(config_.camera.height_px, config_.camera.width_px, CV_8UC3,
-                                            cv::Scalar(185, 185, 180))
-                                  : drawer_.draw(scene_, camera_pose_W(p_WB_, yaw_, 0, 0, config_.mount));
+          f.bgr = picture(blank);
           if (o_.video_latency_s > 0.0) {  // taken now, handed over later
             f.t_ns = t_ + seconds_to_ns(o_.video_latency_s);
             in_flight_.push_back(std::move(f));
@@ -240,6 +238,30 @@ class Harness {
     st.after = fsw_.phase();
     phases_.push_back(st.after);
     frame_steps_.push_back(std::move(st));
+  }
+
+  // What the camera sees now, in a buffer no frame handed over still holds (the flight
+  // software may keep a picture): a bare wall when blank, else the scene from the vehicle's
+  // pose. Drawing is a function of the pose alone (the scene and the mount are fixed), so a
+  // pose unchanged since the last drawing (a hover: the kinematic vehicle stands exactly
+  // still) gives the same picture without drawing it again.
+  cv::Mat picture(bool blank) {
+    auto free = std::find_if(pictures_.begin(), pictures_.end(), [](const cv::Mat& m) { return m.u->refcount == 1; });
+    if (free == pictures_.end()) {
+      pictures_.emplace_back(config_.camera.height_px, config_.camera.width_px, CV_8UC3);
+      free = std::prev(pictures_.end());
+    }
+    if (blank) {
+      *free = cv::Scalar(185, 185, 180);
+      return *free;
+    }
+    const Eigen::Vector4d pose(p_WB_.x(), p_WB_.y(), p_WB_.z(), yaw_);
+    if (!drawn_pose_ || *drawn_pose_ != pose) {
+      drawer_.draw(scene_, camera_pose_W(p_WB_, yaw_, 0, 0, config_.mount), drawn_);
+      drawn_pose_ = pose;
+    }
+    drawn_.copyTo(*free);
+    return *free;
   }
 
   // Concealment as the receiver hands it over (see Options::damage_group_frames).
@@ -348,6 +370,9 @@ class Harness {
   FlightConfig config_;
   Scene scene_;
   Drawer drawer_;
+  cv::Mat drawn_;                             ///< the last picture drawn
+  std::optional<Eigen::Vector4d> drawn_pose_;  ///< from where (x, y, z, yaw)
+  std::deque<cv::Mat> pictures_;              ///< buffers of the pictures handed over
   TimeNs t_ = 0;
   std::optional<TimeNs> approach_t_;
   std::optional<TimeNs> reread_t_;  ///< the first frame of the first re-read
