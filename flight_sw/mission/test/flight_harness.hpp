@@ -108,12 +108,13 @@ class Harness {
     yaw_ = o_.start_yaw_rad;
   }
 
-  /// Runs until the flight software finishes or t_end_s.
-  void run(double t_end_s) {
+  /// Runs until the flight software finishes, t_end_s, or `until` holds (checked after each
+  /// input: a test that needs a flight only up to an event stops there).
+  void run(double t_end_s, const std::function<bool(const Harness&)>& until = {}) {
     handle(fsw_.start(0));
     const TimeNs end = seconds_to_ns(t_end_s);
     std::int64_t frame_k = 1, state_k = 1;
-    while (!fsw_.finished() && t_ < end) {
+    while (!fsw_.finished() && t_ < end && !(until && until(*this))) {
       const TimeNs t_frame = tick_time_ns(frame_k, o_.frame_rate_hz);
       const TimeNs t_state = tick_time_ns(state_k, 10);
       const TimeNs t_reply = replies_.empty() ? end : replies_.front().t_ns;
