@@ -30,7 +30,9 @@ if [ "$mode" = ci ]; then
   fi
 fi
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(state_record sdk_command scenario flight_config video_receiver)
+# Longest first (in CI mode video_receiver, then sdk_command, take the most CPU), so that with
+# two at a time the last to start is a short one and no core idles long at the end.
+[ ${#targets[@]} -gt 0 ] || targets=(video_receiver sdk_command state_record scenario flight_config)
 if [ "$mode" = ci ]; then
   for t in "${targets[@]}"; do
     [ -n "${ci_runs[$t]:-}" ] || { echo "run-fuzz.sh: no CI input count for target $t" >&2; exit 2; }

@@ -395,7 +395,7 @@ TEST(FlightSoftware, AnInventoryHoverThatLostTheGridSearchesAgain) {
 // inside the cell is worse), and the mission ends crossed, landed beyond the shelf.
 TEST(FlightSoftware, MissionOutOfTimeMidCrossingFinishesTheCrossing) {
   Harness nominal{Options{}};
-  nominal.run(80.0);
+  nominal.run(80.0, [](const Harness& n) { return first_entry_s(n, Phase::Cross).has_value(); });  // flown to its crossing
   const std::optional<double> t_cross_s = first_entry_s(nominal, Phase::Cross);
   ASSERT_TRUE(t_cross_s.has_value()) << nominal.fsw().result().reason;
   FlightConfig c;

@@ -108,12 +108,13 @@ class Harness {
     yaw_ = o_.start_yaw_rad;
   }
 
-  /// Runs until the flight software finishes or t_end_s.
-  void run(double t_end_s) {
+  /// Runs until the flight software finishes, t_end_s, or `until` holds (checked after each
+  /// input: a test that needs a flight only up to an event stops there).
+  void run(double t_end_s, const std::function<bool(const Harness&)>& until = {}) {
     handle(fsw_.start(0));
     const TimeNs end = seconds_to_ns(t_end_s);
     std::int64_t frame_k = 1, state_k = 1;
-    while (!fsw_.finished() && t_ < end) {
+    while (!fsw_.finished() && t_ < end && !(until && until(*this))) {
       const TimeNs t_frame = tick_time_ns(frame_k, o_.frame_rate_hz);
       const TimeNs t_state = tick_time_ns(state_k, 10);
       const TimeNs t_reply = replies_.empty() ? end : replies_.front().t_ns;
@@ -172,9 +173,7 @@ class Harness {
           CameraFrame f;
           f.t_ns = t_;
           f.index = frame_k;
-          f.bgr = blank ? cv::Mat(config_.camera.height_px, config_.camera.width_px, CV_8UC3,
-                                            cv::Scalar(185, 185, 180))
-                                  : drawer_.draw(scene_, camera_pose_W(p_WB_, yaw_, 0, 0, config_.mount));
+          f.bgr = picture(blank);
           if (o_.video_latency_s > 0.0) {  // taken now, handed over later
             f.t_ns = t_ + seconds_to_ns(o_.video_latency_s);
             in_flight_.push_back(std::move(f));
@@ -240,6 +239,30 @@ class Harness {
     st.after = fsw_.phase();
     phases_.push_back(st.after);
     frame_steps_.push_back(std::move(st));
+  }
+
+  // What the camera sees now, in a buffer no frame handed over still holds (the flight
+  // software may keep a picture): a bare wall when blank, else the scene from the vehicle's
+  // pose. Drawing is a function of the pose alone (the scene and the mount are fixed), so a
+  // pose unchanged since the last drawing (a hover: the kinematic vehicle stands exactly
+  // still) gives the same picture without drawing it again.
+  cv::Mat picture(bool blank) {
+    auto free = std::find_if(pictures_.begin(), pictures_.end(), [](const cv::Mat& m) { return m.u->refcount == 1; });
+    if (free == pictures_.end()) {
+      pictures_.emplace_back(config_.camera.height_px, config_.camera.width_px, CV_8UC3);
+      free = std::prev(pictures_.end());
+    }
+    if (blank) {
+      *free = cv::Scalar(185, 185, 180);
+      return *free;
+    }
+    const Eigen::Vector4d pose(p_WB_.x(), p_WB_.y(), p_WB_.z(), yaw_);
+    if (!drawn_pose_ || *drawn_pose_ != pose) {
+      drawer_.draw(scene_, camera_pose_W(p_WB_, yaw_, 0, 0, config_.mount), drawn_);
+      drawn_pose_ = pose;
+    }
+    drawn_.copyTo(*free);
+    return *free;
   }
 
   // Concealment as the receiver hands it over (see Options::damage_group_frames).
@@ -348,6 +371,9 @@ class Harness {
   FlightConfig config_;
   Scene scene_;
   Drawer drawer_;
+  cv::Mat drawn_;                             ///< the last picture drawn
+  std::optional<Eigen::Vector4d> drawn_pose_;  ///< from where (x, y, z, yaw)
+  std::deque<cv::Mat> pictures_;              ///< buffers of the pictures handed over
   TimeNs t_ = 0;
   std::optional<TimeNs> approach_t_;
   std::optional<TimeNs> reread_t_;  ///< the first frame of the first re-read

@@ -337,13 +337,16 @@ TEST(FlightSoftware, MissionOutOfTimeGivesUpClearOfTheShelf) {
 TEST(FlightSoftware, MissionOutOfTimeInAReReadFromCloseBacksOutFirst) {
   Options o;
   o.blank_after_approach_s = 4.0;
-  Harness first(o);
-  first.run(60.0);
   // The re-read begins on a timer (the target lost too long): the first picture after the
   // approach that finds the mission in FindShelf dates it to within a frame.
+  const auto reread_step = [](const std::vector<FrameStep>& steps) {
+    const auto in_approach = std::find_if(steps.begin(), steps.end(), [](const FrameStep& s) { return s.before == Phase::Approach; });
+    return std::find_if(in_approach, steps.end(), [](const FrameStep& s) { return s.after == Phase::FindShelf; });
+  };
+  Harness first(o);
+  first.run(60.0, [&](const Harness& f) { return reread_step(f.frame_steps()) != f.frame_steps().end(); });  // flown to the re-read
   const std::vector<FrameStep>& steps = first.frame_steps();
-  const auto in_approach = std::find_if(steps.begin(), steps.end(), [](const FrameStep& s) { return s.before == Phase::Approach; });
-  const auto reread = std::find_if(in_approach, steps.end(), [](const FrameStep& s) { return s.after == Phase::FindShelf; });
+  const auto reread = reread_step(steps);
   ASSERT_NE(reread, steps.end()) << first.fsw().result().reason;
   const std::optional<double> t_reread_s = ns_to_seconds(reread->t_ns);
   double x_reread_m = 0.0;
