@@ -191,8 +191,7 @@ bool on_tag(const cv::Mat& bgr, const cv::Point2d& p) {
 // the truth (without_senses), where this draw's mission succeeds; with the Tello's own senses
 // it ends "approach timed out" (a safe abort, no crossing). The overlay draws what the flight
 // software computed on the pictures it was handed, whichever link handed them: the run is flown
-// over the ideal link (whole pictures: no H.264 to encode and decode), at well under half the sdk
-// link's CPU.
+// over the ideal link (whole pictures: no H.264 to encode and decode).
 TEST(ReplayOverlay, TagsAreDrawnOnThePictureTheyCameFrom) {
   using namespace shelfcross;
   verification::Scenario nominal = verification::without_senses(

@@ -69,9 +69,20 @@ inline Eigen::Isometry3d camera_pose_W(const Eigen::Vector3d& p_WB_m, double yaw
   return X_WC;
 }
 
+/// The orientation of shelf frame S in the world: a turn about z by the shelf's yaw.
+inline Eigen::Matrix3d shelf_rotation_W(const DrawnShelf& s) {
+  return Eigen::AngleAxisd(s.yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+}
+
+/// A point of shelf frame S in the world, with S's orientation R_WS (shelf_rotation_W: taken
+/// once where many points are moved).
+inline Eigen::Vector3d shelf_to_world(const DrawnShelf& s, const Eigen::Matrix3d& R_WS, const Eigen::Vector3d& p_S) {
+  return s.origin_W_m + R_WS * p_S;
+}
+
 /// A point of shelf frame S in the world.
 inline Eigen::Vector3d shelf_to_world(const DrawnShelf& s, const Eigen::Vector3d& p_S) {
-  return s.origin_W_m + Eigen::AngleAxisd(s.yaw_rad, Eigen::Vector3d::UnitZ()) * p_S;
+  return shelf_to_world(s, shelf_rotation_W(s), p_S);
 }
 
 /// y_S of post i and z_S of beam j (shelfcross/warehouse.hpp conventions).
@@ -281,15 +292,14 @@ class Drawer {
   // order; a shape with a corner less than 5 cm in front of the camera is left out.
   void draw_shelf(cv::Mat& img, const Scene& scene, const DrawnShelf& s, const Eigen::Isometry3d& X_CW) const {
     shelf_shapes(scene, s);
-    const Eigen::Matrix3d R_WS = Eigen::AngleAxisd(s.yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    const Eigen::Matrix3d R_WS = shelf_rotation_W(s);
     p_C_.clear();
     visible_.assign(shapes_.size(), false);
     for (size_t k = 0; k < shapes_.size(); ++k) {
       std::array<cv::Point3d, 4> corners_C;
       bool in_front = true;
       for (size_t i = 0; i < 4 && in_front; ++i) {
-        const Eigen::Vector3d p_SW = R_WS * shapes_[k].p_S[i];  // shelf_to_world's rotation
-        const Eigen::Vector3d c = X_CW * Eigen::Vector3d(s.origin_W_m + p_SW);
+        const Eigen::Vector3d c = X_CW * shelf_to_world(s, R_WS, shapes_[k].p_S[i]);
         in_front = c.z() >= 0.05;
         corners_C[i] = cv::Point3d(c.x(), c.y(), c.z());
       }

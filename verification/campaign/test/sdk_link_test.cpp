@@ -114,7 +114,7 @@ TEST(SdkLink, FivePercentLossOnEveryChannelNeverTouchesAndListsNothingWrong) {
 // end-to-end flight does); with it, the sticks were centred on the
 // wire before the land, so the vehicle hovers until its watchdog lands it. Flown in the world
 // of the truth (without_senses): the rule is the driver's and the wall is met on the last sticks,
-// whatever the Tello senses; the senses would only add a tenth to the flights' cost.
+// whatever the Tello senses.
 TEST(SdkLink, LostLandWithoutTheStopSticksRuleFliesIntoTheWall) {
   Scenario s = without_senses(load_scenario(kDefault));
   s.dispersions.clear();

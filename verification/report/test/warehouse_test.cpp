@@ -70,8 +70,7 @@ Scenario first_shelves(Scenario s, std::size_t count) {
 // to 2 % video loss): a lossy run's legitimate outcome, which campaigns measure, not what these
 // tests are about. The same seed gives the same draws for every strategy. Flown in the world of
 // the truth (without_senses): the paths the strategies take and the row's inventory are the
-// flight software's guidance and perception, whatever the Tello senses; the senses add a tenth
-// (sdk link) to a quarter (ideal link) to these long flights' CPU.
+// flight software's guidance and perception, whatever the Tello senses.
 RunResult fly(Scenario s, const std::string& strategy, const std::string& link, std::uint64_t seed) {
   s = without_senses(std::move(s));
   s.cosim.strategy = strategy;
@@ -131,8 +130,7 @@ TEST(Warehouse, EveryStrategyInventoriesTheRowAndThroughTheCellsIsShortestOverTh
 // The whole row of five, through the cells: every shelf crossed at its target and inventoried,
 // without contact. Over the ideal link: what the sdk link does to a crossing and a transfer
 // from shelf to shelf is flown above, on the row's first shelves (seed 12); this is the mission
-// over five shelves, which the ideal link (whole pictures: no H.264 to encode and decode) flies
-// at well under half the sdk link's CPU.
+// over five shelves, and the ideal link flies it without the H.264 encoding and decoding.
 TEST(Warehouse, ThroughTheCellsCrossesAndInventoriesAllFiveShelves) {
   const Scenario nominal = load_scenario(kWarehouse);
   ASSERT_EQ(compared_strategies().front(), "through_cells");
