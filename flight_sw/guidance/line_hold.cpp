@@ -75,28 +75,44 @@ void LineHoldMonitor::on_state(const StateRecord& s, bool quiet) {
 
 namespace {
 
-// The least-squares line v = a + b (t - t0) through (t_i, v_i): its slope b, and half the spread
-// (max - min) / 2 of the residuals v_i - a - b (t_i - t0).
+// The least-squares line v = a + b (t - t0) through (t_i, v_i): its slope b, half the spread
+// (max - min) / 2 of the residuals r_i = v_i - a - b (t_i - t0), and the slope's standard
+// error s / sqrt(sum (t_i - t_m)^2) sqrt(n / n_eff), s^2 = sum r_i^2 / (n - 2). The poses of a
+// hover come 30 a second while the hold and the air move the vehicle over the autopilot's
+// velocity lag and the gusts' second, so neighbouring residuals are alike and n of them know
+// as much as n_eff independent ones: n_eff = n (1 - rho) / (1 + rho) for the residuals'
+// lag-one correlation rho >= 0 (an AR(1) process's), and never more than one per velocity
+// lag of the span (span / kVelocityLag_s, at least 2): a stretch of one lag shows one push,
+// not its mean.
 struct LineFit {
   double slope = 0.0;
   double half_spread = 0.0;
+  double slope_error = 0.0;
 };
-LineFit fit_line(const std::vector<double>& t, const std::vector<double>& v) {
-  const double n = static_cast<double>(t.size());
+LineFit fit_line(const std::vector<double>& t, const std::vector<double>& v, double span_s) {
+  const size_t n = t.size();
   double st = 0.0, sv = 0.0;
-  for (size_t i = 0; i < t.size(); ++i) st += t[i], sv += v[i];
-  const double tm = st / n, vm = sv / n;
+  for (size_t i = 0; i < n; ++i) st += t[i], sv += v[i];
+  const double tm = st / static_cast<double>(n), vm = sv / static_cast<double>(n);
   double stt = 0.0, stv = 0.0;
-  for (size_t i = 0; i < t.size(); ++i) stt += (t[i] - tm) * (t[i] - tm), stv += (t[i] - tm) * (v[i] - vm);
+  for (size_t i = 0; i < n; ++i) stt += (t[i] - tm) * (t[i] - tm), stv += (t[i] - tm) * (v[i] - vm);
   LineFit f;
   f.slope = stt > 0.0 ? stv / stt : 0.0;
-  double r_min = 0.0, r_max = 0.0;
-  for (size_t i = 0; i < t.size(); ++i) {
-    const double r = v[i] - vm - f.slope * (t[i] - tm);
-    r_min = i == 0 ? r : std::min(r_min, r);
-    r_max = i == 0 ? r : std::max(r_max, r);
+  std::vector<double> r(n);
+  for (size_t i = 0; i < n; ++i) r[i] = v[i] - vm - f.slope * (t[i] - tm);
+  const auto [r_min, r_max] = std::minmax_element(r.begin(), r.end());
+  f.half_spread = 0.5 * (*r_max - *r_min);
+  if (n < 3 || stt <= 0.0) return f;
+  double rr = 0.0, lag = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    rr += r[i] * r[i];
+    if (i > 0) lag += r[i] * r[i - 1];
   }
-  f.half_spread = 0.5 * (r_max - r_min);
+  const double rho = rr > 0.0 ? std::clamp(lag / rr, 0.0, 0.95) : 0.0;
+  const double n_eff = std::min(static_cast<double>(n) * (1.0 - rho) / (1.0 + rho),
+                                std::max(2.0, span_s / kVelocityLag_s));
+  const double variance = rr / static_cast<double>(n - 2);
+  f.slope_error = std::sqrt(variance / stt * static_cast<double>(n) / n_eff);
   return f;
 }
 
@@ -124,9 +140,10 @@ LineWander LineHoldMonitor::wander(TimeNs now_ns, double window_s) const {
     up.push_back(it->z_m);
   }
   w.span_s = t.back();
-  const LineFit fy = fit_line(t, across), fz = fit_line(t, up);
+  const LineFit fy = fit_line(t, across, w.span_s), fz = fit_line(t, up, w.span_s);
   w.half_spread_y_m = fy.half_spread;
   w.drift_y_mps = fy.slope;
+  w.drift_error_y_mps = fy.slope_error;
   w.half_spread_z_m = fz.half_spread;
   // The largest mean of kSpeedRecords consecutive quiet records (all of them, if fewer).
   std::vector<double> v;
@@ -200,7 +217,8 @@ LineHoldForecast forecast_line_hold(const MissionParams& m, const LineWander& w,
   // Its own error: the pose's, and how much further the air's reach goes at one standard error
   // more of the air's rms (where that decides the wander).
   const double air_up_y = kAirReach_s * (w.air_rms_mps + w.air_error_mps);
-  f.error_y_m = kPoseError_m + std::max(wander_y, air_up_y) - std::max(wander_y, air_y);
+  // And the drift's: its slope's standard error carried over the blind crossing.
+  f.error_y_m = kPoseError_m + std::max(wander_y, air_up_y) - std::max(wander_y, air_y) + w.drift_error_y_mps * blind_s;
   f.error_z_m = kPoseError_m;
   return f;
 }

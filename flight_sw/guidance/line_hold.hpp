@@ -107,6 +107,7 @@ struct LineWander {
   double half_spread_y_m = 0.0;  ///< (max - min) / 2 of y' (across the heading) about its fitted line
   double half_spread_z_m = 0.0;  ///< (max - min) / 2 of z_K about its fitted line
   double drift_y_mps = 0.0;      ///< the fitted slope of y'
+  double drift_error_y_mps = 0.0;  ///< its standard error (the residuals' correlation counted)
   double across_speed_mps = 0.0;  ///< largest |across-line speed| of quiet state records
   double air_rms_mps = 0.0;       ///< the air remembered (AirMemory::rms_mps)
   double air_error_mps = 0.0;     ///< its standard error (AirMemory::error_mps)

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -311,6 +312,41 @@ TEST(LineHold, TheGateKeepsTheSeparationMinimumPlusTheForecastsError) {
   EXPECT_LT(w.air_error_mps, 0.01);
   const LineHoldForecast g = forecast_line_hold(config.mission, w, blind_s());
   EXPECT_NEAR(g.error_y_m, kPoseError_m + kAirReach_s * w.air_error_mps, 1e-12);
+}
+
+// The drift's own error: a hover drifting 1 cm/s, its poses scattered 2 mm (white) about a
+// sway of 3 mm at 3 Hz (the hold answering the air), fits the drift to within its standard
+// error. The error counts the sway's correlated residuals (never more than one independent
+// residual per velocity lag: 2 of 28 poses over 0.9 s, 5 of 76 over 2.5 s), so it falls with
+// the span faster than the square root of the poses' count; carried over the blind crossing it
+// enters the forecast's error, and a forecast that the long window leaves room for the short
+// window's error refuses.
+TEST(LineHold, TheDriftsStandardErrorEntersTheForecastsError) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> scatter(0.0, 0.002);
+  std::vector<double> noise(100);
+  for (double& n : noise) n = scatter(rng);
+  const auto y = [&](double t) {
+    return 0.01 * t + 0.003 * std::sin(6.0 * std::numbers::pi * t) + noise[static_cast<size_t>(std::lround(t * kFrameHz))];
+  };
+  LineHoldMonitor short_m, long_m;
+  const LineWander s = hover(short_m, 0.9, y, [](double) { return 0.0; });
+  const LineWander l = hover(long_m, 2.5, y, [](double) { return 0.0; });
+  EXPECT_GT(s.drift_error_y_mps, 3.0 * l.drift_error_y_mps);
+  EXPECT_LT(std::abs(s.drift_y_mps - 0.01), 2.0 * s.drift_error_y_mps);
+  EXPECT_LT(std::abs(l.drift_y_mps - 0.01), 2.0 * l.drift_error_y_mps);
+  const FlightConfig config;
+  const LineHoldForecast fs = forecast_line_hold(config.mission, s, blind_s());
+  const LineHoldForecast fl = forecast_line_hold(config.mission, l, blind_s());
+  EXPECT_NEAR(fs.error_y_m, kPoseError_m + s.drift_error_y_mps * blind_s(), 1e-12);
+  EXPECT_NEAR(fl.error_y_m, kPoseError_m + l.drift_error_y_mps * blind_s(), 1e-12);
+  ASSERT_GT(fs.error_y_m - fl.error_y_m, 0.006);
+  // On the narrow column, centred: a forecast leaving 5 mm more than the long window's keep.
+  LineHoldForecast f = fl;
+  f.y_m = line_room(config, {2, 3}, pose_at(-0.6, 0.0, 0.0)).room_y_m - line_hold_keep_m(config.mission, fl.error_y_m) - 0.005;
+  EXPECT_FALSE(gate_with(f).has_value()) << *gate_with(f);
+  f.error_y_m = fs.error_y_m;
+  EXPECT_TRUE(gate_with(f).has_value());
 }
 
 // The across-line speed is the largest mean of three consecutive quiet records: one record
