@@ -16,6 +16,8 @@
 #include <string>
 #include <vector>
 
+#include <gtest/gtest.h>
+
 #include "flight_sw/tello/test/loopback.hpp"
 
 extern char** environ;
