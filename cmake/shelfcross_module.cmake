@@ -35,26 +35,40 @@ function(shelfcross_module)
   install(FILES ${headers} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/shelfcross/${folder})
 endfunction()
 
-# shelfcross_module_tests(NAME <name> DEPS <targets...>)
+# shelfcross_module_tests(NAME <name> DEPS <targets...> [IMAGE_FILE_TESTS <test/x.cpp...>])
 # <folder>/test/*.cpp become one GoogleTest executable `<name>_test`, its tests registered with
 # CTest one by one. Tests read shipped files through SHELFCROSS_SOURCE_DIR.
+# IMAGE_FILE_TESTS: the test sources that read or write image files (cv::imread, cv::imwrite)
+# where their room does not: a second program, `<name>_image_test`, which alone links OpenCV's
+# image codecs. imgcodecs brings GDAL and about 130 shared libraries that a program loads and
+# resolves at every start (about 0.1 s of CPU), and CTest starts a test program once per test.
 function(shelfcross_module_tests)
-  cmake_parse_arguments(M "" "NAME" "DEPS" ${ARGN})
+  cmake_parse_arguments(M "" "NAME" "DEPS;IMAGE_FILE_TESTS" ${ARGN})
   if(NOT SHELFCROSS_BUILD_TESTS)
     return()
   endif()
   file(GLOB sources CONFIGURE_DEPENDS "${CMAKE_CURRENT_SOURCE_DIR}/test/*.cpp")
-  if(NOT sources)
-    return()
+  list(TRANSFORM M_IMAGE_FILE_TESTS PREPEND "${CMAKE_CURRENT_SOURCE_DIR}/")
+  list(REMOVE_ITEM sources ${M_IMAGE_FILE_TESTS})
+  if(sources)
+    _shelfcross_test_program(${M_NAME} ${M_NAME}_test "${sources}" ${M_DEPS})
   endif()
-  add_executable(${M_NAME}_test ${sources})
-  target_link_libraries(${M_NAME}_test PRIVATE ${M_DEPS} GTest::gtest GTest::gmock GTest::gtest_main)
-  target_compile_definitions(${M_NAME}_test PRIVATE SHELFCROSS_SOURCE_DIR="${SHELFCROSS_SOURCE_DIR}")
-  # Designated initialisers that leave members at their defaults are idiomatic C++20.
-  target_compile_options(${M_NAME}_test PRIVATE -Wall -Wextra -Wno-missing-field-initializers)
-  shelfcross_test_program(${M_NAME}_test)
-  gtest_discover_tests(${M_NAME}_test DISCOVERY_TIMEOUT 60 PROPERTIES LABELS ${M_NAME})
+  if(M_IMAGE_FILE_TESTS)
+    _shelfcross_test_program(${M_NAME} ${M_NAME}_image_test "${M_IMAGE_FILE_TESTS}" ${M_DEPS} opencv_imgcodecs)
+  endif()
   shelfcross_test_costs()
+endfunction()
+
+# _shelfcross_test_program(<label> <target> <sources> <deps...>): one GoogleTest program of a
+# room, its tests registered one by one under the room's label.
+function(_shelfcross_test_program label target sources)
+  add_executable(${target} ${sources})
+  target_link_libraries(${target} PRIVATE ${ARGN} GTest::gtest GTest::gmock GTest::gtest_main)
+  target_compile_definitions(${target} PRIVATE SHELFCROSS_SOURCE_DIR="${SHELFCROSS_SOURCE_DIR}")
+  # Designated initialisers that leave members at their defaults are idiomatic C++20.
+  target_compile_options(${target} PRIVATE -Wall -Wextra -Wno-missing-field-initializers)
+  shelfcross_test_program(${target})
+  gtest_discover_tests(${target} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS ${label})
 endfunction()
 
 # shelfcross_test_costs(): CTest reads the long tests' start order (cmake/test_costs.cmake)

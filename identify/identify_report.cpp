@@ -9,7 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "verification/statistics/plot.hpp"
+#include "verification/plot/plot.hpp"
 
 namespace shelfcross::identify {
 namespace {

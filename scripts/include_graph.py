@@ -42,11 +42,13 @@ def _below(order):
 # Each house's rooms and what each may include besides itself.
 ROOMS = {
     "flight_sw": _below(["", "perception", "navigation", "control", "guidance", "mission", "tello"]),
-    # statistics <- scenario <- world <- cosim <- campaign <- report, search;  cosim <- frames
+    # statistics <- scenario <- world <- cosim <- campaign <- report, search;  cosim <- frames;
+    # plot <- report, search
     "verification": {
         **_below(["statistics", "scenario", "world", "cosim", "campaign"]),
-        "report": {"statistics", "scenario", "world", "cosim", "campaign"},
-        "search": {"statistics", "scenario", "world", "cosim", "campaign"},
+        "plot": set(),
+        "report": {"statistics", "plot", "scenario", "world", "cosim", "campaign"},
+        "search": {"statistics", "plot", "scenario", "world", "cosim", "campaign"},
         "frames": {"statistics", "scenario", "world", "cosim"},
     },
 }

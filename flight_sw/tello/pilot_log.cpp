@@ -1,10 +1,7 @@
 #include "flight_sw/tello/pilot_log.hpp"
 
 #include <cstdio>
-#include <filesystem>
 #include <ostream>
-
-#include <opencv2/imgcodecs.hpp>
 
 namespace shelfcross::tello {
 namespace {
@@ -84,10 +81,11 @@ void PilotLog::approach_view(const flight_sw::Telemetry& tm, const Clock& clock)
   log_.write(clock.now_ns(), "fsw_view", std::move(j));
 }
 
-void PilotLog::record(const VideoFrame& f, const std::string& dir, const Clock& clock) {
+void PilotLog::record(const VideoFrame& f, const std::function<bool(const std::string&, const cv::Mat&)>& write,
+                      const Clock& clock) {
   char name[64];
   std::snprintf(name, sizeof name, "frame_%06lld%s.png", static_cast<long long>(f.index), f.damaged ? "_damaged" : "");
-  if (!cv::imwrite((std::filesystem::path(dir) / name).string(), f.bgr, {cv::IMWRITE_PNG_COMPRESSION, 1})) {
+  if (!write(name, f.bgr)) {
     log_.write(clock.now_ns(), "failsafe", {{"event", "cannot record frame " + std::string(name)}});
   }
 }

@@ -3,10 +3,12 @@
 // the driver's events, the frames handed to the flight software, its phase changes (also on
 // the console), its view of the approach, and recorded frames.
 
+#include <functional>
 #include <iosfwd>
 #include <string>
 
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
 
 #include "flight_sw/mission/flight_software.hpp"
 #include "flight_sw/tello/clock.hpp"
@@ -37,8 +39,10 @@ class PilotLog {
   void telemetry(const flight_sw::Telemetry& tm, const Clock& clock);
   /// What the flight software made of a frame of the approach (nothing in other phases).
   void approach_view(const flight_sw::Telemetry& tm, const Clock& clock);
-  /// Writes the frame to `dir` as frame_INDEX[_damaged].png; a failsafe line when it cannot.
-  void record(const VideoFrame& f, const std::string& dir, const Clock& clock);
+  /// Hands the frame to `write` as frame_INDEX[_damaged].png (PilotLoopConfig::record_frame); a
+  /// failsafe line when it cannot be written.
+  void record(const VideoFrame& f, const std::function<bool(const std::string&, const cv::Mat&)>& write,
+              const Clock& clock);
 
  private:
   FlightLog log_;

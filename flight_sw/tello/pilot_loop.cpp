@@ -1,7 +1,6 @@
 #include "flight_sw/tello/pilot_loop.hpp"
 
 #include <algorithm>
-#include <filesystem>
 #include <ostream>
 #include <sstream>
 #include <variant>
@@ -143,7 +142,6 @@ class PilotLoop::Impl {
   }
 
   void start() {
-    if (!o_.record_dir.empty()) std::filesystem::create_directories(o_.record_dir);
     const TimeNs start_ns = clock_.now_ns();
     safe_.started_ns = start_ns;
     feed_.start(start_ns);
@@ -195,7 +193,7 @@ class PilotLoop::Impl {
       const TimeNs taken = clock_.now_ns();
       log_.frame(taken, *f);
       drone_.on_frame(f->handed_ns);
-      if (!o_.record_dir.empty()) log_.record(*f, o_.record_dir, clock_);
+      if (o_.record_frame) log_.record(*f, o_.record_frame, clock_);
       if (safe_.hover_override) {
         safe_.hover_override = false;
         log_.write(taken, "failsafe", {{"event", "video back: control returned to the flight software"}});

@@ -24,6 +24,8 @@
 #include <optional>
 #include <string>
 
+#include <opencv2/core.hpp>
+
 #include "flight_sw/config.hpp"
 #include "flight_sw/mission/flight_software.hpp"
 #include "flight_sw/tello/clock.hpp"
@@ -54,7 +56,12 @@ struct PilotLoopConfig {
   flight_sw::FlightConfig flight;
   Failsafes failsafes;
   std::string log_path;             ///< the flight log (JSON lines); empty: none
-  std::string record_dir;           ///< every frame handed over, as PNG (debugging); empty: none
+  /// Records every frame handed to the flight software (debugging: tello_pilot --record-frames):
+  /// called with the frame's file name, frame_INDEX[_damaged].png, and its picture; false when it
+  /// could not (a failsafe line in the log). The program writes the file: image files are
+  /// OpenCV's imgcodecs, whose hundred-odd shared libraries (GDAL and its formats) the loop
+  /// leaves to the programs that write pictures, not to every co-simulated run. Empty: none.
+  std::function<bool(const std::string& file_name, const cv::Mat& bgr)> record_frame;
   std::string flight_config_path;   ///< for the log's start line
   std::string calibration_path;     ///< for the log's start line
   std::ostream* console = nullptr;  ///< phase changes and failsafe messages for people; null: silent

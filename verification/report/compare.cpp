@@ -11,8 +11,8 @@
 #include "verification/campaign/stored_run.hpp"
 #include "verification/cosim/cosim.hpp"
 #include "verification/cosim/run_metrics_json.hpp"
+#include "verification/plot/plot.hpp"
 #include "verification/report/report.hpp"
-#include "verification/statistics/plot.hpp"
 #include "verification/statistics/statistics.hpp"
 
 namespace shelfcross::verification {

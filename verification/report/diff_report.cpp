@@ -9,7 +9,7 @@
 #include <utility>
 
 #include "config/strict_json.hpp"
-#include "verification/statistics/plot.hpp"
+#include "verification/plot/plot.hpp"
 #include "verification/statistics/statistics.hpp"
 
 namespace shelfcross::verification {

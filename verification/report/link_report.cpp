@@ -6,7 +6,7 @@
 
 #include "verification/campaign/stored_run.hpp"
 #include "verification/cosim/run_metrics_json.hpp"
-#include "verification/statistics/plot.hpp"
+#include "verification/plot/plot.hpp"
 #include "verification/statistics/success_bins.hpp"
 
 namespace shelfcross::verification {

@@ -12,11 +12,11 @@
 #include "verification/campaign/results_store.hpp"
 #include "verification/campaign/stored_run.hpp"
 #include "verification/cosim/run_metrics_json.hpp"
+#include "verification/plot/plot.hpp"
 #include "verification/report/crossing_push.hpp"
 #include "verification/report/link_report.hpp"
 #include "verification/scenario/dispersion.hpp"
 #include "verification/scenario/scenario.hpp"
-#include "verification/statistics/plot.hpp"
 #include "verification/statistics/statistics.hpp"
 #include "verification/statistics/success_bins.hpp"
 

@@ -8,8 +8,8 @@
 #include <sstream>
 
 #include "verification/campaign/results_store.hpp"
+#include "verification/plot/plot.hpp"
 #include "verification/search/search.hpp"
-#include "verification/statistics/plot.hpp"
 #include "verification/statistics/statistics.hpp"
 
 namespace shelfcross::verification {

@@ -3,9 +3,12 @@
 #include <poll.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <iostream>
+
+#include <opencv2/imgcodecs.hpp>
 
 #include "flight_sw/tello/calibration_manoeuvre.hpp"
 #include "flight_sw/tello/pilot_loop.hpp"
@@ -49,7 +52,13 @@ int run_pilot(const PilotOptions& o, const Clock& clock, const std::atomic<int>&
   config.flight = o.flight;
   config.failsafes = o.failsafes;
   config.log_path = o.log_path;
-  config.record_dir = o.record_dir;
+  if (!o.record_dir.empty()) {
+    std::filesystem::create_directories(o.record_dir);
+    config.record_frame = [dir = std::filesystem::path(o.record_dir)](const std::string& file_name,
+                                                                       const cv::Mat& bgr) {
+      return cv::imwrite((dir / file_name).string(), bgr, {cv::IMWRITE_PNG_COMPRESSION, 1});
+    };
+  }
   config.flight_config_path = o.flight_config_path;
   config.calibration_path = o.calibration_path;
   config.console = &std::cout;

@@ -1,22 +1,16 @@
 // tello_pilot as a child process against a scripted fake Tello on loopback: real UDP, real
 // H.264, the real flight software. The fake drone is stepped by the test (no thread); waits
 // are bounded by counts of short poll() waits, never by reading a clock.
-#include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <functional>
 #include <fstream>
-#include <sstream>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/aruco.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -25,26 +19,22 @@
 #include "sdk/video_framing.hpp"
 // The drone's side, to make a Tello-like stream (tests may link verification/; the program not).
 #include "verification/world/h264_encoder.hpp"
-
-extern char** environ;
+#include "verification/world/test/tello_pilot_child.hpp"
 
 namespace shelfcross::tello {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::Child;
+using testing::kConfig;
 using testing::pause_ms;
+using testing::read_file;
+using testing::run_to_exit;
+using testing::temp_dir;
 
-const std::string kConfig = std::string(SHELFCROSS_SOURCE_DIR) + "/flight_sw/config/paper_test_shelf.yaml";
 constexpr const char* kState =
     "mid:-1;x:-100;y:-100;z:-100;mpry:-1,-1,-1;pitch:0;roll:0;yaw:0;vgx:0;vgy:0;vgz:0;templ:55;temph:57;"
     "tof:80;h:80;bat:83;baro:118.26;time:3;agx:-4.00;agy:1.00;agz:-997.00;\r\n";
-
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 // The flight log's lines of one type whose `key` equals `value` (empty key: all of the type).
 int log_lines(const fs::path& log, const std::string& type, const std::string& key = "",
@@ -59,61 +49,6 @@ int log_lines(const fs::path& log, const std::string& type, const std::string& k
     if (key.empty() || (j.contains(key) && j[key].is_string() && j[key] == value)) ++n;
   }
   return n;
-}
-
-fs::path temp_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("tello_pilot_test_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
-
-struct Child {
-  pid_t pid = -1;
-  fs::path out, err;
-  std::optional<int> exit_code;
-
-  Child(const std::vector<std::string>& args, const fs::path& dir) : out(dir / "stdout"), err(dir / "stderr") {
-    std::vector<char*> argv;
-    std::string program = TELLO_PILOT_PROGRAM;
-    argv.push_back(program.data());
-    std::vector<std::string> copy = args;
-    for (auto& a : copy) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_addopen(&fa, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_addopen(&fa, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    EXPECT_EQ(posix_spawn(&pid, program.c_str(), &fa, nullptr, argv.data(), environ), 0);
-    posix_spawn_file_actions_destroy(&fa);
-  }
-  ~Child() {
-    if (!exit_code && pid > 0) {
-      ::kill(pid, SIGKILL);
-      ::waitpid(pid, nullptr, 0);
-    }
-  }
-  bool poll_exit() {
-    if (exit_code) return true;
-    int status = 0;
-    if (::waitpid(pid, &status, WNOHANG) == pid) {
-      exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-      return true;
-    }
-    return false;
-  }
-  int wait(int guard_ms = 20000) {
-    for (int i = 0; i < guard_ms / 5 && !poll_exit(); ++i) pause_ms(5);
-    return exit_code.value_or(-1);
-  }
-};
-
-int run_to_exit(const std::vector<std::string>& args, std::string* err = nullptr) {
-  const fs::path dir = temp_dir("usage");
-  Child c(args, dir);
-  const int code = c.wait();
-  if (err) *err = read_file(c.err);
-  return code;
 }
 
 std::uint16_t free_port() {
@@ -330,32 +265,6 @@ TEST(TelloPilot, DryRunNeverSendsAMotionCommand) {
   }
   EXPECT_GT(log_lines(log, "filtered"), 1);  // the flight software's rc too, logged, not sent
   EXPECT_GT(log_lines(log, "frame"), 0);
-  if (!HasFailure()) fs::remove_all(dir);
-}
-
-}  // namespace
-}  // namespace shelfcross::tello
-
-namespace shelfcross::tello {
-namespace {
-
-TEST(TelloPilot, PrintsMarkersTheDetectorReads) {
-  const fs::path dir = temp_dir("print");
-  std::string err;
-  ASSERT_EQ(run_to_exit({"--config", kConfig, "--print-markers", dir.string(), "--marker-ids", "3-5"}, &err), 0) << err;
-  const auto dict = cv::aruco::getPredefinedDictionary(cv::aruco::DICT_4X4_50);  // the config's
-  for (int id = 3; id <= 5; ++id) {
-    const cv::Mat sheet = cv::imread((dir / ("marker_" + std::to_string(id) + ".png")).string());
-    ASSERT_FALSE(sheet.empty()) << id;
-    std::vector<int> ids;
-    std::vector<std::vector<cv::Point2f>> corners;
-    cv::aruco::detectMarkers(sheet, dict, corners, ids);
-    ASSERT_EQ(ids, std::vector<int>{id});
-    // 0.10 m at 300 dpi: 1181 px a side.
-    EXPECT_NEAR(cv::norm(corners[0][0] - corners[0][1]), 1181.0, 3.0);
-  }
-  EXPECT_FALSE(cv::imread((dir / "tag.png").string()).empty());
-  EXPECT_EQ(run_to_exit({"--config", kConfig, "--print-markers", dir.string(), "--marker-ids", "5-2"}, &err), 2);
   if (!HasFailure()) fs::remove_all(dir);
 }
 

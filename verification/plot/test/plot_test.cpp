@@ -1,4 +1,4 @@
-#include "verification/statistics/plot.hpp"
+#include "verification/plot/plot.hpp"
 
 #include <unistd.h>
 #include <cmath>
