@@ -227,6 +227,7 @@ void read_mission(const Map& m, MissionParams& p) {
   opt(m, "calm_wait_s", p.line_hold.calm_wait_s, kNonNegative);
   opt(m, "give_up_clearance_m", p.line_hold.give_up_clearance_m, kNonNegative);
   opt(m, "separation_min_m", p.line_hold.separation_min_m, within(0.0, 0.1));
+  opt(m, "trim_drift", p.line_hold.trim_drift);
   if (p.line_hold.line_hold_min_span_s > p.line_hold.line_hold_window_s) m.fail("line_hold_min_span_s", "must not exceed line_hold_window_s");
   m.finish();
 }

@@ -38,7 +38,7 @@
 //               identity_continuity_s identity_confirm_s identity_rereads stop_distance_m
 //               min_beyond_distance_m level_check vertical_lag_s height_hold_range_blend
 //               height_hold_time_constant_s line_hold_window_s
-//               line_hold_min_span_s calm_wait_s give_up_clearance_m separation_min_m
+//               line_hold_min_span_s calm_wait_s give_up_clearance_m separation_min_m trim_drift
 //   layout:     shelf_count shelf_spacing_m (required when shelf_count > 1)
 //   strategy:   mode (through_cells | over_tops | around_ends) top_clearance_m end_clearance_m
 //               transfer_speed_mps transfer_kp transfer_yaw_kp waypoint_tolerance_m transfer_leg_s
@@ -322,6 +322,10 @@ struct LineHoldParams {
   /// verifier's near miss (a scenario's cosim.near_miss_m) is the same 2 cm by default; the
   /// flight software cannot read the scenario, so it has its own.
   double separation_min_m = 0.02;
+  /// The quiet stretch's drift flown out in the crossing: its sticks ask the line's velocity
+  /// less the drift (a biased VPS hold moves the vehicle at minus the bias, which no reading
+  /// shows). The gate's forecast still carries the whole drift (line_hold.hpp, "drift").
+  bool trim_drift = true;
 };
 
 /// The mission's parameters (the YAML section `mission`, its keys flat: config.hpp's key list),

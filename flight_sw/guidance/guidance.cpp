@@ -131,8 +131,17 @@ double crossing_vz_mps(const ControlGains& g, double cell_height_m, double heigh
   return height_hold_vz_mps(cell_height_m, height_m, g.crossing_kp_z, g.crossing_z_speed_max_mps);
 }
 
+void trim_crossing(CrossingPlan& plan, const ControlGains& g, double drift_y_mps) {
+  const Eigen::Vector2d line_B = g.crossing_speed_mps * plan.dir_B;
+  plan.trim_B_mps = Eigen::Vector2d(0.0, -drift_y_mps);
+  const Eigen::Vector2d commanded_B = line_B + plan.trim_B_mps;
+  const double turn_rad = std::atan2(commanded_B.y(), commanded_B.x()) - std::atan2(line_B.y(), line_B.x());
+  plan.end.axis_O = Eigen::Rotation2Dd(turn_rad) * plan.end.axis_O;
+}
+
 VelocityCommand crossing_velocity(const ControlGains& g, const CrossingPlan& plan, double vz_mps) {
-  return {g.crossing_speed_mps * plan.dir_B.x(), g.crossing_speed_mps * plan.dir_B.y(), vz_mps, 0.0};
+  const Eigen::Vector2d v_B = g.crossing_speed_mps * plan.dir_B + plan.trim_B_mps;
+  return {v_B.x(), v_B.y(), vz_mps, 0.0};
 }
 
 // ---- Transfer ----

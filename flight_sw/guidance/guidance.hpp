@@ -118,6 +118,7 @@ constexpr double kHeadingCarry_s = 0.5;
 /// The crossing, planned on the last pose.
 struct CrossingPlan {
   Eigen::Vector2d dir_B = Eigen::Vector2d::UnitX();  ///< the line's horizontal part in B, |dir_B| = |d_xy|
+  Eigen::Vector2d trim_B_mps = Eigen::Vector2d::Zero();  ///< added to the line's velocity (trim_crossing)
   CrossingEnd end;  ///< where it ends (odometry.hpp)
 };
 /// Along the crossing line (crossing_direction_K, navigation.hpp) at crossing_speed_mps,
@@ -140,7 +141,15 @@ CrossingPlan plan_crossing(const FlightConfig& config, const PoseEstimate& pose_
 /// height h (control.hpp, height_hold_vz_mps, with crossing_kp_z and crossing_z_speed_max_mps).
 double crossing_vz_mps(const ControlGains& g, double cell_height_m, double height_m);
 
-/// Horizontally along the line at crossing_speed_mps, vertically `vz_mps`, heading held.
+/// A drift of `drift_y_mps` across the heading (the line hold's, line_hold.hpp) flown out: the
+/// crossing asks the line's velocity less the drift, v_B - (0, d). The Tello then moves along the
+/// line while its own estimate, and so the state odometry, moves along the commanded velocity
+/// (a biased VPS hold flies the estimate): the odometry's axis, along which the watch measures
+/// the offset and the progress, is turned by the angle between the two.
+void trim_crossing(CrossingPlan& plan, const ControlGains& g, double drift_y_mps);
+
+/// Horizontally along the line at crossing_speed_mps (plus the plan's trim), vertically
+/// `vz_mps`, heading held.
 VelocityCommand crossing_velocity(const ControlGains& g, const CrossingPlan& plan, double vz_mps);
 
 // ---- Transfer between shelves (over_tops, around_ends) ----

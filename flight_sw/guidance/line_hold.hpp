@@ -122,6 +122,8 @@ struct LineHoldForecast {
   double error_z_m = 0.0;  ///< and up: the pose's
   double span_s = 0.0;    ///< the quiet stretch it was measured on (at most line_hold_window_s)
   double air_rms_mps = 0.0;  ///< the air remembered, where its reach is the larger wander (else 0)
+  /// The drift the crossing flies out (line_hold.trim_drift; else 0), across the heading, m/s.
+  double drift_trim_y_mps = 0.0;
 };
 
 /// The air remembered (file comment, "air"): the quiet state records' sideways speed of the

@@ -179,8 +179,9 @@ GateVerdict CrossingGate::judge(MissionFacts& facts, const TargetTracker& tracke
   // state odometry has flown (guidance.hpp, plan_crossing).
   const double yaw_O = facts.state ? facts.state->yaw_rad : 0.0;
   const double speed_gain = forward_gain_.speed_gain();
-  const CrossingPlan plan = plan_crossing(config_, pose, sticks.yaw_rate_radps, beyond_m, speed_gain,
-                                          facts.odometry.p_O_m().head<2>(), yaw_O);
+  CrossingPlan plan = plan_crossing(config_, pose, sticks.yaw_rate_radps, beyond_m, speed_gain,
+                                    facts.odometry.p_O_m().head<2>(), yaw_O);
+  trim_crossing(plan, g, gate.line_hold.drift_trim_y_mps);
   CrossingStart start;
   start.end = plan.end;
   start.watch = plan_crossing_watch(config_, line_room(config_, *tracker.target(), pose), pose.p_FB_m(),
@@ -189,7 +190,9 @@ GateVerdict CrossingGate::judge(MissionFacts& facts, const TargetTracker& tracke
                 " m past the back face; speed gain " + format_m(speed_gain) + "; " +
                 format_m(*gate.height_above_cell_m) + " m above the cell centre by the state height; " +
                 "line-hold forecast " + format_m(gate.line_hold.y_m) + " m across, " + format_m(gate.line_hold.z_m) +
-                " m up" + air_text(gate.line_hold) + (behind_m ? "; tags " + format_m(*behind_m) + " m behind)" : ")");
+                " m up" + air_text(gate.line_hold) +
+                (plan.trim_B_mps.y() != 0.0 ? "; a drift of " + format_m(-plan.trim_B_mps.y()) + " m/s across flown out" : "") +
+                (behind_m ? "; tags " + format_m(*behind_m) + " m behind)" : ")");
   // Horizontally along the line; vertically the cell centre's height held by the state
   // height (CellCrossing), not the line's slope: that slope came from a pose a video latency
   // old, and open loop it flew a vehicle still settling vertically into the beam below.

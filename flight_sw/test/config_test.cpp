@@ -22,6 +22,7 @@ TEST(FlightConfigYaml, SampleFileReadsToTheDocumentedDefaults) {
   EXPECT_DOUBLE_EQ(c.rc.rc_per_radps_yaw, d.rc.rc_per_radps_yaw);
   EXPECT_DOUBLE_EQ(c.timeouts.video_land_s, d.timeouts.video_land_s);
   EXPECT_DOUBLE_EQ(c.mission.line_hold.separation_min_m, d.mission.line_hold.separation_min_m);
+  EXPECT_EQ(c.mission.line_hold.trim_drift, d.mission.line_hold.trim_drift);
   EXPECT_DOUBLE_EQ(c.mission.crossing.height_hold_range_blend, d.mission.crossing.height_hold_range_blend);
   EXPECT_DOUBLE_EQ(c.mission.crossing.height_hold_time_constant_s, d.mission.crossing.height_hold_time_constant_s);
   EXPECT_EQ(c.mission.vehicle_size_m, d.mission.vehicle_size_m);
@@ -55,6 +56,8 @@ TEST(FlightConfigYaml, BadInputIsRefusedWithFileAndLine) {
   expect_refused(shelf + "mission:\n  separation_min_m: -0.01\n", 5, "separation_min_m");
   expect_refused(shelf + "mission:\n  height_hold_range_blend: 1.5\n", 5, "height_hold_range_blend");
   expect_refused(shelf + "mission:\n  height_hold_time_constant_s: 0\n", 5, "height_hold_time_constant_s");
+  expect_refused(shelf + "mission:\n  trim_drift: sometimes\n", 5, "trim_drift");
+  EXPECT_FALSE(parse_flight_config(shelf + "mission:\n  trim_drift: false\n", "test.yaml").mission.line_hold.trim_drift);
   EXPECT_DOUBLE_EQ(parse_flight_config(shelf + "mission:\n  separation_min_m: 0.03\n", "test.yaml")
                        .mission.line_hold.separation_min_m,
                    0.03);

@@ -139,6 +139,34 @@ TEST(CrossingLaws, TheLineIsFlownAtCrossingSpeedAndEndsByDistance) {
   EXPECT_GT(plan_crossing(config, pose, 0.0, 0.5, 0.8, {1.0, 2.0}, 0.0).end.timed_ns, plan.end.timed_ns);
 }
 
+// A drift flown out: a vehicle drifting 2 cm/s to its left (+y) on a line straight ahead is
+// asked 2 cm/s to its right; the Tello then flies the line, while its estimate, which the
+// odometry integrates, moves along the commanded velocity: the watch's axis turns with it, by
+// atan(-0.02 / 0.4) on a heading of 0.3 rad.
+TEST(CrossingLaws, ADriftFlownOutTurnsTheCommandAndTheOdometrysAxis) {
+  const FlightConfig config;
+  PoseEstimate pose;
+  pose.X_FC.translation() = Eigen::Vector3d(-0.6, 0.0, 0.0);
+  pose.X_FB.translation() = Eigen::Vector3d(-0.6, 0.0, 0.0);
+  const CrossingPlan line = plan_crossing(config, pose, 0.0, 0.5, 1.0, {0.0, 0.0}, 0.3);
+  CrossingPlan trimmed = line;
+  trim_crossing(trimmed, config.control, 0.02);
+  const double speed = config.control.crossing_speed_mps;
+  const VelocityCommand v = crossing_velocity(config.control, trimmed, 0.0);
+  EXPECT_NEAR(v.vx_B_mps, speed, kTight);
+  EXPECT_NEAR(v.vy_B_mps, -0.02, kTight);
+  const double turned = std::atan2(trimmed.end.axis_O.y(), trimmed.end.axis_O.x()) -
+                        std::atan2(line.end.axis_O.y(), line.end.axis_O.x());
+  EXPECT_NEAR(turned, std::atan2(-0.02, speed), 1e-12);
+  EXPECT_NEAR(trimmed.end.axis_O.norm(), 1.0, 1e-12);
+  EXPECT_EQ(trimmed.end.line_m, line.end.line_m);
+  // No drift: the plan is the line's.
+  CrossingPlan none = line;
+  trim_crossing(none, config.control, 0.0);
+  EXPECT_EQ(none.end.axis_O, line.end.axis_O);
+  EXPECT_EQ(crossing_velocity(config.control, none, 0.0).vy_B_mps, crossing_velocity(config.control, line, 0.0).vy_B_mps);
+}
+
 TEST(CrossingLaws, TheHeightHoldIsSaturated) {
   const ControlGains g;
   EXPECT_EQ(crossing_vz_mps(g, 1.0, 0.0), g.crossing_z_speed_max_mps);

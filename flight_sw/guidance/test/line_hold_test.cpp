@@ -141,7 +141,9 @@ TEST(LineHold, StrongGustIsRefused) {
 // A drifting hover: 4 cm/s sideways nobody commanded, below the state's 0.05 m/s rounding (it
 // reads 0): only the poses show it, as the slope of their across-line position. It goes on
 // through the 2.6 s blind crossing, 10.4 cm: more than the 8.4 cm the opening leaves. Refused,
-// though the 1.5 s of hover moved it only 6 cm and the state showed nothing.
+// though the 1.5 s of hover moved it only 6 cm and the state showed nothing. The crossing
+// would fly the drift out (trim_drift, the default), but the forecast keeps it whole: a trim
+// is only as right as the drift stays what the hover showed.
 TEST(LineHold, DriftingHoverIsRefused) {
   LineHoldMonitor m;
   const LineWander w = hover(
@@ -149,12 +151,19 @@ TEST(LineHold, DriftingHoverIsRefused) {
   EXPECT_EQ(w.across_speed_mps, 0.0);
   EXPECT_NEAR(w.drift_y_mps, 0.04, 1e-9);
   EXPECT_NEAR(w.half_spread_y_m, 0.0, 1e-9);
+  EXPECT_NEAR(w.drift_error_y_mps, 0.0, 1e-9);
   const LineHoldForecast f = forecast_line_hold(FlightConfig{}.mission, w, blind_s());
   ASSERT_TRUE(f.measured);
   EXPECT_NEAR(f.y_m, 0.04 * blind_s(), 1e-9);
+  EXPECT_NEAR(f.drift_trim_y_mps, 0.04, 1e-9);
   const auto refusal = gate_with(f);
   ASSERT_TRUE(refusal.has_value());
   EXPECT_EQ(refusal->rfind(kLineCannotBeHeld, 0), 0u) << *refusal;
+  MissionParams untrimmed = FlightConfig{}.mission;
+  untrimmed.line_hold.trim_drift = false;
+  const LineHoldForecast g = forecast_line_hold(untrimmed, w, blind_s());
+  EXPECT_EQ(g.drift_trim_y_mps, 0.0);
+  EXPECT_EQ(g.y_m, f.y_m);
 }
 
 // An arrival 2 cm inside the vertical room by the state height, with 3 cm of wander forecast:
