@@ -25,6 +25,7 @@
 #include "render/lens_mesh.hpp"
 #include "render/noise.hpp"
 #include "render/renderer.hpp"
+#include "render/rolling_shutter.hpp"
 #include "render/test/test_warehouse.hpp"
 
 namespace {
@@ -118,6 +119,22 @@ void BM_RenderFrameRolling(benchmark::State& state) {
 }
 BENCHMARK(BM_RenderFrameRolling)->Arg(1)->Arg(0)->ArgName("turning")->MeasureProcessCPUTime()
     ->Unit(benchmark::kMillisecond);
+
+// The rolling frame's mesh alone: BM_RenderMeshOnly's, with the 47 px margin of
+// rolling_bench_renderer, meshed at the middle pose of BM_RenderFrameRolling/turning:1's
+// readout and each vertex moved to its row's pose.
+void BM_RenderMeshOnlyRolling(benchmark::State& state) {
+  shelfcross::render::LensMesher mesher = rolling_bench_renderer().lens_mesh();
+  const shelfcross::render::ReadoutPoses readout(
+      shelfcross::render::test::camera_looking_forward({0.8, 0.0, 0.98}, -0.5 * 0.020), bench_pose());
+  for (auto _ : state) {
+    mesher.build(readout);
+    benchmark::DoNotOptimize(mesher.vertices().data());
+  }
+  state.counters["vertices"] = static_cast<double>(mesher.vertices().size());
+  state.counters["triangles"] = static_cast<double>(mesher.indices().size() / 3);
+}
+BENCHMARK(BM_RenderMeshOnlyRolling)->MeasureProcessCPUTime()->Unit(benchmark::kMillisecond);
 
 void BM_RenderFinishOnly(benchmark::State& state) {
   cv::setNumThreads(1);

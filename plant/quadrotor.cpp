@@ -59,7 +59,11 @@ struct CvodeSolver {
     if (!y || !abstol) throw std::runtime_error("plant: N_VNew_Serial failed");
     N_VEnableFusedOps_Serial(y, SUNTRUE);  // fewer passes over the 17 components per step
     double* a = N_VGetArrayPointer(abstol);
-    for (int i = 0; i < kStateSize; ++i) a[i] = i >= kIdxRotor ? settings.abs_tol_rotor_radps : settings.abs_tol;
+    for (int i = 0; i < kStateSize; ++i) {
+      a[i] = i >= kIdxRotor ? settings.abs_tol_rotor_radps
+             : i >= kIdxW   ? settings.abs_tol_rate_radps
+                            : settings.abs_tol;
+    }
     pack_state(y0, N_VGetArrayPointer(y));
     const bool adams = settings.method == IntegratorSettings::Method::adams_fixed_point;
     cvode = CVodeCreate(adams ? CV_ADAMS : CV_BDF, ctx);
@@ -217,7 +221,8 @@ Quadrotor::Quadrotor(const VehicleParams& vehicle, const WindParams& wind, std::
       !(vehicle.rotor_inertia_kgm2 >= 0.0) || !(vehicle.linear_drag_Ns_per_m.minCoeff() >= 0.0) ||
       !(vehicle.quadratic_drag_Ns2_per_m2.minCoeff() >= 0.0))
     throw std::invalid_argument("plant: vehicle parameters must be positive (drag and Jr >= 0)");
-  if (!positive(settings.rel_tol) || !positive(settings.abs_tol) || !positive(settings.abs_tol_rotor_radps))
+  if (!positive(settings.rel_tol) || !positive(settings.abs_tol) || !positive(settings.abs_tol_rate_radps) ||
+      !positive(settings.abs_tol_rotor_radps))
     throw std::invalid_argument("plant: integrator tolerances must be positive");
   impl_ = std::make_unique<Impl>(vehicle, wind, wind_seed, settings);
   impl_->state = landed_state(vehicle);

@@ -29,10 +29,10 @@ void move_to_rows(const LensProjection& projection, const ReadoutPoses& readout,
     // 0.5) / H_s - 1, gl_clip_from_camera); then one step of the iteration, and the point at
     // tau_1. Its error: |dv/dtau| / rows squared times the first guess's (see the file comment).
     const double tau0 = tau_of((0.5 * (static_cast<double>(g.clip[1]) / g.clip[3] + 1.0)) * rows_s - 0.5);
-    const Eigen::Vector3d p_W = readout.middle_pose() * points_C[k];
-    const Eigen::Vector3d p0_C = readout.point_C(p_W, tau0);
+    ReadoutPoses::Track track(readout, readout.middle_pose() * points_C[k]);
+    const Eigen::Vector3d p0_C = track.at(tau0);
     if (!(p0_C.z() >= min_z)) continue;
-    const Eigen::Vector3d p_C = readout.point_C(p_W, tau_of(pixel(p0_C).y()));
+    const Eigen::Vector3d p_C = track.at(tau_of(pixel(p0_C).y()));
     if (!(p_C.z() >= min_z)) continue;
     const Eigen::Vector4d clip = projection.clip_of(pixel(p_C), p_C.z());
     for (int c = 0; c < 4; ++c) vertices[k].clip[c] = static_cast<float>(clip[c]);

@@ -21,12 +21,19 @@ ReadoutPoses::ReadoutPoses(const Eigen::Isometry3d& X_WC_start, const Eigen::Iso
   }
 }
 
-Eigen::Vector3d ReadoutPoses::point_C(const Eigen::Vector3d& p_W, double tau) const {
+Eigen::Vector3d ReadoutPoses::point_C(const Eigen::Vector3d& p_W, double tau) const { return Track(*this, p_W).at(tau); }
+
+Eigen::Vector3d ReadoutPoses::Track::at(double tau) {
   const double a = std::clamp(tau, -kBeyond, 1.0 + kBeyond) * kSteps;
   const int k = std::clamp(static_cast<int>(std::floor(a)), 0, kSteps - 1);
   const double f = a - k;
-  const auto i = static_cast<std::size_t>(k);
-  return (1.0 - f) * (X_CW_[i] * p_W) + f * (X_CW_[i + 1] * p_W);
+  if (k != step_) {
+    const auto i = static_cast<std::size_t>(k);
+    p0_C_ = poses_.X_CW_[i] * p_W_;
+    p1_C_ = poses_.X_CW_[i + 1] * p_W_;
+    step_ = k;
+  }
+  return (1.0 - f) * p0_C_ + f * p1_C_;
 }
 
 }  // namespace shelfcross::render

@@ -53,6 +53,21 @@ class ReadoutPoses {
   static constexpr int kSteps = 32;
   static constexpr double kBeyond = 0.5;
 
+  /// One point p_W seen over the readout: at(tau) is point_C(p_W, tau), value for value, and
+  /// keeps the point in the two table poses it last used, so that a second fraction in the same
+  /// table step (a vertex's fixed-point step mostly stays in it) takes no new pose products.
+  class Track {
+   public:
+    Track(const ReadoutPoses& poses, const Eigen::Vector3d& p_W) : poses_(poses), p_W_(p_W) {}
+    Eigen::Vector3d at(double tau);
+
+   private:
+    const ReadoutPoses& poses_;
+    Eigen::Vector3d p_W_;
+    int step_ = -1;                    ///< the table step of p0_C_, p1_C_ (-1: none yet)
+    Eigen::Vector3d p0_C_, p1_C_;      ///< p_W at the step's first and last pose
+  };
+
  private:
   Eigen::Isometry3d X_WC_middle_;
   std::array<Eigen::Isometry3d, kSteps + 1> X_CW_;  ///< at tau = k / kSteps

@@ -183,6 +183,7 @@ TEST(PlantEq9, FreeFall) {
   IntegratorSettings tight;
   tight.rel_tol = 1e-10;
   tight.abs_tol = 1e-12;
+  tight.abs_tol_rate_radps = 1e-12;
   Quadrotor quad(v, WindParams{}, 1, tight);
   RigidBodyState s;
   s.p_WB_m = Eigen::Vector3d(1.0, 2.0, 10.0);
@@ -244,6 +245,7 @@ TEST(PlantEq9, TumblingBodyConservesEnergyAndAngularMomentum) {
   IntegratorSettings tight;
   tight.rel_tol = 1e-10;
   tight.abs_tol = 1e-12;
+  tight.abs_tol_rate_radps = 1e-12;
   Quadrotor quad(v, WindParams{}, 1, tight);
   RigidBodyState s;  // rotors stopped, gravity on, high above the floor
   s.p_WB_m = Eigen::Vector3d(0.0, 0.0, 100.0);
@@ -275,6 +277,7 @@ TEST(PlantEq9, SpinningRotorsConserveTotalAngularMomentum) {
   IntegratorSettings tight;
   tight.rel_tol = 1e-10;
   tight.abs_tol = 1e-12;
+  tight.abs_tol_rate_radps = 1e-12;
   Quadrotor quad(v, WindParams{}, 1, tight);
   RigidBodyState s;
   s.p_WB_m = Eigen::Vector3d(0.0, 0.0, 100.0);

@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <cstring>
+#include <random>
+#include <vector>
 
 #include <Eigen/LU>
 
@@ -67,42 +69,71 @@ RigidBodyState fly_manoeuvre(Autopilot autopilot, RigidBodyState state, TimeNs t
   return state;
 }
 
-TEST(PlantIntegration, CvodeMatchesFineRk4OverTenSecondManoeuvre) {
-  const VehicleParams v;  // every term on (motors, gyroscopic, drag); calm air
-  // Take off for real (the floor is CVODE's) and hand the hovering autopilot to both runs.
+// A hover after a real take-off (the floor is CVODE's), handed to the manoeuvre's flights.
+struct Hover {
+  Autopilot autopilot;
+  RigidBodyState state;
+  TimeNs t0_ns;
+};
+Hover hover_after_takeoff(const VehicleParams& v) {
   SimulatedTello tello(v, AutopilotParams{}, WindParams{}, 1);
   tello.submit(0, "command");
   tello.submit(seconds_to_ns(0.1), "takeoff");
   tello.step_to(seconds_to_ns(6.0));
-  ASSERT_EQ(tello.mode(), FlightMode::flying);
-  const Autopilot hovering = tello.autopilot();
-  const RigidBodyState start = tello.state();
-  const TimeNs t0 = tello.time_ns();
+  EXPECT_EQ(tello.mode(), FlightMode::flying);
+  return {tello.autopilot(), tello.state(), tello.time_ns()};
+}
 
-  const auto cvode_run = [&](IntegratorSettings settings) {
-    Quadrotor quad(v, WindParams{}, 1, settings);
-    quad.reset(start, t0);
-    return fly_manoeuvre(hovering, start, t0, [&](const Eigen::Vector4d& cmd, TimeNs t_next) {
-      quad.set_rotor_commands(cmd);
-      quad.advance_to(t_next);
-      return quad.state();
-    });
-  };
+// The manoeuvre from `hover` with each tick's rotor commands moved by seeded draws of
+// `jitter` times hover speed (0: as the autopilot sends them), flown by a plant advanced by
+// `advance(cmd, t_next)`.
+template <class Advance>
+RigidBodyState fly_jittered(const VehicleParams& v, const Hover& hover, double jitter, Advance advance) {
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> draw(0.0, jitter * v.hover_rotor_speed_radps());
+  return fly_manoeuvre(hover.autopilot, hover.state, hover.t0_ns, [&](Eigen::Vector4d cmd, TimeNs t_next) {
+    if (jitter > 0.0)
+      for (int i = 0; i < 4; ++i) cmd[i] += draw(rng);
+    return advance(cmd, t_next);
+  });
+}
+
+// The reference: RK4 at 50 us.
+RigidBodyState rk4_flight(const VehicleParams& v, const Hover& hover, double jitter) {
   double y[kStateSize];
-  pack_state(start, y);
-  const RigidBodyState ref = fly_manoeuvre(hovering, start, t0, [&](const Eigen::Vector4d& cmd, TimeNs) {
-    constexpr int kSub = 40;  // RK4 at 50 us
+  pack_state(hover.state, y);
+  return fly_jittered(v, hover, jitter, [&](const Eigen::Vector4d& cmd, TimeNs) {
+    constexpr int kSub = 40;
     for (int j = 0; j < kSub; ++j) rk4_step(v, y, cmd, 0.002 / kSub);
     const double qn = std::sqrt(y[kIdxQ] * y[kIdxQ] + y[kIdxQ + 1] * y[kIdxQ + 1] + y[kIdxQ + 2] * y[kIdxQ + 2] +
                                 y[kIdxQ + 3] * y[kIdxQ + 3]);
     for (int i = 0; i < 4; ++i) y[kIdxQ + i] /= qn;
     return unpack_state(y);
   });
+}
+
+RigidBodyState cvode_flight(const VehicleParams& v, const Hover& hover, double jitter, IntegratorSettings settings,
+                            long* evaluations = nullptr) {
+  Quadrotor quad(v, WindParams{}, 1, settings);
+  quad.reset(hover.state, hover.t0_ns);
+  const RigidBodyState end = fly_jittered(v, hover, jitter, [&](const Eigen::Vector4d& cmd, TimeNs t_next) {
+    quad.set_rotor_commands(cmd);
+    quad.advance_to(t_next);
+    return quad.state();
+  });
+  if (evaluations) *evaluations = quad.rhs_evaluations();
+  return end;
+}
+
+TEST(PlantIntegration, CvodeMatchesFineRk4OverTenSecondManoeuvre) {
+  const VehicleParams v;  // every term on (motors, gyroscopic, drag); calm air
+  const Hover hover = hover_after_takeoff(v);
+  const RigidBodyState ref = rk4_flight(v, hover, 0.0);
   // The manoeuvre did go somewhere, airborne all the time.
-  EXPECT_GT((ref.p_WB_m - start.p_WB_m).norm(), 1.0);
+  EXPECT_GT((ref.p_WB_m - hover.state.p_WB_m).norm(), 1.0);
   EXPECT_GT(ref.p_WB_m.z(), 0.5);
 
-  const RigidBodyState s = cvode_run(IntegratorSettings{});
+  const RigidBodyState s = cvode_flight(v, hover, 0.0, IntegratorSettings{});
   EXPECT_LT((s.p_WB_m - ref.p_WB_m).norm(), 1e-4) << "CVODE " << s.p_WB_m.transpose() << " RK4 " << ref.p_WB_m.transpose();
   EXPECT_LT((s.v_WB_W_mps - ref.v_WB_W_mps).norm(), 1e-4);
   EXPECT_LT(s.q_WB.angularDistance(ref.q_WB), 1e-4);
@@ -113,11 +144,37 @@ TEST(PlantIntegration, CvodeMatchesFineRk4OverTenSecondManoeuvre) {
   IntegratorSettings tight;
   tight.rel_tol = 1e-10;
   tight.abs_tol = 1e-12;
+  tight.abs_tol_rate_radps = 1e-12;
   tight.abs_tol_rotor_radps = 1e-8;
-  const RigidBodyState p = cvode_run(tight);
+  const RigidBodyState p = cvode_flight(v, hover, 0.0, tight);
   EXPECT_LT((p.p_WB_m - ref.p_WB_m).norm(), 1e-7);
   EXPECT_LT((p.v_WB_W_mps - ref.v_WB_W_mps).norm(), 1e-7);
   EXPECT_LT((p.rotor_speed_radps - ref.rotor_speed_radps).norm(), 1e-4);
+}
+
+// Commands that jump from tick to tick, as a position hold on noisy velocity readings sends
+// them: the manoeuvre's, each rotor's command moved by a seeded draw of 1 % of hover speed.
+// The defaults keep the flight on the reference; the body rates' tolerance relaxed to 1e-6
+// rad/s keeps it there too, with fewer evaluations.
+TEST(PlantIntegration, JumpyCommandsStayOnTheReferenceAndARelaxedRateToleranceSavesEvaluations) {
+  const VehicleParams v;
+  const Hover hover = hover_after_takeoff(v);
+  constexpr double kJitter = 0.01;
+  const RigidBodyState ref = rk4_flight(v, hover, kJitter);
+  EXPECT_GT((ref.p_WB_m - hover.state.p_WB_m).norm(), 1.0);
+
+  long n_default = 0, n_relaxed = 0;
+  IntegratorSettings relaxed;
+  relaxed.abs_tol_rate_radps = 1e-6;
+  for (auto [settings, evaluations] : {std::pair{IntegratorSettings{}, &n_default}, std::pair{relaxed, &n_relaxed}}) {
+    const RigidBodyState s = cvode_flight(v, hover, kJitter, settings, evaluations);
+    EXPECT_LT((s.p_WB_m - ref.p_WB_m).norm(), 1e-4);
+    EXPECT_LT((s.v_WB_W_mps - ref.v_WB_W_mps).norm(), 1e-4);
+    EXPECT_LT(s.q_WB.angularDistance(ref.q_WB), 1e-4);
+    EXPECT_LT((s.w_WB_B_radps - ref.w_WB_B_radps).norm(), 1e-3);
+  }
+  EXPECT_LT(static_cast<double>(n_relaxed), 0.9 * static_cast<double>(n_default))
+      << n_relaxed << " evaluations against " << n_default;
 }
 
 TEST(PlantIntegration, BdfNewtonAlternativeAgrees) {
@@ -236,6 +293,9 @@ TEST(PlantFailure, BadParametersAreRefused) {
   IntegratorSettings s;
   s.rel_tol = -1.0;
   EXPECT_THROW(Quadrotor(VehicleParams{}, WindParams{}, 1, s), std::invalid_argument);
+  IntegratorSettings rate;
+  rate.abs_tol_rate_radps = 0.0;
+  EXPECT_THROW(Quadrotor(VehicleParams{}, WindParams{}, 1, rate), std::invalid_argument);
 }
 
 // Steady level flight at a given pitch: the speed where drag balances the thrust's horizontal
