@@ -322,9 +322,10 @@ struct LineHoldParams {
   /// verifier's near miss (a scenario's cosim.near_miss_m) is the same 2 cm by default; the
   /// flight software cannot read the scenario, so it has its own.
   double separation_min_m = 0.02;
-  /// The quiet stretch's drift flown out in the crossing: its sticks ask the line's velocity
-  /// less the drift (a biased VPS hold moves the vehicle at minus the bias, which no reading
-  /// shows). The gate's forecast still carries the whole drift (line_hold.hpp, "drift").
+  /// The quiet stretch's drift flown out in the crossing, what of it lies beyond one standard
+  /// error: its sticks ask the line's velocity less that (a biased VPS hold moves the vehicle at
+  /// minus the bias, which no reading shows). The gate's forecast still carries the whole drift
+  /// (line_hold.hpp, "drift").
   bool trim_drift = true;
 };
 

@@ -212,10 +212,14 @@ LineHoldForecast forecast_line_hold(const MissionParams& m, const LineWander& w,
   // The wander across: the window's, or the air remembered where that reaches further.
   const double wander_y = w.half_spread_y_m * growth, air_y = kAirReach_s * w.air_rms_mps;
   if (air_y > wander_y) f.air_rms_mps = w.air_rms_mps;
-  // The drift goes on for the whole crossing. Flown out (trim_drift), it is still forecast
-  // whole: the trim centres the line where the drift holds, and the forecast covers a trim as
-  // wrong as the drift is large (a drift that changes, a slope the air made).
-  if (m.line_hold.trim_drift) f.drift_trim_y_mps = w.drift_y_mps;
+  // The drift goes on for the whole crossing. Flown out (trim_drift): only what the hover showed
+  // beyond one standard error of it, sign(d) max(0, |d| - se_d), so that a slope the air made
+  // on a short stretch is not flown as a drift. It is still forecast whole: the trim centres the
+  // line where the drift holds, and the forecast covers a trim as wrong as the drift is large
+  // (a drift that changes).
+  if (m.line_hold.trim_drift) {
+    f.drift_trim_y_mps = std::copysign(std::max(0.0, std::abs(w.drift_y_mps) - w.drift_error_y_mps), w.drift_y_mps);
+  }
   f.y_m = std::max(wander_y, air_y) + std::abs(w.drift_y_mps) * blind_s + w.across_speed_mps * kVelocityLag_s;
   f.z_m = w.half_spread_z_m * growth;
   // Its own error: the pose's, and how much further the air's reach goes at one standard error

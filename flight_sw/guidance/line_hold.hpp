@@ -21,7 +21,10 @@
 //              rounding) the next measured pose shows, as a step the fit's slope and spread
 //              take in. Across the heading, the approach's own forward creep moves nothing;
 //   drift      the least-squares slope of y' over time: a steady drift nobody commanded (one
-//              below the state record's 0.05 m/s rounding reads 0 there);
+//              below the state record's 0.05 m/s rounding reads 0 there), and its standard
+//              error (the residuals counted as n_eff independent ones: fit_line). The crossing
+//              flies out what lies beyond the error (trim_drift, trim_crossing); the forecast
+//              counts the whole drift either way;
 //   wander     half the spread (max - min) / 2 of y' and z_K about their fitted lines;
 //   speed      the largest across-line speed the state record showed in the same quiet
 //              stretch (the state's velocities turned into the cell frame by the pose's yaw);
@@ -54,8 +57,9 @@
 //              consecutive quiet records (0.3 s, short against the air's second): one noisy
 //              record reads 1/kSpeedRecords of its step.
 //   error      the forecast's own error (LineHoldForecast::error_y_m): the pose's across the
-//              line at the commit range (kPoseError_m), and the air's reach at sigma_v plus one
-//              standard error of its estimate less its reach at sigma_v. The gate keeps
+//              line at the commit range (kPoseError_m), the air's reach at sigma_v plus one
+//              standard error of its estimate less its reach at sigma_v, and the drift's
+//              standard error times T_blind. The gate keeps
 //              separation_min_m plus it clear (never less than crossing_margin_m).
 //
 // The gate (crossing_refusal) then requires the line's offset at either face plus the
@@ -122,7 +126,8 @@ struct LineHoldForecast {
   double error_z_m = 0.0;  ///< and up: the pose's
   double span_s = 0.0;    ///< the quiet stretch it was measured on (at most line_hold_window_s)
   double air_rms_mps = 0.0;  ///< the air remembered, where its reach is the larger wander (else 0)
-  /// The drift the crossing flies out (line_hold.trim_drift; else 0), across the heading, m/s.
+  /// The drift the crossing flies out, across the heading, m/s: the drift beyond one standard
+  /// error, sign(d) max(0, |d| - se_d), with line_hold.trim_drift; else 0.
   double drift_trim_y_mps = 0.0;
 };
 

@@ -350,6 +350,11 @@ TEST(LineHold, TheDriftsStandardErrorEntersTheForecastsError) {
   EXPECT_NEAR(fs.error_y_m, kPoseError_m + s.drift_error_y_mps * blind_s(), 1e-12);
   EXPECT_NEAR(fl.error_y_m, kPoseError_m + l.drift_error_y_mps * blind_s(), 1e-12);
   ASSERT_GT(fs.error_y_m - fl.error_y_m, 0.006);
+  // The crossing flies out the drift beyond one standard error only: less of the short
+  // stretch's than of the long one's.
+  EXPECT_NEAR(fs.drift_trim_y_mps, std::max(0.0, s.drift_y_mps - s.drift_error_y_mps), 1e-12);
+  EXPECT_NEAR(fl.drift_trim_y_mps, l.drift_y_mps - l.drift_error_y_mps, 1e-12);
+  EXPECT_LT(fs.drift_trim_y_mps, fl.drift_trim_y_mps);
   // On the narrow column, centred: a forecast leaving 5 mm more than the long window's keep.
   LineHoldForecast f = fl;
   f.y_m = line_room(config, {2, 3}, pose_at(-0.6, 0.0, 0.0)).room_y_m - line_hold_keep_m(config.mission, fl.error_y_m) - 0.005;
