@@ -89,8 +89,9 @@ struct LineFit {
   double half_spread = 0.0;
   double slope_error = 0.0;
 };
-LineFit fit_line(const std::vector<double>& t, const std::vector<double>& v, double span_s) {
+LineFit fit_line(const std::vector<double>& t, const std::vector<double>& v) {
   const size_t n = t.size();
+  const double span_s = t.back() - t.front();
   double st = 0.0, sv = 0.0;
   for (size_t i = 0; i < n; ++i) st += t[i], sv += v[i];
   const double tm = st / static_cast<double>(n), vm = sv / static_cast<double>(n);
@@ -140,7 +141,7 @@ LineWander LineHoldMonitor::wander(TimeNs now_ns, double window_s) const {
     up.push_back(it->z_m);
   }
   w.span_s = t.back();
-  const LineFit fy = fit_line(t, across, w.span_s), fz = fit_line(t, up, w.span_s);
+  const LineFit fy = fit_line(t, across), fz = fit_line(t, up);
   w.half_spread_y_m = fy.half_spread;
   w.drift_y_mps = fy.slope;
   w.drift_error_y_mps = fy.slope_error;

@@ -81,8 +81,7 @@ void PilotLog::approach_view(const flight_sw::Telemetry& tm, const Clock& clock)
   log_.write(clock.now_ns(), "fsw_view", std::move(j));
 }
 
-void PilotLog::record(const VideoFrame& f, const std::function<bool(const std::string&, const cv::Mat&)>& write,
-                      const Clock& clock) {
+void PilotLog::record(const VideoFrame& f, const FrameWriter& write, const Clock& clock) {
   char name[64];
   std::snprintf(name, sizeof name, "frame_%06lld%s.png", static_cast<long long>(f.index), f.damaged ? "_damaged" : "");
   if (!write(name, f.bgr)) {

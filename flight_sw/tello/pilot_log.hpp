@@ -22,6 +22,10 @@ namespace shelfcross::tello {
 /// flight software or the program itself (its failsafes, the stick program).
 enum PilotTag : int { kTagFlightSoftware = 1, kTagPilot = 2 };
 
+/// Writes a recorded frame under its file name; false when it could not (tello_pilot
+/// --record-frames: PilotLoopConfig::record_frame).
+using FrameWriter = std::function<bool(const std::string& file_name, const cv::Mat& bgr)>;
+
 class PilotLog {
  public:
   /// Opens the flight log (empty path: none); throws FlightLogError when it cannot be written.
@@ -41,8 +45,7 @@ class PilotLog {
   void approach_view(const flight_sw::Telemetry& tm, const Clock& clock);
   /// Hands the frame to `write` as frame_INDEX[_damaged].png (PilotLoopConfig::record_frame); a
   /// failsafe line when it cannot be written.
-  void record(const VideoFrame& f, const std::function<bool(const std::string&, const cv::Mat&)>& write,
-              const Clock& clock);
+  void record(const VideoFrame& f, const FrameWriter& write, const Clock& clock);
 
  private:
   FlightLog log_;

@@ -24,12 +24,11 @@
 #include <optional>
 #include <string>
 
-#include <opencv2/core.hpp>
-
 #include "flight_sw/config.hpp"
 #include "flight_sw/mission/flight_software.hpp"
 #include "flight_sw/tello/clock.hpp"
 #include "flight_sw/tello/flight_log.hpp"
+#include "flight_sw/tello/pilot_log.hpp"
 #include "flight_sw/tello/sdk_driver.hpp"
 #include "flight_sw/tello/video_receiver.hpp"
 #include "sdk/command.hpp"
@@ -61,7 +60,7 @@ struct PilotLoopConfig {
   /// could not (a failsafe line in the log). The program writes the file: image files are
   /// OpenCV's imgcodecs, whose hundred-odd shared libraries (GDAL and its formats) the loop
   /// leaves to the programs that write pictures, not to every co-simulated run. Empty: none.
-  std::function<bool(const std::string& file_name, const cv::Mat& bgr)> record_frame;
+  FrameWriter record_frame;
   std::string flight_config_path;   ///< for the log's start line
   std::string calibration_path;     ///< for the log's start line
   std::ostream* console = nullptr;  ///< phase changes and failsafe messages for people; null: silent
